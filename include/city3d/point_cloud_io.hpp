@@ -1,0 +1,91 @@
+// Point-cloud input: LAS 1.0-1.4 (point formats 0-10), PLY (ascii, binary little/big endian), LAZ
+// recognised. Everything lands in one PointCloud type with double world coordinates. Files can be
+// streamed chunk by chunk, reading only the attributes the caller asks for.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "city3d/types.hpp"
+
+namespace city3d {
+
+/// Attributes a reader can fill, combined as a bit mask. xyz is always read.
+enum PointField : std::uint32_t {
+  kFieldXyz = 0,
+  kFieldIntensity = 1u << 0,
+  kFieldReturns = 1u << 1,         ///< return number and number of returns
+  kFieldClassification = 1u << 2,  ///< LAS class (extended 8-bit class for formats 6-10), PLY class/label
+  kFieldGpsTime = 1u << 3,
+  kFieldRgb = 1u << 4,
+  kFieldNormal = 1u << 5,          ///< PLY nx/ny/nz
+  kFieldAll = 0xFFFFFFFFu,
+};
+using PointFields = std::uint32_t;
+
+/// Points with optional attributes. `points` is always filled; every other vector is either empty
+/// (attribute absent from the file or not requested) or exactly as long as `points`.
+struct PointCloud {
+  std::vector<Point3> points;                         ///< world coordinates, metres
+  std::vector<std::uint16_t> intensity;
+  std::vector<std::uint8_t> return_number;
+  std::vector<std::uint8_t> number_of_returns;
+  std::vector<std::uint8_t> classification;
+  std::vector<double> gps_time;
+  std::vector<std::array<std::uint16_t, 3>> rgb;
+  std::vector<std::array<float, 3>> normals;
+
+  std::size_t size() const { return points.size(); }
+  bool empty() const { return points.empty(); }
+  void clear();
+  /// Appends all points (and the attributes both clouds have) of `other`.
+  void append(const PointCloud& other);
+};
+
+/// What a point-cloud file holds, from its header (no points read).
+struct PointCloudInfo {
+  std::string path;
+  std::string format;            ///< "LAS", "LAZ" or "PLY"
+  std::string version;           ///< LAS "1.2"; PLY "ascii", "binary_little_endian", "binary_big_endian"
+  int point_format = -1;         ///< LAS point data format id (0-10) without the compression bits; -1 for PLY
+  std::uint16_t record_length = 0;  ///< LAS point record length in bytes; 0 for PLY
+  std::uint64_t point_count = 0;
+  bool compressed = false;       ///< LAZ (compression bit or LASzip VLR)
+  Box3 bounds;                   ///< header bounds for LAS; empty for PLY until the points are read
+  std::array<double, 3> scale{1.0, 1.0, 1.0};
+  std::array<double, 3> offset{0.0, 0.0, 0.0};
+  std::string crs;               ///< WKT from the file (LAS WKT VLR), "EPSG:n" from GeoTIFF keys, or empty
+  std::string generating_software;
+  PointFields fields = kFieldXyz;  ///< attributes the file can provide
+  std::vector<std::string> vlrs;   ///< "user_id/record_id (n bytes)" of each VLR and EVLR, for `info`
+};
+
+/// A streaming reader over one file. Open with open_point_cloud(); call read() until it returns 0.
+class PointCloudReader {
+ public:
+  virtual ~PointCloudReader() = default;
+  /// Header facts, available right after opening.
+  virtual const PointCloudInfo& info() const = 0;
+  /// Appends at most `max_points` points (with the requested attributes) to `out` and returns how
+  /// many it appended; 0 means the end of the file. Throws IoError on truncated or invalid data
+  /// (message names the file and the point index).
+  virtual std::size_t read(PointCloud& out, std::size_t max_points) = 0;
+};
+
+/// Opens a LAS or PLY file (chosen by its signature, not its extension) and validates its header.
+/// `fields` says which attributes read() fills. Throws IoError naming the file and the problem
+/// (missing, empty, truncated, wrong signature, bad header fields, LAZ not supported yet, ...).
+std::unique_ptr<PointCloudReader> open_point_cloud(const std::string& path,
+                                                   PointFields fields = kFieldAll);
+
+/// Reads a whole file into memory. Throws IoError as open_point_cloud() and read() do.
+PointCloud read_point_cloud(const std::string& path, PointFields fields = kFieldAll);
+
+/// Reads only the header of a file. Throws IoError as open_point_cloud() does.
+PointCloudInfo read_point_cloud_info(const std::string& path);
+
+}  // namespace city3d

@@ -1,0 +1,95 @@
+// Plain value types shared by every module: points, rings, footprints, meshes, ids.
+// No third-party headers here, so that any module can include it cheaply.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace city3d {
+
+/// A building identifier as it comes from the footprint source (or the file name for single clouds).
+using BuildingId = std::string;
+
+/// A 2D point in metres (world or local frame, as the owner documents).
+struct Point2 {
+  double x = 0.0;
+  double y = 0.0;
+};
+
+/// A 3D point in metres (world or local frame, as the owner documents). Always double: world
+/// coordinates at RD New magnitudes (x ~ 85 000, y ~ 447 000) need more than float's 24 bits.
+struct Point3 {
+  double x = 0.0;
+  double y = 0.0;
+  double z = 0.0;
+};
+
+/// An axis-aligned 3D box; empty() until something is added.
+struct Box3 {
+  Point3 min{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+             std::numeric_limits<double>::infinity()};
+  Point3 max{-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+             -std::numeric_limits<double>::infinity()};
+
+  bool empty() const { return min.x > max.x; }
+  void add(const Point3& p) {
+    if (p.x < min.x) min.x = p.x;
+    if (p.y < min.y) min.y = p.y;
+    if (p.z < min.z) min.z = p.z;
+    if (p.x > max.x) max.x = p.x;
+    if (p.y > max.y) max.y = p.y;
+    if (p.z > max.z) max.z = p.z;
+  }
+};
+
+/// An axis-aligned 2D box; empty() until something is added.
+struct Box2 {
+  Point2 min{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+  Point2 max{-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+
+  bool empty() const { return min.x > max.x; }
+  void add(const Point2& p) {
+    if (p.x < min.x) min.x = p.x;
+    if (p.y < min.y) min.y = p.y;
+    if (p.x > max.x) max.x = p.x;
+    if (p.y > max.y) max.y = p.y;
+  }
+  bool intersects(const Box2& o) const {
+    return !(o.min.x > max.x || o.max.x < min.x || o.min.y > max.y || o.max.y < min.y);
+  }
+};
+
+/// A closed ring of 2D vertices; the closing vertex is not repeated.
+using Ring2 = std::vector<Point2>;
+
+/// A polygon with holes. After reading, the outer ring is counter-clockwise and every hole clockwise.
+struct Polygon2 {
+  Ring2 outer;
+  std::vector<Ring2> holes;
+};
+
+/// One building footprint: one or more polygons (a multipolygon) with the building's id.
+struct Footprint {
+  BuildingId id;                    ///< value of the id field (or the feature id as text)
+  std::int64_t fid = -1;            ///< OGR feature id, -1 when the source has none
+  std::vector<Polygon2> polygons;   ///< world coordinates (the source's CRS), metres
+};
+
+/// A polygonal surface mesh: faces are vertex-index loops (not triangulated), counter-clockwise seen
+/// from outside for a closed, outward-oriented model.
+struct PolygonMesh {
+  std::vector<Point3> vertices;
+  std::vector<std::vector<std::uint32_t>> faces;
+};
+
+/// A building's model: the mesh in a local frame plus the origin that takes it back to the world
+/// (world = local + origin).
+struct BuildingModel {
+  BuildingId id;
+  PolygonMesh mesh;
+  Point3 origin;
+};
+
+}  // namespace city3d

@@ -1,0 +1,63 @@
+// LASzip decoding (private to the LAS reader): turns the compressed point block of a LAZ file back
+// into raw LAS point records, chunk by chunk.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace city3d::detail {
+
+/// The content of the LASzip VLR (user id "laszip encoded", record id 22204).
+struct LaszipVlr {
+  struct Item {
+    std::uint16_t type = 0;     ///< 6 POINT10, 7 GPSTIME11, 8 RGB12, 0 BYTE, 10 POINT14, 11 RGB14, 12 RGBNIR14, 14 BYTE14
+    std::uint16_t size = 0;     ///< bytes of the item in a raw record
+    std::uint16_t version = 0;
+  };
+  std::uint16_t compressor = 0;  ///< 0 none, 1 pointwise, 2 pointwise-chunked, 3 layered-chunked
+  std::uint16_t coder = 0;       ///< 0 arithmetic
+  std::uint8_t version_major = 0;
+  std::uint8_t version_minor = 0;
+  std::uint16_t version_revision = 0;
+  std::uint32_t options = 0;
+  std::uint32_t chunk_size = 0;  ///< points per chunk; 0xFFFFFFFF = variable (sizes in the chunk table)
+  std::int64_t number_of_special_evlrs = -1;
+  std::int64_t offset_to_special_evlrs = -1;
+  std::vector<Item> items;
+};
+
+/// Parses the LASzip VLR payload. Throws IoError naming `path` when it is malformed.
+LaszipVlr parse_laszip_vlr(const std::uint8_t* data, std::size_t size, const std::string& path);
+
+/// Where the compressed point block is and what it must decode to (taken from the LAS header).
+struct LazLayout {
+  std::string path;
+  std::uint64_t point_data_offset = 0;  ///< header "offset to point data"
+  std::uint64_t point_count = 0;        ///< legacy or 64-bit count
+  std::uint16_t record_length = 0;      ///< raw record length (point format size + extra bytes)
+  std::uint8_t point_format = 0;        ///< without the compression bits
+  std::uint64_t file_size = 0;
+};
+
+/// Streams raw point records out of a LAZ file. Errors (truncated file, bad chunk table, unknown
+/// items, corrupt data) throw IoError naming the file and the chunk.
+class LazDecoder {
+ public:
+  LazDecoder(const LaszipVlr& vlr, const LazLayout& layout);
+  ~LazDecoder();
+  LazDecoder(const LazDecoder&) = delete;
+  LazDecoder& operator=(const LazDecoder&) = delete;
+
+  /// Writes at most `max_points` raw records (record_length bytes each) to `out`; returns how many
+  /// it wrote, 0 once all point_count records have been produced.
+  std::size_t decode(std::uint8_t* out, std::size_t max_points);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace city3d::detail
