@@ -1,2 +1,187 @@
-// placeholder until implemented
+// Tests of the OBJ / PLY model writers against reference files and by reading the output back.
 #include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "city3d/error.hpp"
+#include "city3d/model_io.hpp"
+
+namespace fs = std::filesystem;
+using namespace city3d;
+
+namespace {
+
+// A unit-ish box (2 x 1 x 3 m) in a local frame, faces counter-clockwise seen from outside.
+BuildingModel box_model(const std::string& id, Point3 origin) {
+  BuildingModel m;
+  m.id = id;
+  m.origin = origin;
+  m.mesh.vertices = {{0, 0, 0}, {2, 0, 0}, {2, 1, 0}, {0, 1, 0}, {0, 0, 3}, {2, 0, 3}, {2, 1, 3}, {0, 1, 3}};
+  m.mesh.faces = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+  return m;
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// The reference files hold "@VERSION@" where the writer puts the library version.
+std::string reference(const std::string& name) {
+  std::string text = read_text(fs::path(CITY3D_TEST_DATA) / "model" / name);
+  const std::string tag = "@VERSION@";
+  for (auto pos = text.find(tag); pos != std::string::npos; pos = text.find(tag))
+    text.replace(pos, tag.size(), CITY3D_VERSION);
+  return text;
+}
+
+class ModelWriter : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("city3d_model_io_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+}  // namespace
+
+TEST_F(ModelWriter, writes_obj_in_world_coordinates_matching_reference) {
+  const fs::path out = dir_ / "box.obj";
+  write_model(out.string(), box_model("NL.IMBAG.Pand.0503100000018603", {84916.949, 447413.3, 5.977}),
+              {MeshFormat::obj, false});
+  EXPECT_EQ(read_text(out), reference("box_world.obj"));
+}
+
+TEST_F(ModelWriter, writes_obj_in_local_coordinates_with_origin_comment) {
+  const fs::path out = dir_ / "box.obj";
+  write_model(out.string(), box_model("b1", {84916.949, 447413.3, 5.977}), {MeshFormat::obj, true});
+  EXPECT_EQ(read_text(out), reference("box_local.obj"));
+}
+
+TEST_F(ModelWriter, keeps_millimetres_at_rd_new_magnitudes) {
+  BuildingModel m = box_model("b", {85000.0, 447000.0, 0.0});
+  m.mesh.vertices[0] = {0.0004, 0.0016, 0.0};  // world 85000.0004, 447000.0016
+  const fs::path out = dir_ / "b.obj";
+  write_model(out.string(), m, {MeshFormat::obj, false});
+  const std::string text = read_text(out);
+  EXPECT_NE(text.find("v 85000.0004 447000.0016 0.0000\n"), std::string::npos) << text;
+}
+
+TEST_F(ModelWriter, merged_obj_has_one_group_per_building_with_offset_indices) {
+  const fs::path out = dir_ / "all.obj";
+  write_models(out.string(), {box_model("a", {0, 0, 0}), box_model("b", {10, 0, 0})}, {MeshFormat::obj, false});
+  const std::string text = read_text(out);
+  EXPECT_NE(text.find("o a\n"), std::string::npos);
+  EXPECT_NE(text.find("o b\n"), std::string::npos);
+  // The second building's first face uses its own vertices 9..16.
+  EXPECT_NE(text.find("o b\nv 10.0000 0.0000 0.0000\n"), std::string::npos);
+  EXPECT_NE(text.find("f 9 12 11 10\n"), std::string::npos);
+  EXPECT_EQ(text.find("f 1 4 3 2\n"), text.rfind("f 1 4 3 2\n"));
+}
+
+TEST_F(ModelWriter, writes_ascii_ply_matching_reference) {
+  const fs::path out = dir_ / "box.ply";
+  write_model(out.string(), box_model("b1", {100.0, 200.0, 0.5}), {MeshFormat::ply_ascii, false});
+  EXPECT_EQ(read_text(out), reference("box_world_ascii.ply"));
+}
+
+TEST_F(ModelWriter, writes_binary_ply_that_reads_back_exactly) {
+  const fs::path out = dir_ / "box.ply";
+  const BuildingModel m = box_model("b1", {84916.949, 447413.3, 5.977});
+  write_model(out.string(), m, {MeshFormat::ply_binary, false});
+  const std::string text = read_text(out);
+  const std::string end = "end_header\n";
+  const auto body = text.find(end);
+  ASSERT_NE(body, std::string::npos);
+  EXPECT_NE(text.find("format binary_little_endian 1.0\n"), std::string::npos);
+  EXPECT_NE(text.find("element vertex 8\n"), std::string::npos);
+  EXPECT_NE(text.find("element face 6\n"), std::string::npos);
+  const char* p = text.data() + body + end.size();
+  for (const Point3& v : m.mesh.vertices) {
+    double xyz[3];
+    std::memcpy(xyz, p, sizeof xyz);  // the test host is little-endian (x86-64)
+    p += sizeof xyz;
+    EXPECT_DOUBLE_EQ(xyz[0], v.x + m.origin.x);
+    EXPECT_DOUBLE_EQ(xyz[1], v.y + m.origin.y);
+    EXPECT_DOUBLE_EQ(xyz[2], v.z + m.origin.z);
+  }
+  for (const auto& face : m.mesh.faces) {
+    ASSERT_EQ(static_cast<unsigned char>(*p), face.size());
+    ++p;
+    for (std::uint32_t v : face) {
+      std::int32_t index;
+      std::memcpy(&index, p, 4);
+      p += 4;
+      EXPECT_EQ(index, static_cast<std::int32_t>(v));
+    }
+  }
+  EXPECT_EQ(p, text.data() + text.size());
+}
+
+TEST_F(ModelWriter, merged_ply_records_building_ids_and_per_face_index) {
+  const fs::path out = dir_ / "all.ply";
+  write_models(out.string(), {box_model("first", {0, 0, 0}), box_model("second", {5, 0, 0})},
+               {MeshFormat::ply_ascii, false});
+  const std::string text = read_text(out);
+  EXPECT_NE(text.find("comment building 0 first\n"), std::string::npos);
+  EXPECT_NE(text.find("comment building 1 second\n"), std::string::npos);
+  EXPECT_NE(text.find("property int building\n"), std::string::npos);
+  EXPECT_NE(text.find("\n4 8 11 10 9 1\n"), std::string::npos) << text;
+}
+
+TEST_F(ModelWriter, rejects_faces_with_out_of_range_vertices) {
+  BuildingModel m = box_model("broken", {0, 0, 0});
+  m.mesh.faces.push_back({0, 1, 42});
+  try {
+    write_model((dir_ / "x.obj").string(), m, {MeshFormat::obj, false});
+    FAIL() << "no exception";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("broken"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("vertex 42"), std::string::npos);
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "x.obj"));
+}
+
+TEST_F(ModelWriter, reports_unwritable_path_and_leaves_no_temporary_file) {
+  const fs::path out = dir_ / "no_such_dir" / "x.obj";
+  try {
+    write_model(out.string(), box_model("b", {0, 0, 0}), {MeshFormat::obj, false});
+    FAIL() << "no exception";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("no_such_dir/x.obj"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(fs::is_empty(dir_));
+}
+
+TEST_F(ModelWriter, overwrites_atomically_without_leftovers) {
+  const fs::path out = dir_ / "b.obj";
+  write_model(out.string(), box_model("old", {0, 0, 0}), {MeshFormat::obj, false});
+  write_model(out.string(), box_model("new", {0, 0, 0}), {MeshFormat::obj, false});
+  EXPECT_NE(read_text(out).find("o new\n"), std::string::npos);
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1);
+}
+
+TEST(ModelFileName, replaces_unsafe_characters_and_never_returns_a_hidden_name) {
+  EXPECT_EQ(model_file_name("NL.IMBAG.Pand.0503100000018603", MeshFormat::obj), "NL.IMBAG.Pand.0503100000018603.obj");
+  EXPECT_EQ(model_file_name("a/b c:d", MeshFormat::ply_binary), "a_b_c_d.ply");
+  EXPECT_EQ(model_file_name("", MeshFormat::obj), "_.obj");
+  EXPECT_EQ(model_file_name("..", MeshFormat::obj), "_...obj");
+}
+
+TEST(MeshFormatName, parses_known_names_and_rejects_others) {
+  EXPECT_EQ(parse_mesh_format("obj"), MeshFormat::obj);
+  EXPECT_EQ(parse_mesh_format("ply"), MeshFormat::ply_binary);
+  EXPECT_EQ(parse_mesh_format("ply-ascii"), MeshFormat::ply_ascii);
+  EXPECT_THROW(parse_mesh_format("stl"), ConfigError);
+}
