@@ -1,1 +1,58 @@
-int main() { return 0; }
+// The city3d executable: parses the command line and runs the chosen command; nothing else.
+#include <cstdio>
+#include <exception>
+#include <iostream>
+
+#include "city3d/error.hpp"
+#include "city3d/info.hpp"
+#include "city3d/log.hpp"
+#include "city3d/options.hpp"
+
+namespace {
+
+int run_info(const city3d::RunOptions& options) {
+  for (std::size_t i = 0; i < options.inputs.size(); ++i) {
+    const std::string& path = options.inputs[i];
+    if (i > 0) std::cout << "\n";
+    if (city3d::looks_like_point_cloud(path))
+      std::cout << city3d::describe_point_cloud(city3d::summarise_point_cloud(path));
+    else
+      std::cout << city3d::describe_footprints(city3d::read_footprints(path, options.footprint));
+    std::cout.flush();
+  }
+  return city3d::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  city3d::RunOptions options;
+  try {
+    options = city3d::parse_command_line(argc, argv);
+  } catch (const city3d::ConfigError& e) {
+    std::cerr << "city3d: " << e.what() << "\n";
+    return city3d::kExitUsage;
+  }
+  if (options.help) {
+    std::cout << city3d::help_text();
+    return city3d::kExitOk;
+  }
+  if (options.version) {
+    std::cout << "city3d " << CITY3D_VERSION << "\n";
+    return city3d::kExitOk;
+  }
+  city3d::set_log_level(static_cast<city3d::LogLevel>(options.verbosity));
+  try {
+    if (options.command == "info") return run_info(options);
+  } catch (const city3d::ConfigError& e) {
+    std::cerr << "city3d: " << e.what() << "\n";
+    return city3d::kExitUsage;
+  } catch (const city3d::Error& e) {
+    std::cerr << "city3d: " << e.what() << "\n";
+    return city3d::kExitInput;
+  } catch (const std::exception& e) {
+    std::cerr << "city3d: internal error: " << e.what() << "\n";
+    return city3d::kExitInternal;
+  }
+  return city3d::kExitOk;
+}

@@ -1,0 +1,34 @@
+// `city3d info`: a human-readable summary of what a point-cloud file or a footprint source holds.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+
+#include "city3d/footprint_io.hpp"
+#include "city3d/point_cloud_io.hpp"
+
+namespace city3d {
+
+/// A point-cloud file's header plus what only reading every point tells: the class histogram.
+struct PointCloudSummary {
+  PointCloudInfo info;
+  std::uint64_t points_read = 0;
+  bool has_classes = false;
+  std::array<std::uint64_t, 256> class_counts{};
+};
+
+/// Reads the header and streams every point's classification. Throws IoError.
+PointCloudSummary summarise_point_cloud(const std::string& path);
+
+/// True when the file starts with a point-cloud signature ("LASF" or "ply").
+bool looks_like_point_cloud(const std::string& path);
+
+/// The text `city3d info` prints for a point-cloud file (header, count, bounds, class histogram, CRS).
+std::string describe_point_cloud(const PointCloudSummary& summary);
+
+/// The text `city3d info` prints for a footprint source (driver, layer, count, id field, SRS, holes,
+/// repaired and skipped features with their reasons).
+std::string describe_footprints(const FootprintSet& footprints);
+
+}  // namespace city3d

@@ -1,0 +1,48 @@
+// The command line: one table maps every flag onto the run options (and the stage parameter
+// structs), and the same table prints --help with the defaults.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "city3d/footprint_io.hpp"
+#include "city3d/model_io.hpp"
+
+namespace city3d {
+
+/// Process exit codes of the `city3d` executable.
+enum ExitCode : int {
+  kExitOk = 0,        ///< the run finished (for `reconstruct`: even if some buildings fell back or failed)
+  kExitInput = 1,     ///< the run could not go on: unreadable or invalid input, unwritable output
+  kExitUsage = 2,     ///< bad command line: unknown command or option, bad value
+  kExitInternal = 3,  ///< an unexpected internal error (a bug): please report it
+};
+
+/// Everything one invocation of `city3d` can set, with its defaults.
+struct RunOptions {
+  std::string command;               ///< "info" or "reconstruct"; empty with --help / --version
+  bool help = false;
+  bool version = false;
+  std::vector<std::string> inputs;   ///< positional arguments: files for `info`, point clouds for `reconstruct`
+
+  // Footprints.
+  std::string footprints;            ///< OGR source or OBJ polygon file
+  FootprintReadOptions footprint;    ///< layer, id field, filter, bbox, repair
+
+  // Output.
+  std::string output_dir = "city3d_out";
+  std::string format = "obj";        ///< obj, ply, ply-ascii
+  bool local_coordinates = false;
+
+  // Logging.
+  int verbosity = 1;                 ///< 0 quiet, 1 warnings, 2 info, 3 debug
+};
+
+/// Parses argv. Throws ConfigError naming the offending argument (unknown option, missing or bad
+/// value, unknown command) after collecting every problem.
+RunOptions parse_command_line(int argc, const char* const* argv);
+
+/// The --help text: usage, commands, every option with its default, exit codes.
+std::string help_text();
+
+}  // namespace city3d

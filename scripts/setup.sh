@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# One-command set-up on a fresh Debian 12 machine (run as root, or with sudo available):
+#   scripts/setup.sh run    install what is missing, build, run the main job on the sample in data/
+#   scripts/setup.sh test   install what is missing, build, run the tests
+# Idempotent: installed packages and an existing build are reused.
+set -euo pipefail
+
+mode="${1:-run}"
+case "$mode" in run | test) ;; *) echo "usage: $0 run|test" >&2; exit 2 ;; esac
+cd "$(dirname "$0")/.."
+
+# Debian packages the build needs (see README.md, "Dependencies", for why each is there).
+packages=(
+  build-essential cmake ccache pkg-config
+  libgdal-dev gdal-bin
+  libgtest-dev
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+jobs="$(nproc 2>/dev/null || echo 2)"
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
+cmake --build build -j "$jobs"
+
+if [ "$mode" = run ]; then
+  set -x
+  ./build/city3d info data/delft_sample_1.las data/delft_sample_footprints.gpkg
+else
+  ctest --test-dir build --output-on-failure -j "$jobs"
+fi

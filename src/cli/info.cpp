@@ -1,0 +1,152 @@
+// `city3d info`: summaries of point-cloud files and footprint sources, streamed so that a tile of any
+// size is summarised in bounded memory.
+#include "city3d/info.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "city3d/error.hpp"
+
+namespace city3d {
+namespace {
+
+// ASPRS LAS 1.4 standard class names (R15); AHN uses 26 for civil structures ("kunstwerk").
+const char* class_name(int c) {
+  switch (c) {
+    case 0: return "never classified";
+    case 1: return "unclassified";
+    case 2: return "ground";
+    case 3: return "low vegetation";
+    case 4: return "medium vegetation";
+    case 5: return "high vegetation";
+    case 6: return "building";
+    case 7: return "low point (noise)";
+    case 9: return "water";
+    case 10: return "rail";
+    case 11: return "road surface";
+    case 13: return "wire guard";
+    case 14: return "wire conductor";
+    case 15: return "transmission tower";
+    case 17: return "bridge deck";
+    case 18: return "high noise";
+    case 26: return "user defined (AHN: civil structure)";
+    default: return c < 64 ? "reserved" : "user defined";
+  }
+}
+
+std::string fields_text(PointFields f) {
+  std::string s = "xyz";
+  if (f & kFieldIntensity) s += " intensity";
+  if (f & kFieldReturns) s += " returns";
+  if (f & kFieldClassification) s += " classification";
+  if (f & kFieldGpsTime) s += " gps_time";
+  if (f & kFieldRgb) s += " rgb";
+  if (f & kFieldNormal) s += " normal";
+  return s;
+}
+
+std::string fixed(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+}  // namespace
+
+bool looks_like_point_cloud(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char magic[4] = {0, 0, 0, 0};
+  in.read(magic, 4);
+  const std::string m(magic, static_cast<std::size_t>(in.gcount()));
+  return m == "LASF" || m.rfind("ply", 0) == 0;
+}
+
+PointCloudSummary summarise_point_cloud(const std::string& path) {
+  PointCloudSummary summary;
+  summary.info = read_point_cloud_info(path);
+  if (summary.info.compressed) return summary;  // header only until LAZ decoding is wired in
+  auto reader = open_point_cloud(path, kFieldClassification);
+  summary.info = reader->info();
+  PointCloud chunk;
+  constexpr std::size_t kChunk = 1 << 20;
+  Box3 bounds;
+  for (;;) {
+    chunk.clear();
+    const std::size_t n = reader->read(chunk, kChunk);
+    if (n == 0) break;
+    summary.points_read += n;
+    if (!chunk.classification.empty()) {
+      summary.has_classes = true;
+      for (std::uint8_t c : chunk.classification) ++summary.class_counts[c];
+    }
+    for (const Point3& p : chunk.points) bounds.add(p);
+  }
+  // PLY headers carry no bounds: report the bounds of the points read.
+  if (summary.info.bounds.empty()) summary.info.bounds = bounds;
+  return summary;
+}
+
+std::string describe_point_cloud(const PointCloudSummary& s) {
+  const PointCloudInfo& i = s.info;
+  const int d = i.format == "PLY" ? 3 : std::max(0, static_cast<int>(std::ceil(-std::log10(i.scale[0]) - 1e-9)));
+  std::ostringstream out;
+  out << "file: " << i.path << "\n";
+  out << "format: " << i.format << " " << i.version;
+  if (i.point_format >= 0) out << ", point format " << i.point_format << ", record length " << i.record_length;
+  out << "\n";
+  out << "points: " << i.point_count << "\n";
+  if (!i.bounds.empty()) {
+    out << "bounds: x " << fixed(i.bounds.min.x, d) << " .. " << fixed(i.bounds.max.x, d) << ", y "
+        << fixed(i.bounds.min.y, d) << " .. " << fixed(i.bounds.max.y, d) << ", z " << fixed(i.bounds.min.z, d)
+        << " .. " << fixed(i.bounds.max.z, d) << "\n";
+  }
+  if (i.format != "PLY") {
+    out << "scale: " << i.scale[0] << " " << i.scale[1] << " " << i.scale[2] << "  offset: " << i.offset[0] << " "
+        << i.offset[1] << " " << i.offset[2] << "\n";
+  }
+  out << "crs: " << (i.crs.empty() ? "none recorded" : i.crs) << "\n";
+  if (!i.generating_software.empty()) out << "software: " << i.generating_software << "\n";
+  out << "fields: " << fields_text(i.fields) << "\n";
+  for (const std::string& v : i.vlrs) out << "vlr: " << v << "\n";
+  if (i.compressed) {
+    out << "classes: not counted (LAZ point decoding is not available yet)\n";
+  } else if (s.has_classes) {
+    out << "classes:\n";
+    for (int c = 0; c < 256; ++c)
+      if (s.class_counts[c] > 0) out << "  " << c << " " << class_name(c) << ": " << s.class_counts[c] << "\n";
+  } else {
+    out << "classes: none in file\n";
+  }
+  return out.str();
+}
+
+std::string describe_footprints(const FootprintSet& f) {
+  std::ostringstream out;
+  out << "file: " << f.path << "\n";
+  out << "driver: " << f.driver << "\n";
+  out << "layer: " << f.layer << "\n";
+  out << "features: " << f.feature_count << "\n";
+  out << "footprints: " << f.footprints.size() << "\n";
+  out << "id field: " << f.id_field << "\n";
+  out << "srs: " << (f.srs.empty() ? "none recorded" : f.srs) << "\n";
+  std::size_t multi = 0;
+  Box2 bounds;
+  for (const Footprint& fp : f.footprints) {
+    if (fp.polygons.size() > 1) ++multi;
+    for (const Polygon2& p : fp.polygons)
+      for (const Point2& v : p.outer) bounds.add(v);
+  }
+  if (!bounds.empty())
+    out << "bounds: x " << fixed(bounds.min.x, 3) << " .. " << fixed(bounds.max.x, 3) << ", y "
+        << fixed(bounds.min.y, 3) << " .. " << fixed(bounds.max.y, 3) << "\n";
+  out << "with holes: " << f.with_holes << "\n";
+  out << "multipolygons: " << multi << "\n";
+  out << "repaired (invalid): " << f.repaired << "\n";
+  out << "skipped: " << f.skipped.size() << "\n";
+  for (const SkippedFootprint& s : f.skipped) out << "  " << s.id << ": " << s.reason << "\n";
+  return out.str();
+}
+
+}  // namespace city3d
