@@ -13,6 +13,8 @@ cd "$(dirname "$0")/.."
 packages=(
   build-essential cmake ccache pkg-config
   libgdal-dev gdal-bin
+  libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libboost-dev
+  libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   libgtest-dev
 )
 
