@@ -185,3 +185,71 @@ TEST(MeshFormatName, parses_known_names_and_rejects_others) {
   EXPECT_EQ(parse_mesh_format("ply-ascii"), MeshFormat::ply_ascii);
   EXPECT_THROW(parse_mesh_format("stl"), ConfigError);
 }
+
+TEST_F(ModelWriter, writes_cityjson_matching_reference) {
+  const fs::path out = dir_ / "box.city.json";
+  CityObject object{box_model("b1", {84916.9491, 447413.3, 5.977}), "1.2",
+                    {{"status", std::string("ok")}, {"rmse", 0.125}, {"points", std::int64_t{1234}},
+                     {"note", AttributeValue{}}, {"strict", false}}};
+  write_cityjson(out.string(), {object}, {"EPSG:28992", 0.001, ""});
+  EXPECT_EQ(read_text(out), reference("box.city.json"));
+}
+
+TEST_F(ModelWriter, cityjson_shares_vertices_and_labels_faces_by_normal) {
+  const fs::path out = dir_ / "two.city.json";
+  write_cityjson(out.string(), {{box_model("a", {0, 0, 0}), "2.2", {}}, {box_model("b", {10, 0, 0}), "2.2", {}}},
+                 {"", 0.001, ""});
+  const std::string text = read_text(out);
+  // 8 distinct vertices per building, none shared across buildings: 16 in all.
+  std::size_t vertices = 0;
+  for (auto pos = text.find("\"vertices\":[[") + 12; pos < text.size(); ++pos)
+    if (text[pos] == '[') ++vertices;
+  EXPECT_EQ(vertices, 16u);
+  // Face order floor, roof, 4 walls -> ground 0, wall 1, roof 2.
+  EXPECT_NE(text.find("\"values\":[[0,2,1,1,1,1]]"), std::string::npos) << text;
+  EXPECT_EQ(text.find("referenceSystem"), std::string::npos);
+}
+
+TEST(SurfaceTypes, uses_given_semantics_when_present) {
+  BuildingModel m = box_model("b", {0, 0, 0});
+  m.surfaces.assign(m.mesh.faces.size(), SurfaceType::roof);
+  for (SurfaceType t : surface_types(m)) EXPECT_EQ(t, SurfaceType::roof);
+  m.surfaces.clear();
+  const auto types = surface_types(m);
+  ASSERT_EQ(types.size(), 6u);
+  EXPECT_EQ(types[0], SurfaceType::ground);
+  EXPECT_EQ(types[1], SurfaceType::roof);
+  EXPECT_EQ(types[2], SurfaceType::wall);
+}
+
+TEST_F(ModelWriter, cityjsonseq_writes_header_then_one_feature_per_line) {
+  const fs::path out = dir_ / "all.city.jsonl";
+  {
+    CityJsonSeqWriter writer(out.string(), {"EPSG:28992", 0.001, ""}, {84000, 447000, 0});
+    writer.add({box_model("a", {84001, 447002, 1}), "2.2", {{"status", std::string("ok")}}});
+    writer.add({box_model("b", {84010, 447002, 1}), "2.2", {}});
+    EXPECT_FALSE(fs::exists(out));  // only under its final name once closed
+    writer.close();
+  }
+  std::ifstream in(out);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  ASSERT_EQ(lines.size(), 3u);
+  EXPECT_EQ(lines[0],
+            "{\"type\":\"CityJSON\",\"version\":\"2.0\",\"transform\":{\"scale\":[0.001,0.001,0.001],\"translate\":["
+            "84000,447000,0]},\"metadata\":{\"referenceSystem\":\"https://www.opengis.net/def/crs/EPSG/0/28992\"},"
+            "\"CityObjects\":{},\"vertices\":[]}");
+  EXPECT_EQ(lines[1].rfind("{\"type\":\"CityJSONFeature\",\"id\":\"a\",\"CityObjects\":{\"a\":{", 0), 0u);
+  // Building a's first vertex: (84001 - 84000, 447002 - 447000, 1 - 0) m in millimetres.
+  EXPECT_NE(lines[1].find("\"vertices\":[[1000,2000,1000],"), std::string::npos) << lines[1];
+  EXPECT_NE(lines[2].find("\"vertices\":[[10000,2000,1000],"), std::string::npos) << lines[2];
+}
+
+TEST_F(ModelWriter, cityjsonseq_leaves_nothing_when_not_closed) {
+  const fs::path out = dir_ / "partial.city.jsonl";
+  {
+    CityJsonSeqWriter writer(out.string(), {"", 0.001, ""}, {0, 0, 0});
+    writer.add({box_model("a", {0, 0, 0}), "2.2", {}});
+  }
+  EXPECT_TRUE(fs::is_empty(dir_));
+}

@@ -2,7 +2,12 @@
 // for many. Files are written atomically (temporary file, then rename).
 #pragma once
 
+#include <cstdint>
+#include <cstdio>
+#include <memory>
 #include <string>
+#include <utility>
+#include <variant>
 #include <vector>
 
 #include "city3d/types.hpp"
@@ -34,5 +39,49 @@ void write_model(const std::string& path, const BuildingModel& model, const Mode
 /// per-face `building` index and one `comment building <index> <id>` line per building.
 void write_models(const std::string& path, const std::vector<BuildingModel>& models,
                   const ModelWriteOptions& options);
+
+/// One attribute value of a city object: null, boolean, integer, number or text.
+using AttributeValue = std::variant<std::monostate, bool, std::int64_t, double, std::string>;
+
+/// A building as a CityJSON `Building`: its model, the LoD of its geometry and its attributes.
+struct CityObject {
+  BuildingModel model;
+  std::string lod = "2.2";  ///< CityJSON LoD string of the geometry ("1.2", "2.2")
+  std::vector<std::pair<std::string, AttributeValue>> attributes;
+};
+
+struct CityJsonOptions {
+  std::string crs;             ///< "EPSG:28992" (written as an OGC CRS URL), or empty when unknown
+  double scale = 0.001;        ///< transform scale in metres: 0.001 keeps millimetres
+  std::string reference_date;  ///< metadata referenceDate (YYYY-MM-DD), or empty
+};
+
+/// Classifies the faces of a model (its `surfaces` when given, else by normal: down-facing ground,
+/// near-vertical wall, otherwise roof).
+std::vector<SurfaceType> surface_types(const BuildingModel& model);
+
+/// Writes one CityJSON 2.0 file holding every object as a `Building` whose geometry is a `Solid`
+/// with semantic surfaces (RoofSurface, WallSurface, GroundSurface). Vertices are quantised with
+/// the transform (scale, translate = the minimum corner of all vertices) and shared per building.
+/// Atomic write; throws IoError naming the path.
+void write_cityjson(const std::string& path, const std::vector<CityObject>& objects, const CityJsonOptions& options);
+
+/// Streams CityJSONSeq (CityJSON Text Sequences): a first line with the CityJSON header and
+/// transform, then one CityJSONFeature line per building, written in the order add() is called.
+/// The file appears under its final name only after close() (atomic).
+class CityJsonSeqWriter {
+ public:
+  /// `translate` is the transform's translation for the whole file (e.g. the footprints' minimum corner).
+  CityJsonSeqWriter(const std::string& path, const CityJsonOptions& options, const Point3& translate);
+  ~CityJsonSeqWriter();
+  CityJsonSeqWriter(const CityJsonSeqWriter&) = delete;
+  CityJsonSeqWriter& operator=(const CityJsonSeqWriter&) = delete;
+  void add(const CityObject& object);
+  void close();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace city3d

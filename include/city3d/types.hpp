@@ -84,12 +84,17 @@ struct PolygonMesh {
   std::vector<std::vector<std::uint32_t>> faces;
 };
 
+/// What a model face is, for CityJSON semantics.
+enum class SurfaceType : std::uint8_t { ground, wall, roof };
+
 /// A building's model: the mesh in a local frame plus the origin that takes it back to the world
 /// (world = local + origin).
 struct BuildingModel {
   BuildingId id;
   PolygonMesh mesh;
   Point3 origin;
+  /// One entry per face, or empty: writers then classify faces by their normal.
+  std::vector<SurfaceType> surfaces;
 };
 
 }  // namespace city3d

@@ -1,0 +1,281 @@
+// CityJSON 2.0 and CityJSONSeq writers: Buildings with a Solid geometry, semantic surfaces, a
+// quantising transform and attributes. Output is byte-deterministic (fixed key order, shortest
+// round-trip number formatting).
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <map>
+#include <string>
+#include <tuple>
+
+#include "city3d/error.hpp"
+#include "city3d/model_io.hpp"
+#include "io/atomic_file.hpp"
+
+namespace city3d {
+namespace {
+
+void append_json_string(std::string& out, const std::string& s) {
+  out += '"';
+  for (unsigned char c : s) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\r': out += "\\r"; break;
+      case '\t': out += "\\t"; break;
+      default:
+        if (c < 0x20) {
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\u%04x", c);
+          out += buf;
+        } else {
+          out += static_cast<char>(c);
+        }
+    }
+  }
+  out += '"';
+}
+
+void append_number(std::string& out, double v) {
+  if (!std::isfinite(v)) {
+    out += "null";
+    return;
+  }
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  out.append(buf, r.ptr);
+}
+
+void append_value(std::string& out, const AttributeValue& v) {
+  if (std::holds_alternative<std::monostate>(v)) out += "null";
+  else if (const bool* b = std::get_if<bool>(&v)) out += *b ? "true" : "false";
+  else if (const std::int64_t* i = std::get_if<std::int64_t>(&v)) out += std::to_string(*i);
+  else if (const double* d = std::get_if<double>(&v)) append_number(out, *d);
+  else append_json_string(out, std::get<std::string>(v));
+}
+
+std::string crs_url(const std::string& crs) {
+  // "EPSG:28992" -> the OGC URL CityJSON 2.0 expects; anything else is passed through.
+  if (crs.rfind("EPSG:", 0) == 0) return "https://www.opengis.net/def/crs/EPSG/0/" + crs.substr(5);
+  return crs;
+}
+
+const char* surface_name(SurfaceType t) {
+  switch (t) {
+    case SurfaceType::ground: return "GroundSurface";
+    case SurfaceType::wall: return "WallSurface";
+    case SurfaceType::roof: return "RoofSurface";
+  }
+  return "RoofSurface";
+}
+
+using Quantised = std::tuple<std::int64_t, std::int64_t, std::int64_t>;
+
+// Quantises a building's vertices into `vertices` (shared, deduplicated within the building) and
+// appends its CityObject member `"id":{...}` to `out`.
+void append_city_object(std::string& out, const CityObject& object, const Point3& translate, double scale,
+                        std::vector<Quantised>& vertices) {
+  const BuildingModel& m = object.model;
+  std::map<Quantised, std::size_t> index_of;
+  std::vector<std::size_t> remap(m.mesh.vertices.size());
+  for (std::size_t i = 0; i < m.mesh.vertices.size(); ++i) {
+    const Point3& p = m.mesh.vertices[i];
+    const Quantised q{std::llround((p.x + m.origin.x - translate.x) / scale),
+                      std::llround((p.y + m.origin.y - translate.y) / scale),
+                      std::llround((p.z + m.origin.z - translate.z) / scale)};
+    const auto [it, inserted] = index_of.emplace(q, vertices.size());
+    if (inserted) vertices.push_back(q);
+    remap[i] = it->second;
+  }
+  const std::vector<SurfaceType> types = surface_types(m);
+  // Semantic surface objects: only the types used, in the order ground, wall, roof.
+  bool used[3] = {false, false, false};
+  for (SurfaceType t : types) used[static_cast<int>(t)] = true;
+  int surface_index[3] = {-1, -1, -1};
+  int n_surfaces = 0;
+  for (int t = 0; t < 3; ++t)
+    if (used[t]) surface_index[t] = n_surfaces++;
+
+  append_json_string(out, m.id);
+  out += ":{\"type\":\"Building\",\"attributes\":{";
+  for (std::size_t a = 0; a < object.attributes.size(); ++a) {
+    if (a) out += ',';
+    append_json_string(out, object.attributes[a].first);
+    out += ':';
+    append_value(out, object.attributes[a].second);
+  }
+  out += "},\"geometry\":[{\"type\":\"Solid\",\"lod\":";
+  append_json_string(out, object.lod);
+  out += ",\"boundaries\":[[";
+  for (std::size_t f = 0; f < m.mesh.faces.size(); ++f) {
+    if (f) out += ',';
+    out += "[[";
+    bool first = true;
+    std::size_t previous = static_cast<std::size_t>(-1);
+    for (std::uint32_t v : m.mesh.faces[f]) {
+      const std::size_t q = remap[v];
+      if (q == previous) continue;  // consecutive vertices merged by quantisation
+      if (!first) out += ',';
+      out += std::to_string(q);
+      first = false;
+      previous = q;
+    }
+    out += "]]";
+  }
+  out += "]],\"semantics\":{\"surfaces\":[";
+  for (int t = 0, k = 0; t < 3; ++t) {
+    if (!used[t]) continue;
+    if (k++) out += ',';
+    out += "{\"type\":\"";
+    out += surface_name(static_cast<SurfaceType>(t));
+    out += "\"}";
+  }
+  out += "],\"values\":[[";
+  for (std::size_t f = 0; f < types.size(); ++f) {
+    if (f) out += ',';
+    out += std::to_string(surface_index[static_cast<int>(types[f])]);
+  }
+  out += "]]}}]}";
+}
+
+void append_vertices(std::string& out, const std::vector<Quantised>& vertices) {
+  out += "\"vertices\":[";
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    if (i) out += ',';
+    out += '[';
+    out += std::to_string(std::get<0>(vertices[i]));
+    out += ',';
+    out += std::to_string(std::get<1>(vertices[i]));
+    out += ',';
+    out += std::to_string(std::get<2>(vertices[i]));
+    out += ']';
+  }
+  out += ']';
+}
+
+void append_header_fields(std::string& out, const CityJsonOptions& options, const Point3& translate) {
+  out += "\"type\":\"CityJSON\",\"version\":\"2.0\",\"transform\":{\"scale\":[";
+  for (int i = 0; i < 3; ++i) {
+    if (i) out += ',';
+    append_number(out, options.scale);
+  }
+  out += "],\"translate\":[";
+  append_number(out, translate.x);
+  out += ',';
+  append_number(out, translate.y);
+  out += ',';
+  append_number(out, translate.z);
+  out += "]},\"metadata\":{";
+  bool any = false;
+  if (!options.crs.empty()) {
+    out += "\"referenceSystem\":";
+    append_json_string(out, crs_url(options.crs));
+    any = true;
+  }
+  if (!options.reference_date.empty()) {
+    if (any) out += ',';
+    out += "\"referenceDate\":";
+    append_json_string(out, options.reference_date);
+  }
+  out += '}';
+}
+
+void check_options(const CityJsonOptions& options, const std::string& path) {
+  if (!(options.scale > 0.0) || !std::isfinite(options.scale))
+    throw IoError("cityjson: scale must be positive for " + path);
+}
+
+void write_all(std::FILE* f, const std::string& text) { std::fwrite(text.data(), 1, text.size(), f); }
+
+}  // namespace
+
+std::vector<SurfaceType> surface_types(const BuildingModel& model) {
+  if (model.surfaces.size() == model.mesh.faces.size()) return model.surfaces;
+  std::vector<SurfaceType> types;
+  types.reserve(model.mesh.faces.size());
+  for (const auto& face : model.mesh.faces) {
+    // Newell's normal: robust for any planar (or nearly planar) polygon.
+    double nx = 0, ny = 0, nz = 0;
+    for (std::size_t i = 0; i < face.size(); ++i) {
+      const Point3& a = model.mesh.vertices[face[i]];
+      const Point3& b = model.mesh.vertices[face[(i + 1) % face.size()]];
+      nx += (a.y - b.y) * (a.z + b.z);
+      ny += (a.z - b.z) * (a.x + b.x);
+      nz += (a.x - b.x) * (a.y + b.y);
+    }
+    const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+    const double cz = len > 0 ? nz / len : 0.0;
+    // |cos| below 0.1 (more than ~84 degrees from horizontal) counts as a wall.
+    types.push_back(cz < -0.1 ? SurfaceType::ground : (cz <= 0.1 ? SurfaceType::wall : SurfaceType::roof));
+  }
+  return types;
+}
+
+void write_cityjson(const std::string& path, const std::vector<CityObject>& objects, const CityJsonOptions& options) {
+  check_options(options, path);
+  Point3 translate{0, 0, 0};
+  Box3 box;
+  for (const CityObject& o : objects)
+    for (const Point3& p : o.model.mesh.vertices)
+      box.add({p.x + o.model.origin.x, p.y + o.model.origin.y, p.z + o.model.origin.z});
+  if (!box.empty()) {
+    // A translation on the scale's grid keeps quantised coordinates exact multiples of the scale.
+    translate = {std::floor(box.min.x), std::floor(box.min.y), std::floor(box.min.z)};
+  }
+  std::string out = "{";
+  append_header_fields(out, options, translate);
+  out += ",\"CityObjects\":{";
+  std::vector<Quantised> vertices;
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    if (i) out += ',';
+    append_city_object(out, objects[i], translate, options.scale, vertices);
+  }
+  out += "},";
+  append_vertices(out, vertices);
+  out += "}\n";
+  detail::AtomicFile file(path);
+  write_all(file.file(), out);
+  file.commit();
+}
+
+struct CityJsonSeqWriter::Impl {
+  std::string path;
+  CityJsonOptions options;
+  Point3 translate;
+  std::unique_ptr<detail::AtomicFile> file;
+};
+
+CityJsonSeqWriter::CityJsonSeqWriter(const std::string& path, const CityJsonOptions& options,
+                                     const Point3& translate)
+    : impl_(new Impl{path, options, translate, nullptr}) {
+  check_options(options, path);
+  impl_->file = std::make_unique<detail::AtomicFile>(path);
+  std::string header = "{";
+  append_header_fields(header, options, translate);
+  header += ",\"CityObjects\":{},\"vertices\":[]}\n";
+  write_all(impl_->file->file(), header);
+}
+
+CityJsonSeqWriter::~CityJsonSeqWriter() = default;
+
+void CityJsonSeqWriter::add(const CityObject& object) {
+  if (!impl_->file) throw IoError("cityjson: " + impl_->path + " is already closed");
+  std::string line = "{\"type\":\"CityJSONFeature\",\"id\":";
+  append_json_string(line, object.model.id);
+  line += ",\"CityObjects\":{";
+  std::vector<Quantised> vertices;
+  append_city_object(line, object, impl_->translate, impl_->options.scale, vertices);
+  line += "},";
+  append_vertices(line, vertices);
+  line += "}\n";
+  write_all(impl_->file->file(), line);
+}
+
+void CityJsonSeqWriter::close() {
+  if (!impl_->file) return;
+  impl_->file->commit();
+  impl_->file.reset();
+}
+
+}  // namespace city3d
