@@ -17,7 +17,7 @@ struct FootprintReadOptions {
   std::string layer;             ///< layer name; empty = the first layer with polygons
   std::string id_field;          ///< attribute holding the building id; empty = the feature id (FID)
   std::string attribute_filter;  ///< OGR SQL WHERE clause, e.g. "bouwjaar > 1900"; empty = all
-  std::optional<Box2> bbox;      ///< keep only footprints whose bounding box intersects this box
+  std::optional<Box2> bbox;      ///< keep only footprints intersecting this box (OGR spatial filter)
   bool repair = true;            ///< repair invalid polygons with MakeValid; false = skip them
 };
 

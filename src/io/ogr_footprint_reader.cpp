@@ -1,1 +1,463 @@
-// placeholder until implemented
+// Footprints from any GDAL/OGR vector source (GeoPackage, Shapefile, GeoJSON, SQLite, ...), and the
+// dispatch of read_footprints() / list_footprint_layers() between the OGR and OBJ readers.
+#include <cpl_conv.h>
+#include <cpl_error.h>
+#include <cpl_vsi.h>
+#include <gdal.h>
+#include <gdal_priv.h>
+#include <ogr_geometry.h>
+#include <ogr_spatialref.h>
+#include <ogrsf_frmts.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "city3d/error.hpp"
+#include "city3d/footprint_io.hpp"
+#include "city3d/log.hpp"
+#include "io/footprint_readers.hpp"
+
+namespace city3d {
+namespace detail {
+namespace {
+
+constexpr const char* kModule = "footprints: ";
+
+void register_drivers_once() {
+  static std::once_flag once;
+  std::call_once(once, [] { GDALAllRegister(); });
+}
+
+/// While alive, GDAL's messages on this thread go to a quiet handler instead of stderr; we read
+/// them back with CPLGetLastErrorMsg() and put them into our own messages. The handler stack is
+/// thread-local in GDAL, so concurrent readers do not disturb each other.
+class QuietGdalErrors {
+ public:
+  QuietGdalErrors() {
+    CPLPushErrorHandler(CPLQuietErrorHandler);
+    CPLErrorReset();
+  }
+  ~QuietGdalErrors() { CPLPopErrorHandler(); }
+  QuietGdalErrors(const QuietGdalErrors&) = delete;
+  QuietGdalErrors& operator=(const QuietGdalErrors&) = delete;
+};
+
+/// GDAL's last message on this thread, as " (GDAL: ...)", or empty.
+std::string gdal_message() {
+  const char* msg = CPLGetLastErrorMsg();
+  if (msg == nullptr || *msg == '\0') return {};
+  return std::string(" (GDAL: ") + msg + ")";
+}
+
+std::string join(const std::vector<std::string>& names) {
+  std::string out;
+  for (const std::string& name : names) {
+    if (!out.empty()) out += ", ";
+    out += name;
+  }
+  return out.empty() ? "none" : out;
+}
+
+bool iequals(const std::string& a, const std::string& b) {
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+           return std::tolower(static_cast<unsigned char>(x)) == std::tolower(static_cast<unsigned char>(y));
+         });
+}
+
+bool path_exists(const std::string& path) {
+  VSIStatBufL stat;
+  return VSIStatExL(path.c_str(), &stat, VSI_STAT_EXISTS_FLAG) == 0;
+}
+
+GDALDatasetUniquePtr open_vector(const std::string& path) {
+  register_drivers_once();
+  CPLErrorReset();
+  GDALDatasetUniquePtr dataset(GDALDataset::Open(
+      path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY | GDAL_OF_VERBOSE_ERROR, nullptr, nullptr, nullptr));
+  if (dataset) return dataset;
+  // Existence is checked after the attempt, not before: an OGR source need not be a local file
+  // ("PG:dbname=...", "/vsizip/..."); VSIStatExL understands the /vsi prefixes too.
+  if (!path_exists(path)) throw IoError(kModule + std::string("cannot open ") + path + ": no such file");
+  throw IoError(kModule + std::string("cannot open ") + path + ": not a vector source" + gdal_message());
+}
+
+std::vector<std::string> layer_names(GDALDataset& dataset) {
+  std::vector<std::string> names;
+  for (OGRLayer* layer : dataset.GetLayers()) names.emplace_back(layer->GetName());
+  return names;
+}
+
+bool is_polygonal(OGRwkbGeometryType type) {
+  switch (wkbFlatten(type)) {
+    case wkbPolygon:
+    case wkbMultiPolygon:
+    case wkbCurvePolygon:
+    case wkbMultiSurface:
+      return true;
+    default:
+      return false;
+  }
+}
+
+/// A declared layer type that may still hold polygons (GeoJSON and CSV layers with mixed or
+/// unknown geometry types declare "Unknown").
+bool may_hold_polygons(OGRwkbGeometryType type) {
+  const OGRwkbGeometryType flat = wkbFlatten(type);
+  return is_polygonal(type) || flat == wkbUnknown || flat == wkbGeometryCollection;
+}
+
+/// True when some feature of the layer (with whatever filters are set) has a non-empty polygon.
+bool layer_has_polygon_feature(OGRLayer& layer) {
+  layer.ResetReading();
+  for (const auto& feature : layer) {
+    const OGRGeometry* geometry = feature->GetGeometryRef();
+    if (geometry != nullptr && !geometry->IsEmpty() && is_polygonal(geometry->getGeometryType())) {
+      layer.ResetReading();
+      return true;
+    }
+  }
+  layer.ResetReading();
+  return false;
+}
+
+OGRLayer& select_layer(GDALDataset& dataset, const std::string& path, const std::string& name) {
+  if (!name.empty()) {
+    OGRLayer* layer = dataset.GetLayerByName(name.c_str());
+    if (layer == nullptr) {
+      throw IoError(kModule + std::string("no layer '") + name + "' in " + path +
+                    " (layers: " + join(layer_names(dataset)) + ")");
+    }
+    return *layer;
+  }
+  if (dataset.GetLayerCount() == 0) throw IoError(kModule + path + " has no layers");
+  // With one layer there is nothing to choose; whether it holds polygons is checked by the reader,
+  // which then names the layer in its message.
+  if (dataset.GetLayerCount() == 1) return *dataset.GetLayer(0);
+  for (OGRLayer* layer : dataset.GetLayers()) {
+    if (is_polygonal(layer->GetGeomType())) return *layer;
+  }
+  for (OGRLayer* layer : dataset.GetLayers()) {
+    if (may_hold_polygons(layer->GetGeomType()) && layer_has_polygon_feature(*layer)) return *layer;
+  }
+  throw IoError(kModule + std::string("no layer with polygon features in ") + path +
+                " (layers: " + join(layer_names(dataset)) + ")");
+}
+
+/// "EPSG:n" when the layer's SRS carries or can be matched to an EPSG code, else its WKT, else "".
+std::string describe_srs(OGRLayer& layer) {
+  const OGRSpatialReference* srs = layer.GetSpatialRef();
+  if (srs == nullptr) return {};
+  std::unique_ptr<OGRSpatialReference> copy(srs->Clone());
+  auto epsg = [&]() -> std::string {
+    const char* authority = copy->GetAuthorityName(nullptr);
+    const char* code = copy->GetAuthorityCode(nullptr);
+    if (authority != nullptr && code != nullptr && iequals(authority, "EPSG")) {
+      return std::string("EPSG:") + code;
+    }
+    return {};
+  };
+  std::string text = epsg();
+  if (text.empty() && copy->AutoIdentifyEPSG() == OGRERR_NONE) text = epsg();
+  if (!text.empty()) return text;
+  char* wkt = nullptr;
+  if (copy->exportToWkt(&wkt) == OGRERR_NONE && wkt != nullptr) text = wkt;
+  CPLFree(wkt);
+  return text;
+}
+
+Ring2 ring_from_ogr(const OGRLinearRing& ring) {
+  Ring2 out;
+  out.reserve(static_cast<std::size_t>(ring.getNumPoints()));
+  for (int i = 0; i < ring.getNumPoints(); ++i) out.push_back({ring.getX(i), ring.getY(i)});
+  return out;
+}
+
+/// Polygons of a multipolygon, rings cleaned and oriented; degenerate polygons dropped.
+std::vector<Polygon2> polygons_from_ogr(const OGRMultiPolygon& multi) {
+  std::vector<Polygon2> polygons;
+  for (const OGRPolygon* part : multi) {
+    if (part == nullptr || part->IsEmpty()) continue;
+    Polygon2 polygon;
+    polygon.outer = ring_from_ogr(*part->getExteriorRing());
+    for (int i = 0; i < part->getNumInteriorRings(); ++i) {
+      polygon.holes.push_back(ring_from_ogr(*part->getInteriorRing(i)));
+    }
+    if (normalise_polygon(polygon)) polygons.push_back(std::move(polygon));
+  }
+  return polygons;
+}
+
+/// The polygonal parts of MakeValid's result (which may mix polygons, lines and points) as one
+/// multipolygon. MakeValid's parts do not overlap, so collecting them needs no union.
+std::unique_ptr<OGRMultiPolygon> polygonal_parts(std::unique_ptr<OGRGeometry> geometry) {
+  auto multi = std::make_unique<OGRMultiPolygon>();
+  if (!geometry) return multi;
+  const OGRwkbGeometryType type = wkbFlatten(geometry->getGeometryType());
+  if (type == wkbPolygon || type == wkbMultiPolygon) {
+    OGRGeometry* forced = OGRGeometryFactory::forceToMultiPolygon(geometry.release());
+    multi.reset(forced->toMultiPolygon());
+    return multi;
+  }
+  if (type == wkbGeometryCollection) {
+    for (const OGRGeometry* part : geometry->toGeometryCollection()) {
+      const OGRwkbGeometryType part_type = wkbFlatten(part->getGeometryType());
+      if (part_type == wkbPolygon) {
+        multi->addGeometry(part);
+      } else if (part_type == wkbMultiPolygon) {
+        for (const OGRPolygon* polygon : part->toMultiPolygon()) multi->addGeometry(polygon);
+      }
+    }
+  }
+  return multi;
+}
+
+/// Where one feature's geometry ended up.
+struct GeometryOutcome {
+  std::vector<Polygon2> polygons;  ///< empty when skipped
+  std::string skip_reason;         ///< set when skipped
+  std::string repair_note;         ///< set when repaired (the validity problem GEOS reported)
+};
+
+GeometryOutcome convert_geometry(const OGRGeometry& source, bool repair) {
+  GeometryOutcome outcome;
+  std::unique_ptr<OGRGeometry> geometry(source.clone());
+  // Curves (CurvePolygon, MultiSurface) are linearised with GDAL's default step of 4 degrees.
+  if (geometry->hasCurveGeometry()) geometry.reset(geometry->getLinearGeometry());
+  geometry->flattenTo2D();  // footprints are 2D; z (and m) would only confuse IsValid
+  std::unique_ptr<OGRMultiPolygon> multi(
+      OGRGeometryFactory::forceToMultiPolygon(geometry.release())->toMultiPolygon());
+
+  CPLErrorReset();
+  if (!multi->IsValid()) {
+    // GEOS reports why a geometry is invalid through the error handler ("Self-intersection at or
+    // near point 25 5"); our quiet handler keeps it as the last message.
+    const char* why = CPLGetLastErrorMsg();
+    const std::string problem =
+        std::string("invalid polygon") + (why != nullptr && *why != '\0' ? std::string(": ") + why : "");
+    if (!repair) {
+      outcome.skip_reason = problem + " (repair disabled)";
+      return outcome;
+    }
+    std::unique_ptr<OGRGeometry> repaired(multi->MakeValid());
+    if (!repaired) {
+      outcome.skip_reason = problem + ", repair failed" + gdal_message();
+      return outcome;
+    }
+    multi = polygonal_parts(std::move(repaired));
+    if (multi->IsEmpty()) {
+      outcome.skip_reason = problem + ", repair left no polygon";
+      return outcome;
+    }
+    outcome.repair_note = problem;
+  }
+  outcome.polygons = polygons_from_ogr(*multi);
+  if (outcome.polygons.empty()) {
+    outcome.skip_reason = "no polygon with 3 or more distinct vertices";
+    outcome.repair_note.clear();
+  }
+  return outcome;
+}
+
+bool intersects(const OGREnvelope& envelope, const Box2& box) {
+  return !(envelope.MinX > box.max.x || envelope.MaxX < box.min.x || envelope.MinY > box.max.y ||
+           envelope.MaxY < box.min.y);
+}
+
+}  // namespace
+
+std::vector<std::string> list_ogr_layers(const std::string& path) {
+  QuietGdalErrors quiet;
+  GDALDatasetUniquePtr dataset = open_vector(path);
+  return layer_names(*dataset);
+}
+
+FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOptions& options) {
+  QuietGdalErrors quiet;
+  GDALDatasetUniquePtr dataset = open_vector(path);
+  OGRLayer& layer = select_layer(*dataset, path, options.layer);
+  const std::string where = path + " layer '" + layer.GetName() + "'";
+
+  FootprintSet set;
+  set.path = path;
+  set.driver = dataset->GetDriver() != nullptr ? dataset->GetDriver()->GetDescription() : "";
+  set.layer = layer.GetName();
+  set.srs = describe_srs(layer);
+
+  if (!may_hold_polygons(layer.GetGeomType())) {
+    throw IoError(kModule + where + " has no polygon features (geometry type " +
+                  OGRGeometryTypeToName(layer.GetGeomType()) + ")");
+  }
+
+  // The id field: an attribute, or the feature id when none is named or when the name is the
+  // layer's FID column ("fid" in GeoPackage, "ogc_fid" in SQLite), which is not an attribute.
+  int id_index = -1;
+  const std::string fid_column = layer.GetFIDColumn() != nullptr ? layer.GetFIDColumn() : "";
+  OGRFeatureDefn* definition = layer.GetLayerDefn();
+  const bool use_fid =
+      options.id_field.empty() ||
+      (definition->GetFieldIndex(options.id_field.c_str()) < 0 &&
+       (iequals(options.id_field, "FID") || (!fid_column.empty() && iequals(options.id_field, fid_column))));
+  if (!use_fid) {
+    id_index = definition->GetFieldIndex(options.id_field.c_str());
+    if (id_index < 0) {
+      std::vector<std::string> fields;
+      for (int i = 0; i < definition->GetFieldCount(); ++i) {
+        fields.emplace_back(definition->GetFieldDefn(i)->GetNameRef());
+      }
+      throw IoError(kModule + std::string("no field '") + options.id_field + "' in " + where +
+                    " (fields: " + join(fields) + ")");
+    }
+  }
+  set.id_field = use_fid ? "FID" : options.id_field;
+
+  if (!options.attribute_filter.empty()) {
+    CPLErrorReset();
+    // Some drivers (GeoPackage, SQLite) accept any filter here and only fail when the SQL is
+    // prepared, on the first read; reading one feature makes both kinds fail in the same place.
+    bool bad_filter = layer.SetAttributeFilter(options.attribute_filter.c_str()) != OGRERR_NONE;
+    if (!bad_filter) {
+      layer.ResetReading();
+      const OGRFeatureUniquePtr probe(layer.GetNextFeature());
+      bad_filter = !probe && CPLGetLastErrorType() == CE_Failure;
+    }
+    if (bad_filter) {
+      throw IoError(kModule + std::string("bad attribute filter '") + options.attribute_filter + "' on " +
+                    where + gdal_message());
+    }
+  }
+  // OGR's spatial filter lets the driver use its index (GeoPackage R-tree, SpatiaLite); some
+  // drivers apply it only approximately, and with GEOS OGR may drop a feature whose envelope
+  // meets the box while its polygon does not, so each envelope is checked against the box below.
+  if (options.bbox) {
+    const Box2& box = *options.bbox;
+    layer.SetSpatialFilterRect(box.min.x, box.min.y, box.max.x, box.max.y);
+  }
+
+  std::unordered_map<BuildingId, std::int64_t> first_fid_of_id;
+  std::size_t polygon_features = 0;
+  auto skip = [&](const BuildingId& id, const std::string& reason) {
+    log_warning(kModule + std::string("skipped ") + id + " in " + where + ": " + reason);
+    set.skipped.push_back({id, reason});
+  };
+
+  layer.ResetReading();
+  while (true) {
+    CPLErrorReset();
+    OGRFeatureUniquePtr feature(layer.GetNextFeature());
+    if (!feature) {
+      // A driver that fails half-way (corrupt file) ends the iteration early with a CE_Failure.
+      if (CPLGetLastErrorType() == CE_Failure) {
+        throw IoError(kModule + std::string("error while reading ") + where + gdal_message());
+      }
+      break;
+    }
+    const std::int64_t fid = feature->GetFID();
+    const OGRGeometry* geometry = feature->GetGeometryRef();
+    if (options.bbox && geometry != nullptr && !geometry->IsEmpty()) {
+      OGREnvelope envelope;
+      geometry->getEnvelope(&envelope);
+      if (!intersects(envelope, *options.bbox)) continue;
+    }
+    ++set.feature_count;
+
+    const std::string fid_text = "fid " + std::to_string(fid);
+    BuildingId id;
+    if (use_fid) {
+      id = std::to_string(fid);
+    } else if (!feature->IsFieldSetAndNotNull(id_index)) {
+      skip(fid_text, "no id (field '" + options.id_field + "' is null)");
+      continue;
+    } else {
+      id = feature->GetFieldAsString(id_index);
+    }
+
+    if (geometry == nullptr) {
+      skip(id, "no geometry");
+      continue;
+    }
+    if (geometry->IsEmpty()) {
+      skip(id, "empty geometry");
+      continue;
+    }
+    if (!is_polygonal(geometry->getGeometryType())) {
+      skip(id, std::string("not a polygon (") + OGRGeometryTypeToName(geometry->getGeometryType()) + ")");
+      continue;
+    }
+    ++polygon_features;
+
+    // The first feature with an id owns it, even when that feature is skipped for its geometry:
+    // a later feature silently taking its place would hide the problem.
+    const auto [first, inserted] = first_fid_of_id.emplace(id, fid);
+    if (!inserted) {
+      skip(id,
+           "duplicated id (first at fid " + std::to_string(first->second) + ", this is " + fid_text + ")");
+      continue;
+    }
+
+    GeometryOutcome outcome = convert_geometry(*geometry, options.repair);
+    if (outcome.polygons.empty()) {
+      skip(id, outcome.skip_reason);
+      continue;
+    }
+    if (!outcome.repair_note.empty()) {
+      ++set.repaired;
+      log_warning(kModule + std::string("repaired ") + id + " in " + where + ": " + outcome.repair_note);
+    }
+    Footprint footprint;
+    footprint.id = std::move(id);
+    footprint.fid = fid;
+    footprint.polygons = std::move(outcome.polygons);
+    const bool has_hole = std::any_of(footprint.polygons.begin(), footprint.polygons.end(),
+                                      [](const Polygon2& p) { return !p.holes.empty(); });
+    if (has_hole) ++set.with_holes;
+    set.footprints.push_back(std::move(footprint));
+  }
+
+  // No polygon at all: an error when the unfiltered layer has none either; an empty selection
+  // (filters that match nothing) is a valid result.
+  if (polygon_features == 0) {
+    layer.SetAttributeFilter(nullptr);
+    layer.SetSpatialFilter(nullptr);
+    if (!layer_has_polygon_feature(layer)) {
+      throw IoError(kModule + where + " has no polygon features");
+    }
+  }
+  log_info(kModule + std::to_string(set.footprints.size()) + " footprints from " + where + " (" +
+           std::to_string(set.skipped.size()) + " skipped, " + std::to_string(set.repaired) + " repaired)");
+  return set;
+}
+
+}  // namespace detail
+
+namespace {
+/// OBJ by extension (case-insensitive); every other path goes to OGR, which sniffs the format.
+bool is_obj_path(const std::string& path) {
+  if (path.size() < 4) return false;
+  std::string extension = path.substr(path.size() - 4);
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension == ".obj";
+}
+}  // namespace
+
+FootprintSet read_footprints(const std::string& path, const FootprintReadOptions& options) {
+  return is_obj_path(path) ? detail::read_obj_footprints(path, options)
+                           : detail::read_ogr_footprints(path, options);
+}
+
+std::vector<std::string> list_footprint_layers(const std::string& path) {
+  if (is_obj_path(path)) {
+    detail::read_obj_footprints(path, {});  // validates the file like the OGR branch does
+    return {"obj"};
+  }
+  return detail::list_ogr_layers(path);
+}
+
+}  // namespace city3d

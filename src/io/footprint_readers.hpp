@@ -1,0 +1,83 @@
+// Private interface of the footprint readers (one source file per format) and the ring clean-up
+// both of them apply, so that OGR and OBJ footprints come out in the same normal form.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "city3d/footprint_io.hpp"
+#include "city3d/types.hpp"
+
+namespace city3d::detail {
+
+/// Reads an OGR vector source (see read_footprints). Throws IoError.
+FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOptions& options);
+
+/// Layer names of an OGR vector source. Throws IoError.
+std::vector<std::string> list_ogr_layers(const std::string& path);
+
+/// Reads a City3D OBJ polygon file: every face is one footprint. Throws IoError.
+FootprintSet read_obj_footprints(const std::string& path, const FootprintReadOptions& options);
+
+/// Twice the signed area of a ring (shoelace formula); positive when counter-clockwise. The
+/// first vertex is subtracted from every vertex first, which keeps the products small at RD New
+/// magnitudes (x ~ 85 000, y ~ 447 000) where they would otherwise cancel catastrophically.
+inline double twice_signed_area(const Ring2& ring) {
+  if (ring.size() < 3) return 0.0;
+  const Point2 origin = ring.front();
+  double sum = 0.0;
+  for (std::size_t i = 1; i + 1 < ring.size(); ++i) {
+    const double ax = ring[i].x - origin.x, ay = ring[i].y - origin.y;
+    const double bx = ring[i + 1].x - origin.x, by = ring[i + 1].y - origin.y;
+    sum += ax * by - bx * ay;
+  }
+  return sum;
+}
+
+/// Drops the closing vertex and consecutive duplicate vertices (exact comparison: the readers
+/// must not move a vertex). A ring of fewer than 3 vertices afterwards is degenerate.
+inline Ring2 clean_ring(const Ring2& ring) {
+  Ring2 cleaned;
+  cleaned.reserve(ring.size());
+  for (const Point2& p : ring) {
+    if (!cleaned.empty() && cleaned.back().x == p.x && cleaned.back().y == p.y) continue;
+    cleaned.push_back(p);
+  }
+  while (cleaned.size() > 1 && cleaned.front().x == cleaned.back().x &&
+         cleaned.front().y == cleaned.back().y) {
+    cleaned.pop_back();
+  }
+  return cleaned;
+}
+
+/// Reverses a ring's orientation while keeping its first vertex first, so that the same ring read
+/// from two formats that store it in opposite orientations comes out vertex for vertex equal.
+inline void reverse_ring(Ring2& ring) {
+  if (ring.size() > 2) std::reverse(ring.begin() + 1, ring.end());
+}
+
+/// Cleans the rings of a polygon and orients them (outer counter-clockwise, holes clockwise).
+/// Degenerate holes are dropped. Returns false when the outer ring is degenerate (fewer than 3
+/// distinct vertices or zero area), in which case the polygon must be dropped.
+inline bool normalise_polygon(Polygon2& polygon) {
+  polygon.outer = clean_ring(polygon.outer);
+  const double outer_area = twice_signed_area(polygon.outer);
+  if (polygon.outer.size() < 3 || outer_area == 0.0) return false;
+  if (outer_area < 0.0) reverse_ring(polygon.outer);
+  std::vector<Ring2> holes;
+  holes.reserve(polygon.holes.size());
+  for (const Ring2& hole : polygon.holes) {
+    Ring2 cleaned = clean_ring(hole);
+    const double hole_area = twice_signed_area(cleaned);
+    if (cleaned.size() < 3 || hole_area == 0.0) continue;
+    if (hole_area > 0.0) reverse_ring(cleaned);
+    holes.push_back(std::move(cleaned));
+  }
+  polygon.holes = std::move(holes);
+  return true;
+}
+
+}  // namespace city3d::detail
