@@ -15,8 +15,12 @@ packages=(
   libgdal-dev gdal-bin
   libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libboost-dev
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
+  libglpk-dev coinor-libcbc-dev
   libgtest-dev
 )
+
+# The tests validate CityJSON output with ajv-cli from the npm registry: they need node and npm.
+if [ "$mode" = test ] && ! command -v npm >/dev/null 2>&1; then packages+=(nodejs npm); fi
 
 missing=()
 for p in "${packages[@]}"; do
@@ -35,8 +39,15 @@ cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j "$jobs"
 
 if [ "$mode" = run ]; then
+  # The main job: every footprint of the sample block (two tiles) reconstructed into city3d_out/.
   set -x
-  ./build/city3d info data/delft_sample_1.las data/delft_sample_footprints.gpkg
+  ./build/city3d reconstruct data/delft_sample_1.las data/delft_sample_2.las \
+    --footprints data/delft_sample_footprints.gpkg --id-field gml_id -j "$jobs" --output city3d_out
+  head -n 5 city3d_out/report.csv
 else
+  if [ ! -x build/tools/node_modules/.bin/ajv ]; then
+    echo "setup: installing ajv-cli (CityJSON schema validation in the tests) into build/tools"
+    npm install --prefix build/tools --no-audit --no-fund --silent ajv-cli@5.0.0 ajv-formats@2.1.1
+  fi
   ctest --test-dir build --output-on-failure -j "$jobs"
 fi

@@ -6,6 +6,9 @@
 #include <array>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <vector>
 #include <string>
 
 #include "city3d/error.hpp"
@@ -50,11 +53,22 @@ TEST(CommandLine, defaults_are_pinned) {
   const city3d::RunOptions o = city3d::parse_command_line(3, argv);
   EXPECT_EQ(o.command, "info");
   ASSERT_EQ(o.inputs.size(), 1u);
-  EXPECT_EQ(o.output_dir, "city3d_out");
+  EXPECT_EQ(o.batch.output_dir, "city3d_out");
   EXPECT_EQ(o.format, "obj");
-  EXPECT_FALSE(o.local_coordinates);
-  EXPECT_TRUE(o.footprint.id_field.empty());
-  EXPECT_TRUE(o.footprint.repair);
+  EXPECT_EQ(o.batch.format, city3d::MeshFormat::obj);
+  EXPECT_FALSE(o.batch.local_coordinates);
+  EXPECT_TRUE(o.batch.footprint.id_field.empty());
+  EXPECT_TRUE(o.batch.footprint.repair);
+  EXPECT_EQ(o.batch.crop.building_classes, std::vector<std::uint8_t>{6});
+  EXPECT_EQ(o.batch.crop.ground_class, 2);
+  EXPECT_DOUBLE_EQ(o.batch.crop.ground_buffer, 3.0);
+  EXPECT_DOUBLE_EQ(o.batch.crop.ground_percentile, 10.0);
+  EXPECT_DOUBLE_EQ(o.batch.reconstruction.lod1.roof_percentile, 70.0);
+  EXPECT_EQ(o.batch.threads, 1);
+  EXPECT_TRUE(o.batch.per_building_files);
+  EXPECT_TRUE(o.batch.cityjson);
+  EXPECT_FALSE(o.batch.cityjson_seq);
+  EXPECT_FALSE(o.strict);
   EXPECT_EQ(o.verbosity, 1);
 }
 
@@ -74,20 +88,26 @@ TEST(CommandLine, collects_every_problem_in_one_error) {
 TEST(CommandLine, accepts_inline_values_and_parses_bbox) {
   const char* argv[] = {"city3d", "info", "--bbox=1,2,3,4", "--id-field", "gml_id", "f.gpkg"};
   const city3d::RunOptions o = city3d::parse_command_line(6, argv);
-  ASSERT_TRUE(o.footprint.bbox.has_value());
-  EXPECT_DOUBLE_EQ(o.footprint.bbox->min.x, 1.0);
-  EXPECT_DOUBLE_EQ(o.footprint.bbox->max.y, 4.0);
-  EXPECT_EQ(o.footprint.id_field, "gml_id");
+  ASSERT_TRUE(o.batch.footprint.bbox.has_value());
+  EXPECT_DOUBLE_EQ(o.batch.footprint.bbox->min.x, 1.0);
+  EXPECT_DOUBLE_EQ(o.batch.footprint.bbox->max.y, 4.0);
+  EXPECT_EQ(o.batch.footprint.id_field, "gml_id");
 }
 
 TEST(Executable, help_lists_every_option_with_its_default_and_the_exit_codes) {
   const Result r = run("--help");
   EXPECT_EQ(r.exit_code, 0);
-  for (const char* flag : {"--footprints", "--layer", "--id-field", "--where", "--bbox", "--no-repair", "--output",
-                           "--format", "--local-coordinates", "--verbose", "--quiet", "--help", "--version"})
+  for (const char* flag :
+       {"--footprints", "--layer", "--id-field", "--where", "--bbox", "--no-repair", "--building-classes",
+        "--ground-class", "--ignore-classes", "--ground-buffer", "--ground-percentile", "--ground-z",
+        "--roof-percentile", "--output", "--format", "--no-model-files", "--merged", "--no-cityjson", "--cityjsonseq",
+        "--timings", "--local-coordinates", "--jobs", "--strict", "--progress", "--no-progress", "--verbose",
+        "--quiet", "--help", "--version"})
     EXPECT_TRUE(contains(r.output, flag)) << flag;
   EXPECT_TRUE(contains(r.output, "[default: city3d_out]"));
   EXPECT_TRUE(contains(r.output, "[default: obj]"));
+  EXPECT_TRUE(contains(r.output, "[default: 6]"));
+  EXPECT_TRUE(contains(r.output, "[default: 70]"));
   EXPECT_TRUE(contains(r.output, "exit codes:"));
 }
 
@@ -164,4 +184,130 @@ TEST(Executable, info_on_truncated_las_names_the_file_and_exits_with_input_error
   EXPECT_TRUE(contains(r.output, "truncated.las")) << r.output;
   EXPECT_TRUE(contains(r.output, "truncated")) << r.output;
   fs::remove_all(dir);
+}
+
+namespace {
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::stringstream ss(text);
+  for (std::string line; std::getline(ss, line);) lines.push_back(line);
+  return lines;
+}
+
+// Validates a CityJSON (or, with `feature`, a CityJSONFeature) file against the official 2.0 schemas
+// with ajv-cli, which scripts/setup.sh installs into build/tools.
+Result validate_cityjson(const fs::path& file, bool feature) {
+  const std::string s = CITY3D_SCHEMAS;
+  std::string command = std::string(CITY3D_AJV) + " validate --spec=draft7 --strict=false -s " + s +
+                        (feature ? "/cityjsonfeature.schema.json" : "/cityjson.schema.json");
+  for (const char* r : {"appearance", "cityobjects", "geomprimitives", "geomtemplates", "metadata"})
+    command += " -r " + s + "/" + r + ".schema.json";
+  command += " -d " + file.string() + " 2>&1";
+  Result r;
+  FILE* pipe = popen(command.c_str(), "r");
+  std::array<char, 4096> buf;
+  std::size_t n;
+  while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+class Reconstruct : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("city3d_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string sample_args() const {
+    const std::string d = CITY3D_SAMPLE_DATA;
+    return d + "/delft_sample_1.las " + d + "/delft_sample_2.las -f " + d +
+           "/delft_sample_footprints.gpkg --id-field gml_id --cityjsonseq --no-progress";
+  }
+  fs::path dir_;
+};
+
+}  // namespace
+
+TEST_F(Reconstruct, sample_block_gives_every_footprint_a_valid_model_and_a_report_row) {
+  const Result r = run("reconstruct " + sample_args() + " -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "15 buildings")) << r.output;
+  const auto rows = lines_of(read_file(dir_ / "out" / "report.csv"));
+  ASSERT_EQ(rows.size(), 16u);  // header + the 15 footprints of data/delft_sample_footprints.gpkg
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    EXPECT_TRUE(contains(rows[i], ",ok,") || contains(rows[i], ",fallback,")) << rows[i];
+    EXPECT_TRUE(contains(rows[i], ",1,")) << "model not valid: " << rows[i];
+    const std::string id = rows[i].substr(0, rows[i].find(','));
+    EXPECT_TRUE(fs::exists(dir_ / "out" / "models" / (id + ".obj"))) << id;
+  }
+}
+
+TEST_F(Reconstruct, cityjson_and_cityjsonseq_validate_against_the_official_schemas) {
+  if (!fs::exists(CITY3D_SCHEMAS)) GTEST_SKIP() << "../shared/spec is not beside the repository";
+  ASSERT_TRUE(fs::exists(CITY3D_AJV)) << "ajv-cli missing: run scripts/setup.sh test";
+  const Result r = run("reconstruct " + sample_args() + " -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Result whole = validate_cityjson(dir_ / "out" / "buildings.city.json", false);
+  EXPECT_EQ(whole.exit_code, 0) << whole.output;
+  const auto lines = lines_of(read_file(dir_ / "out" / "buildings.city.jsonl"));
+  ASSERT_EQ(lines.size(), 16u);  // header line + 15 features
+  for (std::size_t i = 1; i < lines.size(); i += 7) {
+    const fs::path feature = dir_ / ("feature" + std::to_string(i) + ".json");
+    std::ofstream(feature) << lines[i] << "\n";
+    const Result v = validate_cityjson(feature, true);
+    EXPECT_EQ(v.exit_code, 0) << v.output;
+  }
+  // The validator must reject a broken file, or this test proves nothing.
+  const fs::path broken = dir_ / "broken.city.json";
+  std::string text = read_file(dir_ / "out" / "buildings.city.json");
+  text.replace(text.find("\"Building\""), 10, "\"Buildin\"");
+  std::ofstream(broken) << text;
+  EXPECT_NE(validate_cityjson(broken, false).exit_code, 0);
+}
+
+TEST_F(Reconstruct, output_is_byte_identical_for_one_and_two_jobs) {
+  ASSERT_EQ(run("reconstruct " + sample_args() + " -j 1 -o " + (dir_ / "j1").string()).exit_code, 0);
+  ASSERT_EQ(run("reconstruct " + sample_args() + " -j 2 -o " + (dir_ / "j2").string()).exit_code, 0);
+  for (const char* f : {"buildings.city.json", "buildings.city.jsonl"})
+    EXPECT_EQ(read_file(dir_ / "j1" / f), read_file(dir_ / "j2" / f)) << f;
+  for (const auto& entry : fs::directory_iterator(dir_ / "j1" / "models"))
+    EXPECT_EQ(read_file(entry.path()), read_file(dir_ / "j2" / "models" / entry.path().filename())) << entry.path();
+}
+
+TEST_F(Reconstruct, single_building_cloud_without_footprint_gives_one_model) {
+  const std::string ply = kShared + "/city3d_smoke/AHN3";
+  if (!fs::exists(ply)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  std::string first;
+  for (const auto& e : fs::directory_iterator(ply))
+    if (e.path().extension() == ".ply" && (first.empty() || e.path().string() < first)) first = e.path().string();
+  const Result r = run("reconstruct " + first + " --no-progress -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto rows = lines_of(read_file(dir_ / "out" / "report.csv"));
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[1].substr(0, rows[1].find(',')), fs::path(first).stem().string());
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "models" / (fs::path(first).stem().string() + ".obj")));
+}
+
+TEST_F(Reconstruct, missing_footprint_source_is_an_input_error_naming_it) {
+  const std::string d = CITY3D_SAMPLE_DATA;
+  const Result r = run("reconstruct " + d + "/delft_sample_1.las -f /nonexistent/bgt.gpkg -o " + dir_.string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(contains(r.output, "/nonexistent/bgt.gpkg")) << r.output;
+}
+
+TEST_F(Reconstruct, without_inputs_is_a_usage_error) {
+  const Result r = run("reconstruct -o " + dir_.string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(contains(r.output, "no point-cloud file")) << r.output;
 }

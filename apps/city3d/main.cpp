@@ -1,4 +1,6 @@
 // The city3d executable: parses the command line and runs the chosen command; nothing else.
+#include <unistd.h>
+
 #include <cstdio>
 #include <exception>
 #include <iostream>
@@ -7,6 +9,7 @@
 #include "city3d/info.hpp"
 #include "city3d/log.hpp"
 #include "city3d/options.hpp"
+#include "city3d/pipeline.hpp"
 
 namespace {
 
@@ -17,10 +20,20 @@ int run_info(const city3d::RunOptions& options) {
     if (city3d::looks_like_point_cloud(path))
       std::cout << city3d::describe_point_cloud(city3d::summarise_point_cloud(path));
     else
-      std::cout << city3d::describe_footprints(city3d::read_footprints(path, options.footprint));
+      std::cout << city3d::describe_footprints(city3d::read_footprints(path, options.batch.footprint));
     std::cout.flush();
   }
   return city3d::kExitOk;
+}
+
+int run_reconstruct(const city3d::RunOptions& options) {
+  city3d::BatchOptions batch = options.batch;
+  batch.point_clouds = options.inputs;
+  batch.progress = options.progress == 1 || (options.progress == -1 && options.verbosity > 0 && isatty(2));
+  const city3d::BatchSummary s = city3d::run_batch(batch);
+  std::fprintf(stderr, "city3d: %zu buildings: %zu ok, %zu fallback, %zu skipped, %zu failed in %.1f s; report %s\n",
+               s.buildings, s.ok, s.fallback, s.skipped, s.failed, s.seconds, s.report_path.c_str());
+  return options.strict && s.failed > 0 ? city3d::kExitStrict : city3d::kExitOk;
 }
 
 }  // namespace
@@ -44,6 +57,7 @@ int main(int argc, char** argv) {
   city3d::set_log_level(static_cast<city3d::LogLevel>(options.verbosity));
   try {
     if (options.command == "info") return run_info(options);
+    if (options.command == "reconstruct") return run_reconstruct(options);
   } catch (const city3d::ConfigError& e) {
     std::cerr << "city3d: " << e.what() << "\n";
     return city3d::kExitUsage;

@@ -5,8 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "city3d/footprint_io.hpp"
-#include "city3d/model_io.hpp"
+#include "city3d/pipeline.hpp"
 
 namespace city3d {
 
@@ -16,6 +15,7 @@ enum ExitCode : int {
   kExitInput = 1,     ///< the run could not go on: unreadable or invalid input, unwritable output
   kExitUsage = 2,     ///< bad command line: unknown command or option, bad value
   kExitInternal = 3,  ///< an unexpected internal error (a bug): please report it
+  kExitStrict = 4,    ///< `reconstruct --strict`: the run finished but some buildings failed
 };
 
 /// Everything one invocation of `city3d` can set, with its defaults.
@@ -24,17 +24,10 @@ struct RunOptions {
   bool help = false;
   bool version = false;
   std::vector<std::string> inputs;   ///< positional arguments: files for `info`, point clouds for `reconstruct`
-
-  // Footprints.
-  std::string footprints;            ///< OGR source or OBJ polygon file
-  FootprintReadOptions footprint;    ///< layer, id field, filter, bbox, repair
-
-  // Output.
-  std::string output_dir = "city3d_out";
-  std::string format = "obj";        ///< obj, ply, ply-ascii
-  bool local_coordinates = false;
-
-  // Logging.
+  BatchOptions batch;                ///< footprints, stage parameters, outputs, threads
+  std::string format = "obj";        ///< obj, ply, ply-ascii (parsed into batch.format)
+  bool strict = false;               ///< exit non-zero when any building failed
+  int progress = -1;                 ///< -1 automatic (on when stderr is a terminal), 0 off, 1 on
   int verbosity = 1;                 ///< 0 quiet, 1 warnings, 2 info, 3 debug
 };
 

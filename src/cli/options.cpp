@@ -3,7 +3,9 @@
 #include "city3d/options.hpp"
 
 #include <cerrno>
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <functional>
 #include <sstream>
@@ -45,50 +47,121 @@ Box2 parse_bbox(const std::string& flag, const std::string& text) {
   return box;
 }
 
-std::string quoted_or_none(const std::string& s) { return s.empty() ? "" : s; }
+std::string number_text(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
+int parse_int(const std::string& flag, const std::string& text, int min_value) {
+  const double v = parse_double(flag, text);
+  if (v != std::floor(v) || v < min_value || v > 1e6)
+    throw ConfigError("option " + flag + ": '" + text + "' is not an integer >= " + std::to_string(min_value));
+  return static_cast<int>(v);
+}
+
+std::vector<std::uint8_t> parse_classes(const std::string& flag, const std::string& text) {
+  std::vector<std::uint8_t> classes;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    const double v = parse_double(flag, item);
+    if (v != std::floor(v) || v < 0 || v > 255)
+      throw ConfigError("option " + flag + ": '" + item + "' is not a LAS class (0-255)");
+    classes.push_back(static_cast<std::uint8_t>(v));
+  }
+  if (classes.empty()) throw ConfigError("option " + flag + ": no class given");
+  return classes;
+}
+
+std::string classes_text(const std::vector<std::uint8_t>& classes) {
+  std::string s;
+  for (std::uint8_t c : classes) s += (s.empty() ? "" : ",") + std::to_string(c);
+  return s;
+}
 
 const std::vector<OptionSpec>& option_table() {
+  using O = RunOptions;
+  using V = const std::string&;
   static const std::vector<OptionSpec> table = {
+      // Footprints.
       {"--footprints", "-f", "PATH",
-       "footprint source: any OGR vector source (GeoPackage, Shapefile, GeoJSON, SQLite) or a City3D OBJ polygon file",
-       nullptr, [](RunOptions& o, const std::string& v) { o.footprints = v; }},
-      {"--layer", nullptr, "NAME", "footprint layer (default: the first layer with polygons)",
-       [](const RunOptions& o) { return quoted_or_none(o.footprint.layer); },
-       [](RunOptions& o, const std::string& v) { o.footprint.layer = v; }},
+       "footprint source: any OGR vector source (GeoPackage, Shapefile, GeoJSON, SQLite) or a City3D OBJ polygon "
+       "file; without it every point-cloud file is one building",
+       nullptr, [](O& o, V v) { o.batch.footprints = v; }},
+      {"--layer", nullptr, "NAME", "footprint layer (default: the first layer with polygons)", nullptr,
+       [](O& o, V v) { o.batch.footprint.layer = v; }},
       {"--id-field", nullptr, "NAME", "footprint attribute holding the building id (default: the feature id, FID)",
-       [](const RunOptions& o) { return quoted_or_none(o.footprint.id_field); },
-       [](RunOptions& o, const std::string& v) { o.footprint.id_field = v; }},
+       nullptr, [](O& o, V v) { o.batch.footprint.id_field = v; }},
       {"--where", nullptr, "SQL", "OGR attribute filter on the footprints, e.g. \"bouwjaar > 1900\"", nullptr,
-       [](RunOptions& o, const std::string& v) { o.footprint.attribute_filter = v; }},
+       [](O& o, V v) { o.batch.footprint.attribute_filter = v; }},
       {"--bbox", nullptr, "XMIN,YMIN,XMAX,YMAX", "keep only footprints intersecting this box (footprint CRS)", nullptr,
-       [](RunOptions& o, const std::string& v) { o.footprint.bbox = parse_bbox("--bbox", v); }},
+       [](O& o, V v) { o.batch.footprint.bbox = parse_bbox("--bbox", v); }},
       {"--no-repair", nullptr, nullptr, "skip invalid footprints instead of repairing them with MakeValid", nullptr,
-       [](RunOptions& o, const std::string&) { o.footprint.repair = false; }},
+       [](O& o, V) { o.batch.footprint.repair = false; }},
+      // Cropping and heights.
+      {"--building-classes", nullptr, "LIST", "LAS classes of building points (comma-separated)",
+       [](const O& o) { return classes_text(o.batch.crop.building_classes); },
+       [](O& o, V v) { o.batch.crop.building_classes = parse_classes("--building-classes", v); }},
+      {"--ground-class", nullptr, "N", "LAS class of ground points",
+       [](const O& o) { return std::to_string(o.batch.crop.ground_class); },
+       [](O& o, V v) { o.batch.crop.ground_class = parse_classes("--ground-class", v).front(); }},
+      {"--ignore-classes", nullptr, nullptr, "every point inside a footprint is a building point (no ground points)",
+       nullptr, [](O& o, V) { o.batch.crop.use_classes = ClassUse::never; }},
+      {"--ground-buffer", nullptr, "M", "ground points within this distance of a footprint give its floor height",
+       [](const O& o) { return number_text(o.batch.crop.ground_buffer); },
+       [](O& o, V v) { o.batch.crop.ground_buffer = parse_double("--ground-buffer", v); }},
+      {"--ground-percentile", nullptr, "P", "percentile (0-100) of the ground points' z taken as the floor",
+       [](const O& o) { return number_text(o.batch.crop.ground_percentile); },
+       [](O& o, V v) { o.batch.crop.ground_percentile = parse_double("--ground-percentile", v); }},
+      {"--ground-z", nullptr, "Z", "floor height for single-building clouds (default: their lowest point)", nullptr,
+       [](O& o, V v) { o.batch.ground_z = parse_double("--ground-z", v); }},
+      {"--roof-percentile", nullptr, "P", "LoD1 roof height: percentile (0-100) of the building points' z",
+       [](const O& o) { return number_text(o.batch.reconstruction.lod1.roof_percentile); },
+       [](O& o, V v) { o.batch.reconstruction.lod1.roof_percentile = parse_double("--roof-percentile", v); }},
+      // Output.
       {"--output", "-o", "DIR", "output folder (created when missing)",
-       [](const RunOptions& o) { return o.output_dir; },
-       [](RunOptions& o, const std::string& v) { o.output_dir = v; }},
+       [](const O& o) { return o.batch.output_dir; }, [](O& o, V v) { o.batch.output_dir = v; }},
       {"--format", nullptr, "obj|ply|ply-ascii", "model file format (ply = binary little-endian)",
-       [](const RunOptions& o) { return o.format; },
-       [](RunOptions& o, const std::string& v) {
-         parse_mesh_format(v);  // validates
+       [](const O& o) { return o.format; },
+       [](O& o, V v) {
+         o.batch.format = parse_mesh_format(v);
          o.format = v;
        }},
+      {"--no-model-files", nullptr, nullptr, "do not write models/<id>.<format> per building", nullptr,
+       [](O& o, V) { o.batch.per_building_files = false; }},
+      {"--merged", nullptr, nullptr, "also write every building into one models.<format> file", nullptr,
+       [](O& o, V) { o.batch.merged_file = true; }},
+      {"--no-cityjson", nullptr, nullptr, "do not write buildings.city.json", nullptr,
+       [](O& o, V) { o.batch.cityjson = false; }},
+      {"--cityjsonseq", nullptr, nullptr, "also write buildings.city.jsonl (CityJSONSeq, one building per line)",
+       nullptr, [](O& o, V) { o.batch.cityjson_seq = true; }},
+      {"--timings", nullptr, nullptr, "add each building's seconds to its CityJSON attributes (output then differs "
+       "from run to run)", nullptr, [](O& o, V) { o.batch.timings_in_cityjson = true; }},
       {"--local-coordinates", nullptr, nullptr,
        "write local coordinates and record each building's origin, instead of world coordinates", nullptr,
-       [](RunOptions& o, const std::string&) { o.local_coordinates = true; }},
+       [](O& o, V) { o.batch.local_coordinates = true; }},
+      // Run.
+      {"--jobs", "-j", "N", "buildings reconstructed in parallel (output is identical for any N)",
+       [](const O& o) { return std::to_string(o.batch.threads); },
+       [](O& o, V v) { o.batch.threads = parse_int("--jobs", v, 1); }},
+      {"--strict", nullptr, nullptr, "exit with code 4 when any building failed", nullptr,
+       [](O& o, V) { o.strict = true; }},
+      {"--progress", nullptr, nullptr, "progress on stderr even when it is not a terminal", nullptr,
+       [](O& o, V) { o.progress = 1; }},
+      {"--no-progress", nullptr, nullptr, "no progress line", nullptr, [](O& o, V) { o.progress = 0; }},
       {"--verbose", "-v", nullptr, "more messages on stderr (repeat for debug)", nullptr,
-       [](RunOptions& o, const std::string&) { o.verbosity = std::min(o.verbosity + 1, 3); }},
-      {"--quiet", "-q", nullptr, "errors only", nullptr, [](RunOptions& o, const std::string&) { o.verbosity = 0; }},
-      {"--help", "-h", nullptr, "print this help and exit", nullptr,
-       [](RunOptions& o, const std::string&) { o.help = true; }},
-      {"--version", nullptr, nullptr, "print the version and exit", nullptr,
-       [](RunOptions& o, const std::string&) { o.version = true; }},
+       [](O& o, V) { o.verbosity = std::min(o.verbosity + 1, 3); }},
+      {"--quiet", "-q", nullptr, "errors only", nullptr, [](O& o, V) { o.verbosity = 0; }},
+      {"--help", "-h", nullptr, "print this help and exit", nullptr, [](O& o, V) { o.help = true; }},
+      {"--version", nullptr, nullptr, "print the version and exit", nullptr, [](O& o, V) { o.version = true; }},
   };
   return table;
 }
 
 const char* const kCommands[][2] = {
-    {"info", "FILE...          what point-cloud files (LAS, LAZ, PLY) and footprint sources hold"},
+    {"reconstruct", "CLOUD... [-f FOOTPRINTS]  models of every footprint (or of every single-building cloud)"},
+    {"info", "FILE...                        what point-cloud files (LAS, LAZ, PLY) and footprint sources hold"},
 };
 
 }  // namespace
@@ -131,7 +204,8 @@ RunOptions parse_command_line(int argc, const char* const* argv) {
     } else if (options.command.empty()) {
       bool known = false;
       for (const auto& c : kCommands) known = known || arg == c[0];
-      if (!known) problems.push_back("unknown command '" + arg + "' (commands: info; see city3d --help)");
+      if (!known)
+        problems.push_back("unknown command '" + arg + "' (commands: reconstruct, info; see city3d --help)");
       options.command = arg;
     } else {
       options.inputs.push_back(arg);
@@ -140,6 +214,8 @@ RunOptions parse_command_line(int argc, const char* const* argv) {
   if (!options.help && !options.version && problems.empty()) {
     if (options.command.empty()) problems.push_back("no command given (see city3d --help)");
     if (options.command == "info" && options.inputs.empty()) problems.push_back("info: no file given");
+    if (options.command == "reconstruct" && options.inputs.empty())
+      problems.push_back("reconstruct: no point-cloud file or folder given");
   }
   if (!problems.empty()) {
     std::string message;
@@ -178,7 +254,8 @@ std::string help_text() {
       << "  0  the run finished\n"
       << "  1  the run could not go on: unreadable or invalid input, unwritable output\n"
       << "  2  bad command line: unknown command or option, bad value\n"
-      << "  3  internal error (a bug; please report it)\n";
+      << "  3  internal error (a bug; please report it)\n"
+      << "  4  reconstruct --strict: the run finished but some buildings failed\n";
   return out.str();
 }
 

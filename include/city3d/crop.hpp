@@ -1,0 +1,111 @@
+// Cropping: streams point-cloud chunks against the footprints and yields one BuildingInput per
+// footprint (its points and nearby ground points in a local frame, plus a ground height).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "city3d/point_cloud_io.hpp"
+#include "city3d/types.hpp"
+
+namespace city3d {
+
+/// Everything the per-building stages need about one building, in a local frame.
+///
+/// The local frame: world = local + origin. `origin` is the centre of the footprint's bounding box
+/// rounded to the metre, with z = 0 (heights stay absolute, e.g. NAP). Subtracting an integer origin
+/// from world coordinates of similar magnitude is exact in double, so local + origin gives back the
+/// world coordinates bit for bit.
+struct BuildingInput {
+  BuildingId id;
+  Footprint footprint;                ///< the footprint moved to the local frame (same id, fid, rings)
+  Point3 origin;                      ///< world = local + origin; z = 0
+  std::vector<Point3> points;         ///< building points inside the footprint, local, in input order
+  std::vector<Point3> ground_points;  ///< ground points that gave ground_z (see ground_method), local
+  double ground_z = 0.0;              ///< floor height, local (= world, since origin.z = 0), metres
+  std::string ground_method;          ///< "ground percentile", "ground percentile (wide buffer)",
+                                      ///< "lowest building point" or "none"
+};
+
+/// How points are classified while cropping.
+enum class ClassUse {
+  automatic,  ///< per chunk: use classes when the chunk has them, else every point is a building point
+  always,     ///< require classes; a chunk without them throws Error
+  never,      ///< ignore classes: every point inside a footprint is a building point, no ground points
+};
+
+/// Parameters of the crop stage.
+struct CropParams {
+  std::vector<std::uint8_t> building_classes{6};  ///< LAS classes of building points
+  std::uint8_t ground_class = 2;                  ///< LAS class of ground points
+  ClassUse use_classes = ClassUse::automatic;
+  /// Ground points within this distance (metres, >= 0) of the footprint polygon, and outside every
+  /// footprint, give the ground height.
+  double ground_buffer = 3.0;
+  /// Fallback neighbourhood when the buffer holds too few ground points: the footprint's bounding box
+  /// expanded by ground_buffer x wide_buffer_factor (>= 1), again outside every footprint.
+  double wide_buffer_factor = 4.0;
+  double ground_percentile = 10.0;     ///< percentile (0-100) of ground z taken as the floor height
+  std::size_t min_ground_points = 10;  ///< ground points needed (>= 1) in the buffer or wide buffer
+
+  /// Throws ConfigError listing every invalid field.
+  void validate() const;
+};
+
+/// Counters of one crop run, for logging.
+struct CropStats {
+  std::uint64_t points_seen = 0;      ///< points passed to add()
+  std::uint64_t building_points = 0;  ///< (point, footprint) assignments of building points
+  std::uint64_t ground_points = 0;    ///< (point, footprint) assignments to ground buffers (kept now)
+};
+
+namespace detail {
+struct CropIndex;
+}
+
+/// Streams chunks of a point cloud against a set of footprints.
+///
+/// Points are assigned in xy to every footprint that contains them (even-odd rule over all rings of
+/// a polygon, so holes are excluded; a multipolygon contains what any of its polygons contains).
+/// A point exactly on an edge shared by two footprints goes to exactly one of them, always the same
+/// (half-open crossing rule evaluated on canonically ordered edges). Only points relevant to some
+/// footprint are kept, so memory follows the footprints, not the tiles. The result does not depend
+/// on how the cloud is split into chunks.
+class Cropper {
+ public:
+  /// Prepares the spatial index over `footprints` (world coordinates). Throws ConfigError when
+  /// `params` is invalid. Footprints without a usable ring still get a BuildingInput, with no points.
+  Cropper(std::vector<Footprint> footprints, CropParams params = {});
+  ~Cropper();
+  Cropper(Cropper&&) noexcept;
+  Cropper& operator=(Cropper&&) noexcept;
+  Cropper(const Cropper&) = delete;
+  Cropper& operator=(const Cropper&) = delete;
+
+  /// Assigns the points of `chunk` (world coordinates). Points with non-finite coordinates are
+  /// ignored. Throws Error when the chunk's classification vector has the wrong length, when classes
+  /// are required but absent, or after finish().
+  void add(const PointCloud& chunk);
+
+  /// Computes the ground heights and returns one BuildingInput per footprint, in input order. Call
+  /// once, after the last add(); the collected points are moved out. Throws Error on a second call.
+  std::vector<BuildingInput> finish();
+
+  const CropStats& stats() const { return stats_; }
+  std::size_t footprint_count() const;
+
+ private:
+  std::unique_ptr<detail::CropIndex> index_;
+  CropParams params_;
+  CropStats stats_;
+  bool finished_ = false;
+};
+
+/// The p-th percentile (0-100) of `values` with linear interpolation between closest ranks (as
+/// numpy's default). Precondition: `values` is not empty. The vector is reordered.
+double percentile(std::vector<double>& values, double p);
+
+}  // namespace city3d

@@ -1,0 +1,52 @@
+// LoD1 block model: the footprint extruded from the ground height to a robust roof height (the last
+// rung of the fallback ladder, and a baseline).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "city3d/crop.hpp"
+#include "city3d/types.hpp"
+
+namespace city3d {
+
+/// Parameters of the LoD1 block.
+struct Lod1Params {
+  /// Roof height = this percentile (0-100) of the building points' z, as 3DBAG's LoD1.2 "70p": robust
+  /// to chimneys and to wall points.
+  double roof_percentile = 70.0;
+  /// Minimum block height in metres (> 0): a roof below ground_z + min_height is raised to it, so a
+  /// flat or sunken object still gives a valid solid.
+  double min_height = 1.0;
+
+  /// Throws ConfigError listing every invalid field.
+  void validate() const;
+};
+
+/// The heights of a block and what was adjusted.
+struct Lod1Heights {
+  double floor_z = 0.0;  ///< local, = BuildingInput::ground_z
+  double roof_z = 0.0;   ///< local, after the minimum-height rule
+  std::string note;      ///< empty, or why roof_z differs from the percentile
+};
+
+/// Floor and roof heights of `input`'s block. Throws ReconstructionError "lod1: building <id> has no
+/// points" when there are no building points, ConfigError when `params` is invalid.
+Lod1Heights lod1_heights(const BuildingInput& input, const Lod1Params& params = {});
+
+/// Extrudes polygons (outer rings and holes, any orientation; normalised here) from floor_z to roof_z
+/// into a closed, 2-manifold, outward-oriented mesh: one quad per ring edge, the floor and the roof
+/// as one polygon each per polygon without holes; a polygon with holes has its floor and roof split
+/// into convex pieces (ear-clipping after bridging the holes, then merging triangles back) sharing
+/// only ring vertices, so there are no T-junctions. Several polygons give several shells.
+/// Throws ReconstructionError naming `id` when a ring has fewer than 3 vertices, no area, or a roof
+/// with holes cannot be split (self-intersecting rings), or when roof_z <= floor_z.
+PolygonMesh extrude_polygons(const std::vector<Polygon2>& polygons, double floor_z, double roof_z,
+                             const BuildingId& id = {});
+
+/// The LoD1 block of a building, in its local frame (model.origin = input.origin): the footprint
+/// extruded from input.ground_z to lod1_heights().roof_z. Throws as lod1_heights() and
+/// extrude_polygons() do.
+BuildingModel make_lod1_block(const BuildingInput& input, const Lod1Params& params = {});
+
+}  // namespace city3d

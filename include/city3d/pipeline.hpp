@@ -1,0 +1,118 @@
+// The pipeline: reconstruct_building() runs the stages for one building in order and walks the
+// fallback ladder; run_batch() streams tiles, crops them by footprints, reconstructs buildings in
+// parallel and writes models, CityJSON and a report in input order.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "city3d/crop.hpp"
+#include "city3d/footprint_io.hpp"
+#include "city3d/lod1.hpp"
+#include "city3d/model_io.hpp"
+#include "city3d/types.hpp"
+
+namespace city3d {
+
+/// Parameters of every per-building stage.
+struct ReconstructionParams {
+  Lod1Params lod1;
+  /// Throws ConfigError listing every invalid field of every stage.
+  void validate() const;
+};
+
+/// What happened to one input footprint (or single-building cloud).
+enum class BuildingStatus {
+  ok,        ///< reconstructed at the requested level
+  fallback,  ///< reconstructed at a lower rung of the ladder (see reason)
+  skipped,   ///< not reconstructed: nothing to reconstruct (invalid footprint, no points)
+  failed,    ///< every rung failed (see stage and reason)
+};
+
+/// The rung of the fallback ladder a model comes from.
+enum class ModelLevel {
+  none,
+  lod22,                  ///< full LoD2: inferred walls, roof planes, face selection
+  lod22_footprint_walls,  ///< LoD2 with footprint walls only
+  lod12,                  ///< LoD1 block: footprint extruded to a robust roof height
+};
+
+const char* to_string(BuildingStatus status);
+const char* to_string(ModelLevel level);
+/// CityJSON LoD string of a level ("2.2", "1.2"; empty for none).
+const char* cityjson_lod(ModelLevel level);
+
+/// One row of the report.
+struct BuildingReport {
+  BuildingId id;
+  BuildingStatus status = BuildingStatus::failed;
+  ModelLevel level = ModelLevel::none;
+  std::string stage;   ///< stage of the last failure ("crop", "planes", ..., "lod1"), empty when ok
+  std::string reason;  ///< why it fell back, was skipped or failed; empty when ok
+  std::size_t points = 0;
+  std::size_t ground_points = 0;
+  double ground_z = 0.0;  ///< world z of the floor
+  std::string ground_method;
+  double roof_z = 0.0;    ///< world z of the LoD1 roof (70th percentile by default)
+  std::size_t planes = 0;
+  std::size_t walls = 0;
+  std::size_t candidate_faces = 0;
+  std::size_t faces = 0;
+  double rmse = -1.0;     ///< metres, points to model; -1 when there is no model or no points
+  bool valid = false;     ///< closed, 2-manifold, outward
+  double seconds = 0.0;
+};
+
+/// A building's outcome: the report row and, unless skipped or failed, its model.
+struct BuildingResult {
+  BuildingReport report;
+  std::optional<BuildingModel> model;
+};
+
+/// Reconstructs one building, walking the ladder LoD2 -> LoD2 with footprint walls -> LoD1 until a
+/// rung gives a valid closed model. Never throws for a bad building: the result says what happened.
+BuildingResult reconstruct_building(const BuildingInput& input, const ReconstructionParams& params);
+
+/// A single-building cloud without footprint (City3D's second mode): all points are the building,
+/// the local origin is the centre of their bounding box, the floor is `ground_z` when given, else
+/// the lowest point, and the outline (for the LoD1 rung) is the convex hull of the points.
+BuildingInput building_from_cloud(const BuildingId& id, const std::vector<Point3>& world_points,
+                                  std::optional<double> ground_z = std::nullopt);
+
+/// Everything run_batch() needs.
+struct BatchOptions {
+  std::vector<std::string> point_clouds;  ///< LAS/LAZ/PLY files, or folders of them
+  std::string footprints;                 ///< footprint source; empty = single-building clouds
+  FootprintReadOptions footprint;
+  CropParams crop;
+  ReconstructionParams reconstruction;
+  std::optional<double> ground_z;         ///< single-building mode: floor height (world z)
+
+  std::string output_dir = "city3d_out";
+  MeshFormat format = MeshFormat::obj;
+  bool local_coordinates = false;
+  bool per_building_files = true;   ///< models/<id>.<ext>
+  bool merged_file = false;         ///< models.<ext> with every building
+  bool cityjson = true;             ///< buildings.city.json
+  bool cityjson_seq = false;        ///< buildings.city.jsonl
+  bool timings_in_cityjson = false; ///< add "seconds" to CityJSON attributes (breaks byte-identity)
+  int threads = 1;
+  bool progress = false;            ///< progress line on stderr
+};
+
+/// Counts of one batch run.
+struct BatchSummary {
+  std::size_t buildings = 0, ok = 0, fallback = 0, skipped = 0, failed = 0;
+  double seconds = 0.0;
+  std::string report_path;
+};
+
+/// Runs the whole job. Throws IoError / ConfigError only when the run itself cannot go on
+/// (unreadable footprints or point clouds, unwritable output); a bad building never stops it.
+BatchSummary run_batch(const BatchOptions& options);
+
+}  // namespace city3d

@@ -1,0 +1,352 @@
+// LoD1 block: footprint polygons extruded between two heights into a closed polygonal solid. Caps of
+// polygons with holes are split into convex pieces (hole bridging, ear clipping, Hertel-Mehlhorn
+// merging) that only use ring vertices, so the walls and caps meet without T-junctions.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <sstream>
+#include <utility>
+
+#include "city3d/error.hpp"
+#include "city3d/lod1.hpp"
+
+namespace city3d {
+namespace {
+
+using Loop = std::vector<std::uint32_t>;  // indices into the polygon's 2D vertices
+
+double orient(const Point2& a, const Point2& b, const Point2& c) {
+  return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+}
+
+double signed_area(const Ring2& ring) {
+  double twice = 0.0;
+  for (std::size_t k = 0; k < ring.size(); ++k) {
+    const Point2& a = ring[k];
+    const Point2& b = ring[(k + 1) % ring.size()];
+    twice += (a.x - b.x) * (a.y + b.y);
+  }
+  return 0.5 * twice;  // trapezoid sum: (x_k - x_k+1)(y_k + y_k+1) totals twice the CCW area
+}
+
+bool same(const Point2& a, const Point2& b) { return a.x == b.x && a.y == b.y; }
+
+/// Drops repeated consecutive vertices (and a repeated closing vertex) and orients the ring.
+Ring2 clean_ring(const Ring2& ring, bool counter_clockwise, const std::string& what, const BuildingId& id) {
+  Ring2 out;
+  for (const Point2& v : ring) {
+    if (!std::isfinite(v.x) || !std::isfinite(v.y))
+      throw ReconstructionError("lod1: building " + id + ": " + what + " has a non-finite vertex");
+    if (out.empty() || !same(out.back(), v)) out.push_back(v);
+  }
+  while (out.size() > 1 && same(out.front(), out.back())) out.pop_back();
+  if (out.size() < 3)
+    throw ReconstructionError("lod1: building " + id + ": " + what + " has " + std::to_string(out.size()) +
+                              " distinct vertices, need 3");
+  const double area = signed_area(out);
+  if (area == 0.0) throw ReconstructionError("lod1: building " + id + ": " + what + " has no area");
+  if ((area > 0.0) != counter_clockwise) std::reverse(out.begin(), out.end());
+  return out;
+}
+
+/// Interior of the loop at corner (a, b, c) (interior on the left) contains the direction b -> q.
+bool locally_inside(const Point2& a, const Point2& b, const Point2& c, const Point2& q) {
+  if (orient(a, b, c) >= 0.0) return orient(a, b, q) > 0.0 && orient(b, c, q) > 0.0;
+  return orient(a, b, q) > 0.0 || orient(b, c, q) > 0.0;
+}
+
+/// Closed segments pq and rs share at least one point.
+bool segments_touch(const Point2& p, const Point2& q, const Point2& r, const Point2& s) {
+  auto on_segment = [](const Point2& a, const Point2& b, const Point2& c) {  // c on ab, given collinear
+    return std::min(a.x, b.x) <= c.x && c.x <= std::max(a.x, b.x) && std::min(a.y, b.y) <= c.y &&
+           c.y <= std::max(a.y, b.y);
+  };
+  const double d1 = orient(p, q, r), d2 = orient(p, q, s), d3 = orient(r, s, p), d4 = orient(r, s, q);
+  if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) return true;
+  return (d1 == 0 && on_segment(p, q, r)) || (d2 == 0 && on_segment(p, q, s)) ||
+         (d3 == 0 && on_segment(r, s, p)) || (d4 == 0 && on_segment(r, s, q));
+}
+
+/// The bridge segment from vertex v to hole vertex m is usable when no edge other than those at v
+/// or m touches it, and no vertex lies on it.
+bool bridge_is_clear(const std::vector<Point2>& pts, const std::vector<const Loop*>& loops, std::uint32_t v,
+                     std::uint32_t m) {
+  for (const Loop* loop : loops) {
+    for (std::size_t k = 0; k < loop->size(); ++k) {
+      const std::uint32_t a = (*loop)[k], b = (*loop)[(k + 1) % loop->size()];
+      const bool at_v = a == v || b == v, at_m = a == m || b == m;
+      if (at_v && at_m) continue;  // the bridge itself, once merged
+      if (at_v || at_m) {
+        // Sharing an endpoint: only a collinear overlap blocks the bridge.
+        const std::uint32_t other = (a == v || a == m) ? b : a;
+        const Point2& o = pts[other];
+        if (orient(pts[v], pts[m], o) == 0.0 &&
+            (o.x - pts[v].x) * (pts[m].x - pts[v].x) + (o.y - pts[v].y) * (pts[m].y - pts[v].y) > 0.0 &&
+            (o.x - pts[m].x) * (pts[v].x - pts[m].x) + (o.y - pts[m].y) * (pts[v].y - pts[m].y) > 0.0)
+          return false;
+        continue;
+      }
+      if (segments_touch(pts[v], pts[m], pts[a], pts[b])) return false;
+    }
+  }
+  return true;
+}
+
+/// Merges the holes (clockwise) into the outer loop (counter-clockwise) with zero-width bridges, in
+/// decreasing order of each hole's rightmost vertex (Eberly, "Triangulation by Ear Clipping"). The
+/// bridge goes to the nearest outer vertex that sees the hole's rightmost vertex, tested by brute
+/// force, which is fine at footprint sizes.
+Loop bridge_holes(const std::vector<Point2>& pts, Loop outer, std::vector<Loop> holes, const BuildingId& id) {
+  auto rightmost = [&](const Loop& loop) {
+    std::size_t best = 0;
+    for (std::size_t k = 1; k < loop.size(); ++k) {
+      const Point2 &p = pts[loop[k]], &b = pts[loop[best]];
+      if (p.x > b.x || (p.x == b.x && p.y > b.y)) best = k;
+    }
+    return best;
+  };
+  std::stable_sort(holes.begin(), holes.end(), [&](const Loop& l, const Loop& r) {
+    const Point2 &a = pts[l[rightmost(l)]], &b = pts[r[rightmost(r)]];
+    return a.x > b.x || (a.x == b.x && a.y > b.y);
+  });
+  for (std::size_t h = 0; h < holes.size(); ++h) {
+    Loop& hole = holes[h];
+    std::rotate(hole.begin(), hole.begin() + static_cast<std::ptrdiff_t>(rightmost(hole)), hole.end());
+    const std::uint32_t m = hole[0];
+    const Point2& mp = pts[m];
+
+    std::vector<const Loop*> obstacles{&outer};
+    for (std::size_t k = h; k < holes.size(); ++k) obstacles.push_back(&holes[k]);
+
+    std::vector<std::size_t> order(outer.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    auto distance2 = [&](std::size_t k) {
+      const Point2& p = pts[outer[k]];
+      return (p.x - mp.x) * (p.x - mp.x) + (p.y - mp.y) * (p.y - mp.y);
+    };
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t l, std::size_t r) { return distance2(l) < distance2(r); });
+
+    bool bridged = false;
+    for (std::size_t k : order) {
+      const std::uint32_t v = outer[k];
+      const Point2& vp = pts[v];
+      if (same(vp, mp)) continue;
+      const Point2& before = pts[outer[(k + outer.size() - 1) % outer.size()]];
+      const Point2& after = pts[outer[(k + 1) % outer.size()]];
+      if (!locally_inside(before, vp, after, mp)) continue;
+      if (!locally_inside(pts[hole.back()], mp, pts[hole[1]], vp)) continue;
+      if (!bridge_is_clear(pts, obstacles, v, m)) continue;
+      // outer[..k] (ends at v), the hole from m around to m, v again, outer[k+1..].
+      Loop merged(outer.begin(), outer.begin() + static_cast<std::ptrdiff_t>(k) + 1);
+      merged.insert(merged.end(), hole.begin(), hole.end());
+      merged.push_back(m);
+      merged.push_back(v);
+      merged.insert(merged.end(), outer.begin() + static_cast<std::ptrdiff_t>(k) + 1, outer.end());
+      outer = std::move(merged);
+      bridged = true;
+      break;
+    }
+    if (!bridged)
+      throw ReconstructionError("lod1: building " + id +
+                                ": cannot connect a hole to the outer ring "
+                                "(rings intersect or touch)");
+  }
+  return outer;
+}
+
+/// Ear clipping of a (weakly) simple counter-clockwise loop. An ear's triangle must be strictly
+/// convex and hold no other vertex inside or on its boundary, so no vertex ends up on a diagonal.
+std::vector<Loop> ear_clip(const std::vector<Point2>& pts, const Loop& loop, const BuildingId& id) {
+  const std::size_t n = loop.size();
+  std::vector<std::size_t> prev(n), next(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    prev[k] = (k + n - 1) % n;
+    next[k] = (k + 1) % n;
+  }
+  auto is_ear = [&](std::size_t c) {
+    const std::uint32_t ia = loop[prev[c]], ib = loop[c], ic = loop[next[c]];
+    const Point2 &a = pts[ia], &b = pts[ib], &cc = pts[ic];
+    if (orient(a, b, cc) <= 0.0) return false;
+    for (std::size_t k = next[next[c]]; k != prev[c]; k = next[k]) {
+      const std::uint32_t iq = loop[k];
+      if (iq == ia || iq == ib || iq == ic) continue;
+      const Point2& q = pts[iq];
+      if (orient(a, b, q) >= 0.0 && orient(b, cc, q) >= 0.0 && orient(cc, a, q) >= 0.0) return false;
+    }
+    return true;
+  };
+  std::vector<Loop> triangles;
+  std::size_t remaining = n, current = 0, failures = 0;
+  while (remaining > 3) {
+    if (is_ear(current)) {
+      triangles.push_back({loop[prev[current]], loop[current], loop[next[current]]});
+      next[prev[current]] = next[current];
+      prev[next[current]] = prev[current];
+      current = prev[current];
+      --remaining;
+      failures = 0;
+    } else {
+      current = next[current];
+      if (++failures > remaining)
+        throw ReconstructionError("lod1: building " + id + ": cannot split a roof with holes (no ear among " +
+                                  std::to_string(remaining) + " vertices; self-intersecting rings?)");
+    }
+  }
+  if (orient(pts[loop[prev[current]]], pts[loop[current]], pts[loop[next[current]]]) <= 0.0)
+    throw ReconstructionError("lod1: building " + id + ": roof with holes ends in a degenerate triangle");
+  triangles.push_back({loop[prev[current]], loop[current], loop[next[current]]});
+  return triangles;
+}
+
+/// Hertel-Mehlhorn: removes diagonals while both of their ends stay strictly convex, giving convex
+/// pieces (at most four times the minimum number). Pieces share only whole edges.
+std::vector<Loop> merge_convex(const std::vector<Point2>& pts, std::vector<Loop> pieces) {
+  auto key = [](std::uint32_t a, std::uint32_t b) { return (std::uint64_t{a} << 32) | b; };
+  std::map<std::uint64_t, std::size_t> owner;  // directed edge -> piece
+  for (std::size_t p = 0; p < pieces.size(); ++p)
+    for (std::size_t k = 0; k < pieces[p].size(); ++k)
+      owner[key(pieces[p][k], pieces[p][(k + 1) % pieces[p].size()])] = p;
+  std::vector<bool> alive(pieces.size(), true);
+
+  // Candidate diagonals in a fixed order: the edges of the triangles as ear clipping produced them.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> diagonals;
+  for (const Loop& t : pieces)
+    for (std::size_t k = 0; k < t.size(); ++k) {
+      const std::uint32_t a = t[k], b = t[(k + 1) % t.size()];
+      if (a < b && owner.count(key(b, a))) diagonals.push_back({a, b});
+    }
+  for (const auto& [a, b] : diagonals) {
+    const std::size_t pa = owner.at(key(a, b)), pb = owner.at(key(b, a));
+    if (pa == pb) continue;
+    Loop first = pieces[pa], second = pieces[pb];
+    // first = [b, ..., a], second = [a, ..., b].
+    std::rotate(first.begin(), std::find(first.begin(), first.end(), b), first.end());
+    std::rotate(second.begin(), std::find(second.begin(), second.end(), a), second.end());
+    if (first.back() != a || second.back() != b) continue;
+    const Point2 &pa_prev = pts[first[first.size() - 2]], &pa_next = pts[second[1]];
+    const Point2 &pb_prev = pts[second[second.size() - 2]], &pb_next = pts[first[1]];
+    if (orient(pa_prev, pts[a], pa_next) <= 0.0 || orient(pb_prev, pts[b], pb_next) <= 0.0) continue;
+    Loop merged = first;
+    merged.insert(merged.end(), second.begin() + 1, second.end() - 1);
+    owner.erase(key(a, b));
+    owner.erase(key(b, a));
+    pieces[pa] = merged;
+    alive[pb] = false;
+    for (std::size_t k = 0; k < merged.size(); ++k)
+      owner[key(merged[k], merged[(k + 1) % merged.size()])] = pa;
+  }
+  std::vector<Loop> out;
+  for (std::size_t p = 0; p < pieces.size(); ++p)
+    if (alive[p]) out.push_back(std::move(pieces[p]));
+  return out;
+}
+
+}  // namespace
+
+void Lod1Params::validate() const {
+  std::vector<std::string> problems;
+  if (!(roof_percentile >= 0.0 && roof_percentile <= 100.0))
+    problems.push_back("roof_percentile = " + std::to_string(roof_percentile) + " (0-100)");
+  if (!(min_height > 0.0) || !std::isfinite(min_height))
+    problems.push_back("min_height = " + std::to_string(min_height) + " (metres, > 0)");
+  if (problems.empty()) return;
+  std::string message = "lod1: invalid parameters: ";
+  for (std::size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];
+  throw ConfigError(message);
+}
+
+Lod1Heights lod1_heights(const BuildingInput& input, const Lod1Params& params) {
+  params.validate();
+  if (input.points.empty()) throw ReconstructionError("lod1: building " + input.id + " has no points");
+  std::vector<double> heights;
+  heights.reserve(input.points.size());
+  for (const Point3& p : input.points) heights.push_back(p.z);
+  Lod1Heights h;
+  h.floor_z = input.ground_z;
+  h.roof_z = percentile(heights, params.roof_percentile);
+  if (h.roof_z < h.floor_z + params.min_height) {
+    std::ostringstream note;
+    note << "roof raised from " << h.roof_z << " to " << h.floor_z + params.min_height << " (min_height "
+         << params.min_height << " m above ground " << h.floor_z << ")";
+    h.note = note.str();
+    h.roof_z = h.floor_z + params.min_height;
+  }
+  return h;
+}
+
+PolygonMesh extrude_polygons(const std::vector<Polygon2>& polygons, double floor_z, double roof_z,
+                             const BuildingId& id) {
+  if (!(roof_z > floor_z))
+    throw ReconstructionError("lod1: building " + id + ": roof z " + std::to_string(roof_z) +
+                              " is not above floor z " + std::to_string(floor_z));
+  PolygonMesh mesh;
+  for (std::size_t p = 0; p < polygons.size(); ++p) {
+    const std::string name = "polygon " + std::to_string(p);
+    // Flatten the rings into one vertex list; loops index into it.
+    std::vector<Point2> pts;
+    Loop outer;
+    std::vector<Loop> holes;
+    auto add_ring = [&](const Ring2& ring) {
+      Loop loop;
+      for (const Point2& v : ring) {
+        loop.push_back(static_cast<std::uint32_t>(pts.size()));
+        pts.push_back(v);
+      }
+      return loop;
+    };
+    outer = add_ring(clean_ring(polygons[p].outer, true, name + " outer ring", id));
+    for (std::size_t h = 0; h < polygons[p].holes.size(); ++h)
+      holes.push_back(
+          add_ring(clean_ring(polygons[p].holes[h], false, name + " hole " + std::to_string(h), id)));
+
+    // Vertex k of the polygon is mesh vertex base + k at the floor and base + n + k at the roof.
+    const auto base = static_cast<std::uint32_t>(mesh.vertices.size());
+    const auto n = static_cast<std::uint32_t>(pts.size());
+    for (const Point2& v : pts) mesh.vertices.push_back({v.x, v.y, floor_z});
+    for (const Point2& v : pts) mesh.vertices.push_back({v.x, v.y, roof_z});
+    const auto bottom = [&](std::uint32_t k) { return base + k; };
+    const auto top = [&](std::uint32_t k) { return base + n + k; };
+
+    // Walls: the solid lies left of every ring edge (outer CCW, holes CW), so the quad
+    // (bottom a, bottom b, top b, top a) faces right of the edge: out of the solid.
+    auto add_walls = [&](const Loop& loop) {
+      for (std::size_t k = 0; k < loop.size(); ++k) {
+        const std::uint32_t a = loop[k], b = loop[(k + 1) % loop.size()];
+        mesh.faces.push_back({bottom(a), bottom(b), top(b), top(a)});
+      }
+    };
+    add_walls(outer);
+    for (const Loop& hole : holes) add_walls(hole);
+
+    std::vector<Loop> caps;
+    if (holes.empty()) {
+      caps.push_back(outer);
+    } else {
+      caps = merge_convex(pts, ear_clip(pts, bridge_holes(pts, outer, holes, id), id));
+    }
+    for (const Loop& cap : caps) {  // roof: counter-clockwise from above
+      std::vector<std::uint32_t> face;
+      for (std::uint32_t k : cap) face.push_back(top(k));
+      mesh.faces.push_back(std::move(face));
+    }
+    for (const Loop& cap : caps) {  // floor: the same pieces reversed, facing down
+      std::vector<std::uint32_t> face;
+      for (auto it = cap.rbegin(); it != cap.rend(); ++it) face.push_back(bottom(*it));
+      mesh.faces.push_back(std::move(face));
+    }
+  }
+  return mesh;
+}
+
+BuildingModel make_lod1_block(const BuildingInput& input, const Lod1Params& params) {
+  const Lod1Heights heights = lod1_heights(input, params);
+  BuildingModel model;
+  model.id = input.id;
+  model.origin = input.origin;
+  model.mesh = extrude_polygons(input.footprint.polygons, heights.floor_z, heights.roof_z, input.id);
+  return model;
+}
+
+}  // namespace city3d

@@ -1,0 +1,177 @@
+// Mesh validity: directed-edge pairing (closed, consistently oriented), edge and vertex manifoldness,
+// shells, degenerate faces, and the signed volume that tells outward from inward orientation.
+#include "city3d/mesh_check.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numeric>
+#include <tuple>
+#include <vector>
+
+namespace city3d {
+namespace {
+
+struct Vec {
+  double x, y, z;
+};
+Vec sub(const Point3& a, const Point3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+Vec cross(const Vec& a, const Vec& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+double dot(const Vec& a, const Vec& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+
+std::uint64_t key(std::uint32_t a, std::uint32_t b) { return (std::uint64_t{a} << 32) | b; }
+
+std::size_t find_root(std::vector<std::size_t>& parent, std::size_t i) {
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+}  // namespace
+
+MeshCheck check_mesh(const PolygonMesh& mesh) {
+  MeshCheck check;
+  const auto& vertices = mesh.vertices;
+  check.vertex_count = vertices.size();
+  check.face_count = mesh.faces.size();
+
+  // Scale for the zero-area test, and a reference point near the mesh so that the volume sum does
+  // not lose digits to large coordinates.
+  Box3 bounds;
+  for (const Point3& v : vertices) bounds.add(v);
+  const Point3 centre = bounds.empty()
+                            ? Point3{}
+                            : Point3{0.5 * (bounds.min.x + bounds.max.x), 0.5 * (bounds.min.y + bounds.max.y),
+                                     0.5 * (bounds.min.z + bounds.max.z)};
+  const double diagonal2 =
+      bounds.empty() ? 0.0 : dot(sub(bounds.max, bounds.min), sub(bounds.max, bounds.min));
+  const double min_area = 1e-12 * std::max(1.0, diagonal2);
+
+  // Directed edges (a << 32 | b) with their face; faces with bad indices are left out.
+  std::vector<std::pair<std::uint64_t, std::size_t>> directed;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const auto& face = mesh.faces[f];
+    const bool in_range =
+        std::all_of(face.begin(), face.end(), [&](std::uint32_t v) { return v < vertices.size(); });
+    if (!in_range) {
+      ++check.degenerate_faces;
+      continue;
+    }
+    std::vector<std::uint32_t> sorted(face);
+    std::sort(sorted.begin(), sorted.end());
+    const bool repeated = std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end();
+
+    Vec normal{0.0, 0.0, 0.0};  // Newell's normal: twice the vector area
+    for (std::size_t k = 0; k < face.size(); ++k) {
+      const Point3& a = vertices[face[k]];
+      const Point3& b = vertices[face[(k + 1) % face.size()]];
+      normal.x += (a.y - b.y) * (a.z + b.z);
+      normal.y += (a.z - b.z) * (a.x + b.x);
+      normal.z += (a.x - b.x) * (a.y + b.y);
+      directed.push_back({key(face[k], face[(k + 1) % face.size()]), f});
+    }
+    const double area = 0.5 * std::sqrt(dot(normal, normal));
+    check.area += area;
+    if (face.size() < 3 || repeated || area <= min_area) ++check.degenerate_faces;
+
+    for (std::size_t k = 1; k + 1 < face.size(); ++k) {
+      const Vec a = sub(vertices[face[0]], centre);
+      const Vec b = sub(vertices[face[k]], centre);
+      const Vec c = sub(vertices[face[k + 1]], centre);
+      check.signed_volume += dot(a, cross(b, c)) / 6.0;
+    }
+  }
+
+  std::sort(directed.begin(), directed.end());
+  auto count_of = [&](std::uint64_t k) {
+    auto range = std::equal_range(directed.begin(), directed.end(), std::make_pair(k, std::size_t{0}),
+                                  [](const auto& l, const auto& r) { return l.first < r.first; });
+    return static_cast<std::size_t>(range.second - range.first);
+  };
+
+  // Edge pairing, manifold edges and shells in one pass over the distinct directed edges.
+  std::vector<std::size_t> parent(mesh.faces.size());
+  std::iota(parent.begin(), parent.end(), std::size_t{0});
+  bool every_edge_paired_once = true;
+  for (std::size_t i = 0; i < directed.size();) {
+    std::size_t j = i;
+    while (j < directed.size() && directed[j].first == directed[i].first) ++j;
+    const std::uint32_t a = static_cast<std::uint32_t>(directed[i].first >> 32);
+    const std::uint32_t b = static_cast<std::uint32_t>(directed[i].first & 0xFFFFFFFFu);
+    const std::size_t here = j - i;
+    const std::size_t opposite = count_of(key(b, a));
+    if (opposite == 0) check.boundary_edges += here;
+    if (opposite != 1 || here != 1) every_edge_paired_once = false;
+    if (a < b || opposite == 0) {  // count each undirected edge once
+      ++check.edge_count;
+      if (here + opposite > 2 || here > 1 || opposite > 1) ++check.non_manifold_edges;
+    }
+    for (std::size_t k = i + 1; k < j; ++k)
+      parent[find_root(parent, directed[k].second)] = find_root(parent, directed[i].second);
+    if (opposite > 0) {
+      auto it = std::lower_bound(directed.begin(), directed.end(), std::make_pair(key(b, a), std::size_t{0}));
+      parent[find_root(parent, it->second)] = find_root(parent, directed[i].second);
+    }
+    i = j;
+  }
+  for (std::size_t f = 0; f < parent.size(); ++f)
+    if (find_root(parent, f) == f) ++check.shell_count;
+
+  // Vertex manifoldness: the face corners around a vertex (previous, next) must chain into a single
+  // fan; corner (p, v, n) is followed by the corner whose previous vertex is n.
+  struct Corner {
+    std::uint32_t vertex, previous, next;
+  };
+  std::vector<Corner> corners;
+  for (const auto& face : mesh.faces) {
+    if (face.size() < 3 ||
+        !std::all_of(face.begin(), face.end(), [&](std::uint32_t v) { return v < vertices.size(); }))
+      continue;
+    for (std::size_t k = 0; k < face.size(); ++k)
+      corners.push_back({face[k], face[(k + face.size() - 1) % face.size()], face[(k + 1) % face.size()]});
+  }
+  std::sort(corners.begin(), corners.end(), [](const Corner& l, const Corner& r) {
+    return std::tie(l.vertex, l.previous, l.next) < std::tie(r.vertex, r.previous, r.next);
+  });
+  std::vector<bool> visited(corners.size(), false);
+  for (std::size_t i = 0; i < corners.size();) {
+    std::size_t j = i;
+    while (j < corners.size() && corners[j].vertex == corners[i].vertex) ++j;
+    std::size_t fans = 0;
+    for (std::size_t start = i; start < j; ++start) {
+      if (visited[start]) continue;
+      ++fans;
+      // Walk forward from `start`, then backward, marking the corners of this fan.
+      for (std::size_t c = start; !visited[c];) {
+        visited[c] = true;
+        auto it = std::lower_bound(corners.begin() + static_cast<std::ptrdiff_t>(i),
+                                   corners.begin() + static_cast<std::ptrdiff_t>(j), corners[c].next,
+                                   [](const Corner& l, std::uint32_t p) { return l.previous < p; });
+        if (it == corners.begin() + static_cast<std::ptrdiff_t>(j) || it->previous != corners[c].next) break;
+        c = static_cast<std::size_t>(it - corners.begin());
+      }
+      for (std::size_t c = start;;) {
+        const std::uint32_t previous = corners[c].previous;
+        std::size_t found = j;
+        for (std::size_t k = i; k < j; ++k)
+          if (corners[k].next == previous) {
+            found = k;
+            break;
+          }
+        if (found == j || visited[found]) break;
+        visited[found] = true;
+        c = found;
+      }
+    }
+    if (fans > 1) ++check.non_manifold_vertices;
+    i = j;
+  }
+
+  check.closed = !directed.empty() && every_edge_paired_once;
+  check.manifold = check.non_manifold_edges == 0 && check.non_manifold_vertices == 0;
+  check.outward = check.signed_volume > 0.0;
+  return check;
+}
+
+}  // namespace city3d

@@ -1,0 +1,417 @@
+// The pipeline: one building from points to model (reconstruct_building), and the batch job around
+// it (run_batch): footprints, tiles, cropping, parallel reconstruction, ordered output, report.
+#include "city3d/pipeline.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <mutex>
+#include <thread>
+
+#include "city3d/error.hpp"
+#include "city3d/log.hpp"
+#include "city3d/mesh_check.hpp"
+#include "city3d/point_cloud_io.hpp"
+#include "pipeline/report.hpp"
+
+namespace city3d {
+namespace fs = std::filesystem;
+
+const char* to_string(BuildingStatus status) {
+  switch (status) {
+    case BuildingStatus::ok: return "ok";
+    case BuildingStatus::fallback: return "fallback";
+    case BuildingStatus::skipped: return "skipped";
+    case BuildingStatus::failed: return "failed";
+  }
+  return "failed";
+}
+
+const char* to_string(ModelLevel level) {
+  switch (level) {
+    case ModelLevel::none: return "none";
+    case ModelLevel::lod22: return "LoD2.2";
+    case ModelLevel::lod22_footprint_walls: return "LoD2.2 footprint walls";
+    case ModelLevel::lod12: return "LoD1.2";
+  }
+  return "none";
+}
+
+const char* cityjson_lod(ModelLevel level) {
+  switch (level) {
+    case ModelLevel::lod22:
+    case ModelLevel::lod22_footprint_walls: return "2.2";
+    case ModelLevel::lod12: return "1.2";
+    case ModelLevel::none: return "";
+  }
+  return "";
+}
+
+void ReconstructionParams::validate() const { lod1.validate(); }
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// The LoD1 rung: always possible when the building has points and a usable footprint.
+BuildingModel lod1_rung(const BuildingInput& input, const ReconstructionParams& params, BuildingReport& report) {
+  const Lod1Heights heights = lod1_heights(input, params.lod1);
+  report.roof_z = heights.roof_z + input.origin.z;
+  BuildingModel model = make_lod1_block(input, params.lod1);
+  const MeshCheck check = check_mesh(model.mesh);
+  if (!check.valid())
+    throw ReconstructionError("lod1: building " + input.id + ": block is not a valid solid (" +
+                              std::to_string(check.boundary_edges) + " boundary edges, " +
+                              std::to_string(check.non_manifold_edges) + " non-manifold edges, volume " +
+                              std::to_string(check.signed_volume) + ")");
+  return model;
+}
+
+// Monotone-chain convex hull, counter-clockwise, without collinear points.
+Ring2 convex_hull(std::vector<Point2> pts) {
+  std::sort(pts.begin(), pts.end(), [](const Point2& a, const Point2& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
+  pts.erase(std::unique(pts.begin(), pts.end(), [](const Point2& a, const Point2& b) { return a.x == b.x && a.y == b.y; }),
+            pts.end());
+  if (pts.size() < 3) return pts;
+  auto cross = [](const Point2& o, const Point2& a, const Point2& b) {
+    return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+  };
+  Ring2 hull(2 * pts.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
+    hull[k++] = pts[i];
+  }
+  for (std::size_t i = pts.size() - 1, t = k + 1; i > 0; --i) {
+    while (k >= t && cross(hull[k - 2], hull[k - 1], pts[i - 1]) <= 0) --k;
+    hull[k++] = pts[i - 1];
+  }
+  hull.resize(k - 1);
+  return hull;
+}
+
+}  // namespace
+
+BuildingInput building_from_cloud(const BuildingId& id, const std::vector<Point3>& world_points,
+                                  std::optional<double> ground_z) {
+  BuildingInput input;
+  input.id = id;
+  input.footprint.id = id;
+  if (world_points.empty()) return input;
+  Box3 box;
+  for (const Point3& p : world_points) box.add(p);
+  // An integer origin keeps local + origin exact in double (see crop.hpp).
+  input.origin = {std::round((box.min.x + box.max.x) / 2), std::round((box.min.y + box.max.y) / 2), 0.0};
+  input.points.reserve(world_points.size());
+  std::vector<Point2> xy;
+  xy.reserve(world_points.size());
+  for (const Point3& p : world_points) {
+    input.points.push_back({p.x - input.origin.x, p.y - input.origin.y, p.z});
+    xy.push_back({p.x - input.origin.x, p.y - input.origin.y});
+  }
+  input.footprint.polygons.push_back({convex_hull(std::move(xy)), {}});
+  if (ground_z) {
+    input.ground_z = *ground_z;
+    input.ground_method = "given";
+  } else {
+    input.ground_z = box.min.z;
+    input.ground_method = "lowest building point";
+  }
+  return input;
+}
+
+BuildingResult reconstruct_building(const BuildingInput& input, const ReconstructionParams& params) {
+  const auto start = Clock::now();
+  BuildingResult result;
+  BuildingReport& r = result.report;
+  r.id = input.id;
+  r.points = input.points.size();
+  r.ground_points = input.ground_points.size();
+  r.ground_z = input.ground_z + input.origin.z;
+  r.ground_method = input.ground_method;
+  if (input.footprint.polygons.empty()) {
+    r.status = BuildingStatus::skipped;
+    r.stage = "crop";
+    r.reason = "footprint has no usable polygon";
+  } else if (input.points.empty()) {
+    r.status = BuildingStatus::skipped;
+    r.stage = "crop";
+    r.reason = "no building points inside the footprint";
+  } else {
+    // The ladder. LoD2 rungs join here as their stages land; until then LoD1 is the model.
+    try {
+      BuildingModel model = lod1_rung(input, params, r);
+      r.level = ModelLevel::lod12;
+      r.status = BuildingStatus::ok;
+      r.faces = model.mesh.faces.size();
+      r.valid = true;
+      result.model = std::move(model);
+    } catch (const Error& e) {
+      r.status = BuildingStatus::failed;
+      r.stage = "lod1";
+      r.reason = e.what();
+    }
+  }
+  r.seconds = seconds_since(start);
+  return result;
+}
+
+namespace {
+
+bool is_point_cloud_file(const fs::path& p) {
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext == ".las" || ext == ".laz" || ext == ".ply";
+}
+
+// Files as given, folders expanded to their LAS/LAZ/PLY files sorted by name (deterministic).
+std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
+  std::vector<std::string> files;
+  for (const std::string& in : inputs) {
+    std::error_code ec;
+    if (fs::is_directory(in, ec)) {
+      std::vector<std::string> found;
+      for (const auto& entry : fs::directory_iterator(in, ec))
+        if (entry.is_regular_file() && is_point_cloud_file(entry.path())) found.push_back(entry.path().string());
+      if (ec) throw IoError("input: cannot list folder " + in + ": " + ec.message());
+      if (found.empty()) throw IoError("input: folder " + in + " holds no .las, .laz or .ply file");
+      std::sort(found.begin(), found.end());
+      files.insert(files.end(), found.begin(), found.end());
+    } else if (fs::exists(in, ec)) {
+      files.push_back(in);
+    } else {
+      throw IoError("input: cannot open " + in + ": no such file or folder");
+    }
+  }
+  if (files.empty()) throw ConfigError("input: no point-cloud file given");
+  return files;
+}
+
+std::vector<Point3> read_all_points(const std::string& path) {
+  PointCloud cloud = read_point_cloud(path, kFieldXyz);
+  return std::move(cloud.points);
+}
+
+// Streams every tile that overlaps the footprints into the cropper.
+void crop_tiles(const std::vector<std::string>& files, const std::vector<Footprint>& footprints, double buffer,
+                Cropper& cropper) {
+  Box2 extent;
+  for (const Footprint& f : footprints)
+    for (const Polygon2& p : f.polygons)
+      for (const Point2& v : p.outer) extent.add(v);
+  const double margin = buffer * 4.0 + 1.0;  // the cropper's wide ground buffer, and a metre to spare
+  extent.min = {extent.min.x - margin, extent.min.y - margin};
+  extent.max = {extent.max.x + margin, extent.max.y + margin};
+  for (const std::string& file : files) {
+    auto reader = open_point_cloud(file, kFieldClassification);
+    const PointCloudInfo& info = reader->info();
+    if (!info.bounds.empty()) {
+      Box2 tile;
+      tile.add({info.bounds.min.x, info.bounds.min.y});
+      tile.add({info.bounds.max.x, info.bounds.max.y});
+      if (!tile.intersects(extent)) {
+        log_info("crop: " + file + " does not overlap the footprints, skipped");
+        continue;
+      }
+    }
+    PointCloud chunk;
+    std::uint64_t n = 0;
+    for (;;) {
+      chunk.clear();
+      const std::size_t got = reader->read(chunk, 1 << 20);
+      if (got == 0) break;
+      n += got;
+      cropper.add(chunk);
+    }
+    log_info("crop: " + file + ": " + std::to_string(n) + " points streamed");
+  }
+}
+
+std::vector<std::pair<std::string, AttributeValue>> cityjson_attributes(const BuildingReport& r, bool timings) {
+  std::vector<std::pair<std::string, AttributeValue>> a = {
+      {"status", std::string(to_string(r.status))},
+      {"level", std::string(to_string(r.level))},
+      {"reason", r.reason.empty() ? AttributeValue{} : AttributeValue{r.reason}},
+      {"ground_z", r.ground_z},
+      {"ground_method", r.ground_method},
+      {"roof_z_p70", r.roof_z},
+      {"points", static_cast<std::int64_t>(r.points)},
+      {"planes", static_cast<std::int64_t>(r.planes)},
+      {"faces", static_cast<std::int64_t>(r.faces)},
+      {"rmse", r.rmse >= 0 ? AttributeValue{r.rmse} : AttributeValue{}},
+  };
+  if (timings) a.emplace_back("seconds", r.seconds);
+  return a;
+}
+
+// Writes each building's outputs as soon as it and every building before it are done, so output
+// order (and bytes) never depend on the thread count, and finished work is on disk early.
+class OrderedWriter {
+ public:
+  OrderedWriter(const BatchOptions& options, std::size_t total, const Point3& translate, const std::string& crs)
+      : options_(options), results_(total), ready_(total, false) {
+    if (options.per_building_files) fs::create_directories(fs::path(options.output_dir) / "models");
+    if (options.cityjson_seq)
+      seq_ = std::make_unique<CityJsonSeqWriter>((fs::path(options.output_dir) / "buildings.city.jsonl").string(),
+                                                 CityJsonOptions{crs, 0.001, ""}, translate);
+  }
+
+  void submit(std::size_t index, BuildingResult result) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    results_[index] = std::move(result);
+    ready_[index] = true;
+    while (next_ < results_.size() && ready_[next_]) write(results_[next_++]);
+  }
+
+  void finish(const std::string& crs) {
+    if (seq_) seq_->close();
+    const fs::path out(options_.output_dir);
+    if (options_.cityjson) write_cityjson((out / "buildings.city.json").string(), objects_, {crs, 0.001, ""});
+    if (options_.merged_file) {
+      std::vector<BuildingModel> models;
+      for (CityObject& o : objects_) models.push_back(o.model);
+      write_models((out / ("models" + mesh_extension(options_.format))).string(), models,
+                   {options_.format, options_.local_coordinates});
+    }
+  }
+
+  std::vector<BuildingReport> reports() const {
+    std::vector<BuildingReport> rows;
+    for (const BuildingResult& r : results_) rows.push_back(r.report);
+    return rows;
+  }
+
+ private:
+  void write(BuildingResult& result) {
+    if (!result.model) return;
+    if (options_.per_building_files) {
+      const fs::path file = fs::path(options_.output_dir) / "models" / model_file_name(result.model->id, options_.format);
+      write_model(file.string(), *result.model, {options_.format, options_.local_coordinates});
+    }
+    CityObject object{std::move(*result.model), cityjson_lod(result.report.level),
+                      cityjson_attributes(result.report, options_.timings_in_cityjson)};
+    result.model.reset();
+    if (seq_) seq_->add(object);
+    if (options_.cityjson || options_.merged_file) objects_.push_back(std::move(object));
+  }
+
+  const BatchOptions& options_;
+  std::mutex mutex_;
+  std::vector<BuildingResult> results_;
+  std::vector<bool> ready_;
+  std::size_t next_ = 0;
+  std::unique_ptr<CityJsonSeqWriter> seq_;
+  std::vector<CityObject> objects_;
+};
+
+void print_progress(std::size_t done, std::size_t total, Clock::time_point start) {
+  const double elapsed = seconds_since(start);
+  const double rate = elapsed > 0 ? done / elapsed : 0.0;
+  const double left = rate > 0 ? (total - done) / rate : 0.0;
+  std::fprintf(stderr, "\rbuildings %zu/%zu  %.1f/s  %.0f s left   ", done, total, rate, left);
+  if (done == total) std::fputc('\n', stderr);
+  std::fflush(stderr);
+}
+
+}  // namespace
+
+BatchSummary run_batch(const BatchOptions& options) {
+  const auto start = Clock::now();
+  options.reconstruction.validate();
+  options.crop.validate();
+  if (options.threads < 1) throw ConfigError("batch: threads must be at least 1");
+  const std::vector<std::string> files = expand_inputs(options.point_clouds);
+
+  // Inputs: footprints cropped from the tiles, or one building per single-building cloud.
+  std::vector<BuildingInput> inputs;
+  std::vector<BuildingReport> skipped_rows;
+  std::string crs;
+  if (!options.footprints.empty()) {
+    FootprintSet set = read_footprints(options.footprints, options.footprint);
+    crs = set.srs.rfind("EPSG:", 0) == 0 ? set.srs : "";
+    for (const SkippedFootprint& s : set.skipped) {
+      BuildingReport row;
+      row.id = s.id;
+      row.status = BuildingStatus::skipped;
+      row.stage = "footprints";
+      row.reason = s.reason;
+      skipped_rows.push_back(row);
+    }
+    Cropper cropper(set.footprints, options.crop);
+    crop_tiles(files, set.footprints, options.crop.ground_buffer, cropper);
+    inputs = cropper.finish();
+  } else {
+    for (const std::string& file : files) {
+      const std::string id = fs::path(file).stem().string();
+      inputs.push_back(building_from_cloud(id, read_all_points(file), options.ground_z));
+    }
+  }
+
+  // Reconstruct in parallel; write in input order.
+  fs::create_directories(options.output_dir);
+  Point3 translate{0, 0, 0};
+  {
+    Box2 box;
+    for (const BuildingInput& in : inputs) box.add({in.origin.x, in.origin.y});
+    if (!box.empty()) translate = {std::floor(box.min.x), std::floor(box.min.y), 0.0};
+  }
+  OrderedWriter writer(options, inputs.size(), translate, crs);
+  std::atomic<std::size_t> next{0}, done{0};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+  auto worker = [&]() {
+    for (;;) {
+      const std::size_t i = next++;
+      if (i >= inputs.size()) return;
+      {
+        std::lock_guard<std::mutex> lock(failure_mutex);
+        if (failure) return;
+      }
+      try {
+        BuildingResult result = reconstruct_building(inputs[i], options.reconstruction);
+        // The points are not needed any more: free them early.
+        std::vector<Point3>().swap(inputs[i].points);
+        writer.submit(i, std::move(result));
+      } catch (...) {
+        // Only output errors reach here (reconstruct_building never throws for a bad building).
+        std::lock_guard<std::mutex> lock(failure_mutex);
+        if (!failure) failure = std::current_exception();
+        return;
+      }
+      const std::size_t d = ++done;
+      if (options.progress) print_progress(d, inputs.size(), start);
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < options.threads; ++t) pool.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
+  writer.finish(crs);
+
+  std::vector<BuildingReport> rows = writer.reports();
+  rows.insert(rows.end(), skipped_rows.begin(), skipped_rows.end());
+  BatchSummary summary;
+  summary.buildings = rows.size();
+  for (const BuildingReport& r : rows) {
+    summary.ok += r.status == BuildingStatus::ok;
+    summary.fallback += r.status == BuildingStatus::fallback;
+    summary.skipped += r.status == BuildingStatus::skipped;
+    summary.failed += r.status == BuildingStatus::failed;
+  }
+  summary.seconds = seconds_since(start);
+  summary.report_path = (fs::path(options.output_dir) / "report.csv").string();
+  detail::write_report_csv(summary.report_path, rows);
+  detail::write_report_json((fs::path(options.output_dir) / "report.json").string(), rows, summary);
+  return summary;
+}
+
+}  // namespace city3d

@@ -1,0 +1,93 @@
+// Report writers: CSV for spreadsheets and shell tools, JSON for programs. Numbers are printed with
+// fixed precision so that reports of identical runs differ only in their timings.
+#include "pipeline/report.hpp"
+
+#include <cstdio>
+
+#include "io/atomic_file.hpp"
+
+namespace city3d::detail {
+namespace {
+
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string json_string(const std::string& s) {
+  std::string out = "\"";
+  for (unsigned char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += static_cast<char>(c);
+    } else if (c < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", c);
+      out += buf;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  return out + "\"";
+}
+
+std::string fixed(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+}  // namespace
+
+void write_report_csv(const std::string& path, const std::vector<BuildingReport>& rows) {
+  AtomicFile file(path);
+  std::FILE* out = file.file();
+  std::fputs(
+      "id,status,level,stage,reason,points,ground_points,ground_z,ground_method,roof_z,planes,walls,"
+      "candidate_faces,faces,rmse,valid,seconds\n",
+      out);
+  for (const BuildingReport& r : rows) {
+    const std::string line =
+        csv_field(r.id) + "," + to_string(r.status) + "," + to_string(r.level) + "," + csv_field(r.stage) + "," +
+        csv_field(r.reason) + "," + std::to_string(r.points) + "," + std::to_string(r.ground_points) + "," +
+        fixed(r.ground_z, 3) + "," + csv_field(r.ground_method) + "," + fixed(r.roof_z, 3) + "," +
+        std::to_string(r.planes) + "," + std::to_string(r.walls) + "," + std::to_string(r.candidate_faces) + "," +
+        std::to_string(r.faces) + "," + (r.rmse >= 0 ? fixed(r.rmse, 4) : "") + "," + (r.valid ? "1" : "0") + "," +
+        fixed(r.seconds, 4) + "\n";
+    std::fputs(line.c_str(), out);
+  }
+  file.commit();
+}
+
+void write_report_json(const std::string& path, const std::vector<BuildingReport>& rows, const BatchSummary& summary) {
+  AtomicFile file(path);
+  std::FILE* out = file.file();
+  std::fprintf(out,
+               "{\n  \"summary\": {\"buildings\": %zu, \"ok\": %zu, \"fallback\": %zu, \"skipped\": %zu, "
+               "\"failed\": %zu, \"seconds\": %s},\n  \"buildings\": [",
+               summary.buildings, summary.ok, summary.fallback, summary.skipped, summary.failed,
+               fixed(summary.seconds, 3).c_str());
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const BuildingReport& r = rows[i];
+    const std::string line =
+        std::string(i ? "," : "") + "\n    {\"id\": " + json_string(r.id) + ", \"status\": \"" + to_string(r.status) +
+        "\", \"level\": \"" + to_string(r.level) + "\", \"stage\": " + json_string(r.stage) +
+        ", \"reason\": " + json_string(r.reason) + ", \"points\": " + std::to_string(r.points) +
+        ", \"ground_points\": " + std::to_string(r.ground_points) + ", \"ground_z\": " + fixed(r.ground_z, 3) +
+        ", \"ground_method\": " + json_string(r.ground_method) + ", \"roof_z\": " + fixed(r.roof_z, 3) +
+        ", \"planes\": " + std::to_string(r.planes) + ", \"walls\": " + std::to_string(r.walls) +
+        ", \"candidate_faces\": " + std::to_string(r.candidate_faces) + ", \"faces\": " + std::to_string(r.faces) +
+        ", \"rmse\": " + (r.rmse >= 0 ? fixed(r.rmse, 4) : "null") + ", \"valid\": " + (r.valid ? "true" : "false") +
+        ", \"seconds\": " + fixed(r.seconds, 4) + "}";
+    std::fputs(line.c_str(), out);
+  }
+  std::fputs("\n  ]\n}\n", out);
+  file.commit();
+}
+
+}  // namespace city3d::detail
