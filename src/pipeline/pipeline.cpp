@@ -201,13 +201,14 @@ std::vector<Point3> read_all_points(const std::string& path) {
 }
 
 // Streams every tile that overlaps the footprints into the cropper.
-void crop_tiles(const std::vector<std::string>& files, const std::vector<Footprint>& footprints, double buffer,
-                Cropper& cropper) {
+void crop_tiles(const std::vector<std::string>& files, const std::vector<Footprint>& footprints,
+                const CropParams& params, Cropper& cropper) {
   Box2 extent;
   for (const Footprint& f : footprints)
     for (const Polygon2& p : f.polygons)
       for (const Point2& v : p.outer) extent.add(v);
-  const double margin = buffer * 4.0 + 1.0;  // the cropper's wide ground buffer, and a metre to spare
+  // The cropper's wide ground buffer, and a metre to spare.
+  const double margin = params.ground_buffer * params.wide_buffer_factor + 1.0;
   extent.min = {extent.min.x - margin, extent.min.y - margin};
   extent.max = {extent.max.x + margin, extent.max.y + margin};
   for (const std::string& file : files) {
@@ -346,7 +347,7 @@ BatchSummary run_batch(const BatchOptions& options) {
       skipped_rows.push_back(row);
     }
     Cropper cropper(set.footprints, options.crop);
-    crop_tiles(files, set.footprints, options.crop.ground_buffer, cropper);
+    crop_tiles(files, set.footprints, options.crop, cropper);
     inputs = cropper.finish();
   } else {
     for (const std::string& file : files) {
