@@ -311,3 +311,35 @@ TEST_F(Reconstruct, without_inputs_is_a_usage_error) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_TRUE(contains(r.output, "no point-cloud file")) << r.output;
 }
+
+TEST_F(Reconstruct, broken_footprints_are_reported_and_never_stop_the_others) {
+  const std::string d = CITY3D_SAMPLE_DATA;
+  const Result r = run("reconstruct " + d + "/delft_sample_1.las " + d + "/delft_sample_2.las -f " +
+                       CITY3D_TEST_DATA + "/footprints/sample_broken.geojson --id-field gml_id --no-progress -o " +
+                       (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto rows = lines_of(read_file(dir_ / "out" / "report.csv"));
+  ASSERT_EQ(rows.size(), 11u);  // header + 10 features: 5 good ones and 5 broken ones
+  auto row_of = [&](const std::string& id) {
+    for (const std::string& row : rows)
+      if (row.rfind(id + ",", 0) == 0) return row;
+    return std::string();
+  };
+  EXPECT_TRUE(contains(row_of("bowtie"), ",ok,")) << row_of("bowtie");
+  EXPECT_TRUE(contains(row_of("bowtie"), "repaired with MakeValid")) << row_of("bowtie");
+  EXPECT_TRUE(contains(row_of("empty"), ",skipped,none,footprints,no geometry")) << row_of("empty");
+  EXPECT_TRUE(contains(row_of("null_geometry"), ",skipped,none,footprints,no geometry")) << row_of("null_geometry");
+  EXPECT_TRUE(contains(row_of("no_points"), ",skipped,none,crop,no building points")) << row_of("no_points");
+  std::size_t ok = 0, duplicated = 0;
+  for (const std::string& row : rows) {
+    ok += contains(row, ",ok,");
+    duplicated += contains(row, "duplicated id");
+  }
+  EXPECT_EQ(ok, 6u);  // the 5 good footprints and the repaired bow-tie
+  EXPECT_EQ(duplicated, 1u);
+  // A strict run fails on... nothing here: skipped is not failed.
+  EXPECT_EQ(run("reconstruct " + d + "/delft_sample_1.las -f " + CITY3D_TEST_DATA +
+                "/footprints/sample_broken.geojson --strict --no-progress -o " + (dir_ / "strict").string())
+                .exit_code,
+            0);
+}

@@ -53,6 +53,7 @@ struct BuildingReport {
   ModelLevel level = ModelLevel::none;
   std::string stage;   ///< stage of the last failure ("crop", "planes", ..., "lod1"), empty when ok
   std::string reason;  ///< why it fell back, was skipped or failed; empty when ok
+  std::string note;    ///< anything else worth knowing, e.g. the footprint was repaired
   std::size_t points = 0;
   std::size_t ground_points = 0;
   double ground_z = 0.0;  ///< world z of the floor

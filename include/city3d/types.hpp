@@ -75,6 +75,7 @@ struct Footprint {
   BuildingId id;                    ///< value of the id field (or the feature id as text)
   std::int64_t fid = -1;            ///< OGR feature id, -1 when the source has none
   std::vector<Polygon2> polygons;   ///< world coordinates (the source's CRS), metres
+  std::string note;                 ///< what the reader changed, e.g. "repaired with MakeValid: ..."; else empty
 };
 
 /// A polygonal surface mesh: faces are vertex-index loops (not triangulated), counter-clockwise seen

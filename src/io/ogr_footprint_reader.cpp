@@ -414,6 +414,7 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
     footprint.id = std::move(id);
     footprint.fid = fid;
     footprint.polygons = std::move(outcome.polygons);
+    if (!outcome.repair_note.empty()) footprint.note = "footprint repaired with MakeValid: " + outcome.repair_note;
     const bool has_hole = std::any_of(footprint.polygons.begin(), footprint.polygons.end(),
                                       [](const Polygon2& p) { return !p.holes.empty(); });
     if (has_hole) ++set.with_holes;

@@ -137,6 +137,7 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
   r.ground_points = input.ground_points.size();
   r.ground_z = input.ground_z + input.origin.z;
   r.ground_method = input.ground_method;
+  r.note = input.footprint.note;
   if (input.footprint.polygons.empty()) {
     r.status = BuildingStatus::skipped;
     r.stage = "crop";
@@ -241,6 +242,7 @@ std::vector<std::pair<std::string, AttributeValue>> cityjson_attributes(const Bu
       {"status", std::string(to_string(r.status))},
       {"level", std::string(to_string(r.level))},
       {"reason", r.reason.empty() ? AttributeValue{} : AttributeValue{r.reason}},
+      {"note", r.note.empty() ? AttributeValue{} : AttributeValue{r.note}},
       {"ground_z", r.ground_z},
       {"ground_method", r.ground_method},
       {"roof_z_p70", r.roof_z},

@@ -48,13 +48,13 @@ void write_report_csv(const std::string& path, const std::vector<BuildingReport>
   AtomicFile file(path);
   std::FILE* out = file.file();
   std::fputs(
-      "id,status,level,stage,reason,points,ground_points,ground_z,ground_method,roof_z,planes,walls,"
+      "id,status,level,stage,reason,note,points,ground_points,ground_z,ground_method,roof_z,planes,walls,"
       "candidate_faces,faces,rmse,valid,seconds\n",
       out);
   for (const BuildingReport& r : rows) {
     const std::string line =
         csv_field(r.id) + "," + to_string(r.status) + "," + to_string(r.level) + "," + csv_field(r.stage) + "," +
-        csv_field(r.reason) + "," + std::to_string(r.points) + "," + std::to_string(r.ground_points) + "," +
+        csv_field(r.reason) + "," + csv_field(r.note) + "," + std::to_string(r.points) + "," + std::to_string(r.ground_points) + "," +
         fixed(r.ground_z, 3) + "," + csv_field(r.ground_method) + "," + fixed(r.roof_z, 3) + "," +
         std::to_string(r.planes) + "," + std::to_string(r.walls) + "," + std::to_string(r.candidate_faces) + "," +
         std::to_string(r.faces) + "," + (r.rmse >= 0 ? fixed(r.rmse, 4) : "") + "," + (r.valid ? "1" : "0") + "," +
@@ -77,7 +77,7 @@ void write_report_json(const std::string& path, const std::vector<BuildingReport
     const std::string line =
         std::string(i ? "," : "") + "\n    {\"id\": " + json_string(r.id) + ", \"status\": \"" + to_string(r.status) +
         "\", \"level\": \"" + to_string(r.level) + "\", \"stage\": " + json_string(r.stage) +
-        ", \"reason\": " + json_string(r.reason) + ", \"points\": " + std::to_string(r.points) +
+        ", \"reason\": " + json_string(r.reason) + ", \"note\": " + json_string(r.note) + ", \"points\": " + std::to_string(r.points) +
         ", \"ground_points\": " + std::to_string(r.ground_points) + ", \"ground_z\": " + fixed(r.ground_z, 3) +
         ", \"ground_method\": " + json_string(r.ground_method) + ", \"roof_z\": " + fixed(r.roof_z, 3) +
         ", \"planes\": " + std::to_string(r.planes) + ", \"walls\": " + std::to_string(r.walls) +

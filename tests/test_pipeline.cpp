@@ -1,0 +1,98 @@
+// Tests of the batch pipeline on real data: tiles cropped by footprints across a tile seam, the
+// fallback ladder's bottom rung, single-building clouds, and report rows for broken footprints.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "city3d/crop.hpp"
+#include "city3d/footprint_io.hpp"
+#include "city3d/mesh_check.hpp"
+#include "city3d/pipeline.hpp"
+#include "city3d/point_cloud_io.hpp"
+
+namespace fs = std::filesystem;
+using namespace city3d;
+
+namespace {
+
+const std::string kDelft = std::string(CITY3D_SHARED_DATA) + "/ahn3_delft";
+
+void require_delft() {
+  if (!fs::exists(kDelft + "/ahn3_cropped_1.las")) GTEST_SKIP() << "../shared/data is not beside the repository";
+}
+
+}  // namespace
+
+TEST(Batch, footprints_across_the_tile_seam_get_points_from_both_tiles) {
+  require_delft();
+  FootprintSet set = read_footprints(kDelft + "/footprints/bgt_pand_laz_area.gpkg", {});
+  ASSERT_EQ(set.footprints.size(), 160u);
+  // The tiles meet at x = 85000 (../shared/data/README.md): a footprint straddles the seam when its
+  // x range contains 85000. The README counts 7 of them.
+  std::vector<bool> straddles;
+  for (const Footprint& f : set.footprints) {
+    double lo = 1e300, hi = -1e300;
+    for (const Polygon2& p : f.polygons)
+      for (const Point2& v : p.outer) lo = std::min(lo, v.x), hi = std::max(hi, v.x);
+    straddles.push_back(lo < 85000.0 && hi > 85000.0);
+  }
+  ASSERT_EQ(std::count(straddles.begin(), straddles.end(), true), 7);
+
+  Cropper cropper(set.footprints, {});
+  for (const char* tile : {"/ahn3_cropped_1.las", "/ahn3_cropped_2.las"})
+    cropper.add(read_point_cloud(kDelft + tile, kFieldClassification));
+  const std::vector<BuildingInput> inputs = cropper.finish();
+  ASSERT_EQ(inputs.size(), 160u);
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    if (!straddles[i]) continue;
+    std::size_t west = 0, east = 0;
+    for (const Point3& p : inputs[i].points) (p.x + inputs[i].origin.x < 85000.0 ? west : east)++;
+    EXPECT_GT(west, 0u) << inputs[i].id;
+    EXPECT_GT(east, 0u) << inputs[i].id;
+  }
+}
+
+TEST(Batch, single_building_cloud_gets_a_convex_outline_and_its_lowest_point_as_floor) {
+  const std::vector<Point3> world = {{100, 200, 5}, {110, 200, 6}, {110, 210, 7}, {100, 210, 8}, {105, 205, 9}};
+  const BuildingInput in = building_from_cloud("b", world);
+  EXPECT_EQ(in.origin.x, 105.0);
+  EXPECT_EQ(in.origin.y, 205.0);
+  ASSERT_EQ(in.footprint.polygons.size(), 1u);
+  EXPECT_EQ(in.footprint.polygons[0].outer.size(), 4u);  // the interior point is not on the hull
+  EXPECT_DOUBLE_EQ(in.ground_z, 5.0);
+  EXPECT_EQ(in.ground_method, "lowest building point");
+  const BuildingInput given = building_from_cloud("b", world, 1.5);
+  EXPECT_DOUBLE_EQ(given.ground_z, 1.5);
+}
+
+TEST(Batch, building_without_points_is_skipped_with_a_reason_and_no_model) {
+  BuildingInput in;
+  in.id = "empty";
+  in.footprint.polygons.push_back({{{0, 0}, {10, 0}, {10, 10}, {0, 10}}, {}});
+  const BuildingResult r = reconstruct_building(in, {});
+  EXPECT_EQ(r.report.status, BuildingStatus::skipped);
+  EXPECT_EQ(r.report.reason, "no building points inside the footprint");
+  EXPECT_FALSE(r.model.has_value());
+}
+
+TEST(Batch, every_delft_building_gets_a_valid_closed_model) {
+  require_delft();
+  const fs::path out = fs::temp_directory_path() / "city3d_batch_delft";
+  fs::remove_all(out);
+  BatchOptions options;
+  options.point_clouds = {kDelft + "/ahn3_cropped_1.las", kDelft + "/ahn3_cropped_2.las"};
+  options.footprints = kDelft + "/footprints/bgt_pand_laz_area.gpkg";
+  options.footprint.id_field = "gml_id";
+  options.output_dir = out.string();
+  options.threads = 2;
+  const BatchSummary s = run_batch(options);
+  EXPECT_EQ(s.buildings, 160u);
+  EXPECT_EQ(s.ok + s.fallback, 160u);
+  std::size_t models = 0;
+  for (const auto& e : fs::directory_iterator(out / "models")) {
+    (void)e;
+    ++models;
+  }
+  EXPECT_EQ(models, 160u);
+  fs::remove_all(out);
+}
