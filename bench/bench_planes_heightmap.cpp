@@ -1,0 +1,104 @@
+// Time of detect_planes + rasterise_tin + detect_edges per building, single thread, default params.
+// Usage: bench_planes_heightmap [FOLDER]   (default /work/shared/data/city3d_dev, searched
+// recursively for .ply; each cloud is moved to a local frame by subtracting its bbox centre)
+// Prints one line per building and the median and maximum of the per-building total.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "city3d/error.hpp"
+#include "city3d/heightmap.hpp"
+#include "city3d/planes.hpp"
+#include "city3d/point_cloud_io.hpp"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+std::vector<city3d::Point3> local_points(const std::string& path) {
+  const city3d::PointCloud cloud = city3d::read_point_cloud(path, city3d::kFieldXyz);
+  city3d::Box3 box;
+  for (const auto& p : cloud.points) box.add(p);
+  const city3d::Point3 centre{(box.min.x + box.max.x) / 2, (box.min.y + box.max.y) / 2,
+                              (box.min.z + box.max.z) / 2};
+  std::vector<city3d::Point3> local;
+  local.reserve(cloud.points.size());
+  for (const auto& p : cloud.points) local.push_back({p.x - centre.x, p.y - centre.y, p.z - centre.z});
+  return local;
+}
+
+double percentile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  return values[static_cast<std::size_t>(q * static_cast<double>(values.size() - 1) + 0.5)];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc > 2) {
+    std::fprintf(stderr, "usage: bench_planes_heightmap [FOLDER]\n");
+    return 2;
+  }
+  const std::filesystem::path folder = argc == 2 ? argv[1] : "/work/shared/data/city3d_dev";
+  std::vector<std::filesystem::path> files;
+  std::error_code error;
+  for (std::filesystem::recursive_directory_iterator it(folder, error), end; !error && it != end;
+       it.increment(error))
+    if (it->is_regular_file() && it->path().extension() == ".ply") files.push_back(it->path());
+  if (error || files.empty()) {
+    std::fprintf(stderr, "bench_planes_heightmap: no .ply files under %s\n", folder.string().c_str());
+    return 1;
+  }
+  std::sort(files.begin(), files.end());
+
+  const city3d::PlaneParams plane_params;
+  const city3d::HeightmapParams heightmap_params;
+  std::vector<double> totals, planes_ms, raster_ms, edges_ms;
+  int failures = 0;
+  std::printf("%-28s %8s %6s %5s %9s %6s %9s %9s %9s %9s\n", "building", "points", "roofs", "walls",
+              "raster", "edges", "planes_ms", "tin_ms", "edges_ms", "total_ms");
+  for (const auto& file : files) {
+    const std::string name = std::filesystem::relative(file, folder).string();
+    try {
+      const auto points = local_points(file.string());
+      auto start = Clock::now();
+      const auto segments = city3d::detect_planes(points, plane_params);
+      const double t_planes = ms_since(start);
+      start = Clock::now();
+      const auto map = city3d::rasterise_tin(points, heightmap_params);
+      const double t_raster = ms_since(start);
+      start = Clock::now();
+      const auto edges = city3d::detect_edges(map, heightmap_params);
+      const double t_edges = ms_since(start);
+      std::size_t walls = 0;
+      for (const auto& s : segments) walls += s.kind == city3d::PlanarSegment::Kind::wall;
+      const double total = t_planes + t_raster + t_edges;
+      char raster[32];
+      std::snprintf(raster, sizeof raster, "%dx%d", map.width, map.height);
+      std::printf("%-28s %8zu %6zu %5zu %9s %6zu %9.1f %9.1f %9.1f %9.1f\n", name.c_str(), points.size(),
+                  segments.size() - walls, walls, raster, edges.size(), t_planes, t_raster, t_edges, total);
+      totals.push_back(total);
+      planes_ms.push_back(t_planes);
+      raster_ms.push_back(t_raster);
+      edges_ms.push_back(t_edges);
+    } catch (const city3d::Error& e) {
+      ++failures;
+      std::printf("%-28s failed: %s\n", name.c_str(), e.what());
+    }
+  }
+  std::printf("\n%zu buildings (%d failed)\n", totals.size(), failures);
+  std::printf("%-10s %9s %9s %9s %9s\n", "", "planes_ms", "tin_ms", "edges_ms", "total_ms");
+  std::printf("%-10s %9.1f %9.1f %9.1f %9.1f\n", "median", percentile(planes_ms, 0.5),
+              percentile(raster_ms, 0.5), percentile(edges_ms, 0.5), percentile(totals, 0.5));
+  std::printf("%-10s %9.1f %9.1f %9.1f %9.1f\n", "max", percentile(planes_ms, 1.0), percentile(raster_ms, 1.0),
+              percentile(edges_ms, 1.0), percentile(totals, 1.0));
+  return failures == 0 ? 0 : 1;
+}

@@ -1,0 +1,64 @@
+// Planar segments of one building's points: region growing (Rabbani et al. 2006) on PCA normals,
+// each region refitted by least squares and labelled roof or wall (City3D, paper section 3.1).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "city3d/types.hpp"
+
+namespace city3d {
+
+/// Parameters of detect_planes(). Defaults are City3D's for AHN3 (region growing min points 40).
+struct PlaneParams {
+  int k_neighbors = 12;        ///< neighbours for the PCA normals and for growing, >= 3
+  int min_points = 40;         ///< points a plane needs to be reported, >= 3
+  double max_distance = 0.2;   ///< point-to-plane distance while growing, metres, > 0
+  double max_angle = 20.0;     ///< point normal vs plane normal while growing, degrees, in (0, 90]
+  /// A segment is a wall when |n_z| of its unit normal is below this, in [0, 1). The default 0.17
+  /// is sin(9.8 deg): the normal is more than 80.2 deg away from vertical, i.e. the plane is within
+  /// 9.8 deg of vertical. Everything else (flat and sloped roofs up to ~80 deg) is a roof.
+  double wall_max_normal_z = 0.17;
+
+  /// Throws ConfigError listing every invalid field ("planes: invalid parameters: ...; ...").
+  void validate() const;
+};
+
+/// A plane a x + b y + c z + d = 0 with a unit normal (a, b, c), in the frame of the points.
+struct Plane3 {
+  double a = 0.0;
+  double b = 0.0;
+  double c = 1.0;
+  double d = 0.0;
+
+  /// Signed distance of p to the plane, metres (positive on the normal's side).
+  double signed_distance(const Point3& p) const { return a * p.x + b * p.y + c * p.z + d; }
+};
+
+/// A set of points supporting one plane.
+struct PlanarSegment {
+  enum class Kind { roof, wall };
+
+  /// Least-squares plane of `points`. Roof normals point up (c >= 0). Wall normals point away
+  /// from the centroid of all input points (outwards for an outer wall).
+  Plane3 plane;
+  std::vector<std::uint32_t> points;  ///< indices into the input points, ascending
+  Kind kind = Kind::roof;
+  double rms = 0.0;                   ///< RMS point-to-plane distance of `points`, metres
+};
+
+/// Detects the planar segments of one building's points.
+///
+/// `local_points` must be in a local metric frame (coordinates of tens or hundreds of metres, not
+/// RD New world values): normals and fits lose precision far from the origin.
+/// Steps: PCA normals from the k nearest neighbours; CGAL region growing seeded in order of local
+/// planarity; least-squares refit of every region; roof/wall label by |n_z|.
+/// Output is deterministic for a given input order: segments are sorted by size (largest first),
+/// ties broken by their smallest point index. Points in no segment are simply not referenced.
+/// Returns an empty vector when there are fewer than `min_points` points.
+/// Throws ConfigError (invalid params) or ReconstructionError (a non-finite coordinate, or more
+/// than 2^32 - 1 points).
+std::vector<PlanarSegment> detect_planes(const std::vector<Point3>& local_points,
+                                         const PlaneParams& params);
+
+}  // namespace city3d

@@ -1,0 +1,187 @@
+// Planar segments by region growing: PCA normals, CGAL Shape_detection (5.5 positional API),
+// least-squares refit, roof/wall labels. The only translation unit that includes region growing.
+#include "city3d/planes.hpp"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Shape_detection/Region_growing/Region_growing.h>
+#include <CGAL/Shape_detection/Region_growing/Region_growing_on_point_set.h>
+#include <CGAL/property_map.h>
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <iterator>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <utility>
+
+#include "city3d/error.hpp"
+#include "city3d/log.hpp"
+
+namespace city3d {
+
+void PlaneParams::validate() const {
+  std::vector<std::string> problems;
+  if (k_neighbors < 3)
+    problems.push_back("k_neighbors = " + std::to_string(k_neighbors) + ", need >= 3");
+  if (min_points < 3)
+    problems.push_back("min_points = " + std::to_string(min_points) + ", need >= 3");
+  // Negated comparisons so that NaN is rejected too.
+  if (!(max_distance > 0.0) || !std::isfinite(max_distance))
+    problems.push_back("max_distance = " + std::to_string(max_distance) + " m, need > 0");
+  if (!(max_angle > 0.0 && max_angle <= 90.0))
+    problems.push_back("max_angle = " + std::to_string(max_angle) + " deg, need in (0, 90]");
+  if (!(wall_max_normal_z >= 0.0 && wall_max_normal_z < 1.0))
+    problems.push_back("wall_max_normal_z = " + std::to_string(wall_max_normal_z) +
+                       ", need in [0, 1)");
+  if (problems.empty()) return;
+  std::string message = "planes: invalid parameters: ";
+  for (std::size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];
+  throw ConfigError(message);
+}
+
+namespace detail {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using PointWithNormal = std::pair<Kernel::Point_3, Kernel::Vector_3>;
+using PointRange = std::vector<PointWithNormal>;
+using PointMap = CGAL::First_of_pair_property_map<PointWithNormal>;
+using NormalMap = CGAL::Second_of_pair_property_map<PointWithNormal>;
+
+namespace sd = CGAL::Shape_detection;
+using NeighborQuery = sd::Point_set::K_neighbor_query<Kernel, PointRange, PointMap>;
+using RegionType = sd::Point_set::Least_squares_plane_fit_region<Kernel, PointRange, PointMap, NormalMap>;
+using Sorting = sd::Point_set::Least_squares_plane_fit_sorting<Kernel, PointRange, NeighborQuery, PointMap>;
+using RegionGrowing = sd::Region_growing<PointRange, NeighborQuery, RegionType, Sorting::Seed_map>;
+
+/// Least-squares plane through `indices` of `points`: the eigenvector of the smallest eigenvalue of
+/// the covariance about the centroid. Centring first keeps the covariance well conditioned.
+struct Fit {
+  Eigen::Vector3d centroid;
+  Eigen::Vector3d normal;  // unit
+};
+
+template <typename IndexRange, typename PointAt>
+Fit fit_plane(const IndexRange& indices, PointAt point_at) {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (auto i : indices) centroid += point_at(i);
+  centroid /= static_cast<double>(indices.size());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (auto i : indices) {
+    const Eigen::Vector3d d = point_at(i) - centroid;
+    covariance += d * d.transpose();
+  }
+  // Eigenvalues come sorted ascending; column 0 is the normal.
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+  Eigen::Vector3d normal = solver.eigenvectors().col(0);
+  if (!(normal.norm() > 0.0) || !normal.allFinite()) normal = Eigen::Vector3d::UnitZ();
+  return {centroid, normal.normalized()};
+}
+
+}  // namespace
+}  // namespace detail
+
+std::vector<PlanarSegment> detect_planes(const std::vector<Point3>& local_points,
+                                         const PlaneParams& params) {
+  using namespace detail;
+  params.validate();
+  if (local_points.size() > std::numeric_limits<std::uint32_t>::max())
+    throw ReconstructionError("planes: " + std::to_string(local_points.size()) +
+                              " points, at most 2^32 - 1 supported");
+  for (std::size_t i = 0; i < local_points.size(); ++i) {
+    const Point3& p = local_points[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      throw ReconstructionError("planes: point " + std::to_string(i) + " has a non-finite coordinate");
+  }
+  if (local_points.size() < static_cast<std::size_t>(params.min_points)) {
+    log_debug("planes: " + std::to_string(local_points.size()) + " points, fewer than min_points = " +
+              std::to_string(params.min_points) + ", no planes");
+    return {};
+  }
+
+  const auto point_at = [&](std::size_t i) {
+    const Point3& p = local_points[i];
+    return Eigen::Vector3d(p.x, p.y, p.z);
+  };
+
+  PointRange range;
+  range.reserve(local_points.size());
+  for (const Point3& p : local_points) range.emplace_back(Kernel::Point_3(p.x, p.y, p.z), Kernel::Vector_3(0, 0, 1));
+
+  // One kd-tree serves the normals, the seed ordering and the growing.
+  NeighborQuery neighbor_query(range, static_cast<std::size_t>(params.k_neighbors), PointMap());
+
+  // PCA normals: smallest-eigenvalue direction of the k-neighbourhood. Their sign is irrelevant to
+  // the growing (CGAL compares |cos|), so they are left as the solver gives them.
+  std::vector<std::size_t> neighbors;
+  for (std::size_t i = 0; i < range.size(); ++i) {
+    neighbors.clear();
+    neighbor_query(i, neighbors);
+    if (neighbors.size() < 3) continue;  // keep the vertical default
+    const Fit fit = fit_plane(neighbors, point_at);
+    range[i].second = Kernel::Vector_3(fit.normal.x(), fit.normal.y(), fit.normal.z());
+  }
+
+  RegionType region_type(range, params.max_distance, params.max_angle,
+                         static_cast<std::size_t>(params.min_points), PointMap(), NormalMap());
+  // Seeds in order of local planarity, so regions start on clean roof patches, not on edges.
+  Sorting sorting(range, neighbor_query, PointMap());
+  sorting.sort();
+  RegionGrowing region_growing(range, neighbor_query, region_type, sorting.seed_map());
+  std::vector<std::vector<std::size_t>> regions;
+  region_growing.detect(std::back_inserter(regions));
+
+  Eigen::Vector3d building_centroid = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < local_points.size(); ++i) building_centroid += point_at(i);
+  building_centroid /= static_cast<double>(local_points.size());
+
+  std::vector<PlanarSegment> segments;
+  segments.reserve(regions.size());
+  for (auto& region : regions) {
+    std::sort(region.begin(), region.end());
+    const Fit fit = fit_plane(region, point_at);
+    Eigen::Vector3d n = fit.normal;
+    PlanarSegment segment;
+    segment.kind = std::abs(n.z()) < params.wall_max_normal_z ? PlanarSegment::Kind::wall
+                                                              : PlanarSegment::Kind::roof;
+    if (segment.kind == PlanarSegment::Kind::roof) {
+      if (n.z() < 0.0) n = -n;
+    } else {
+      // Outward from the building's centroid, measured horizontally (walls are near vertical).
+      const Eigen::Vector3d out = fit.centroid - building_centroid;
+      if (n.x() * out.x() + n.y() * out.y() < 0.0) n = -n;
+    }
+    segment.plane = {n.x(), n.y(), n.z(), -n.dot(fit.centroid)};
+    double sum_squares = 0.0;
+    segment.points.reserve(region.size());
+    for (std::size_t i : region) {
+      segment.points.push_back(static_cast<std::uint32_t>(i));
+      const double distance = segment.plane.signed_distance(local_points[i]);
+      sum_squares += distance * distance;
+    }
+    segment.rms = std::sqrt(sum_squares / static_cast<double>(region.size()));
+    segments.push_back(std::move(segment));
+  }
+
+  // Largest first; regions are disjoint, so the smallest point index is a unique tie-breaker.
+  std::sort(segments.begin(), segments.end(), [](const PlanarSegment& l, const PlanarSegment& r) {
+    if (l.points.size() != r.points.size()) return l.points.size() > r.points.size();
+    return l.points.front() < r.points.front();
+  });
+
+  if (log_level() >= LogLevel::debug) {
+    std::size_t walls = 0;
+    for (const auto& s : segments) walls += s.kind == PlanarSegment::Kind::wall;
+    std::ostringstream message;
+    message << "planes: " << segments.size() << " planes (" << walls << " walls) from "
+            << local_points.size() << " points";
+    log_debug(message.str());
+  }
+  return segments;
+}
+
+}  // namespace city3d

@@ -1,0 +1,584 @@
+// Tests of planes.hpp and heightmap.hpp: synthetic buildings sampled like AHN3 (15 points/m2,
+// 0.03 m Gaussian noise, fixed seeds) with known geometry, plus the AHN3 smoke buildings.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "city3d/error.hpp"
+#include "city3d/heightmap.hpp"
+#include "city3d/planes.hpp"
+#include "city3d/point_cloud_io.hpp"
+
+namespace {
+
+using city3d::Heightmap;
+using city3d::HeightmapParams;
+using city3d::PlanarSegment;
+using city3d::PlaneParams;
+using city3d::Point2;
+using city3d::Point3;
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDensity = 15.0;  // points/m2, AHN3
+constexpr double kNoise = 0.03;    // metres
+
+double degrees(double radians) { return radians * 180.0 / kPi; }
+
+/// Samples surfaces like an airborne scan: uniform random xy at kDensity, Gaussian noise.
+class SyntheticBuilding {
+ public:
+  explicit SyntheticBuilding(unsigned seed) : rng_(seed) {}
+
+  /// Roof z = height(x, y) over the box [x0, x1] x [y0, y1], restricted to inside(x, y).
+  void roof(double x0, double y0, double x1, double y1, const std::function<double(double, double)>& height,
+            const std::function<bool(double, double)>& inside = nullptr, double density = kDensity) {
+    const int count = static_cast<int>(std::lround((x1 - x0) * (y1 - y0) * density));
+    std::uniform_real_distribution<double> ux(x0, x1), uy(y0, y1);
+    for (int i = 0; i < count; ++i) {
+      const double x = ux(rng_), y = uy(rng_);
+      if (inside && !inside(x, y)) continue;
+      points.push_back({x, y, height(x, y) + noise_(rng_)});
+    }
+  }
+
+  /// Exactly `count` points of a flat patch at height z (for min_points tests).
+  void flat_patch(double x0, double y0, double x1, double y1, double z, int count) {
+    std::uniform_real_distribution<double> ux(x0, x1), uy(y0, y1);
+    for (int i = 0; i < count; ++i) points.push_back({ux(rng_), uy(rng_), z + noise_(rng_)});
+  }
+
+  /// A vertical wall x = x_wall over y in [y0, y1], z in [z0, z1]; noise across the wall.
+  void wall_at_x(double x_wall, double y0, double y1, double z0, double z1) {
+    const int count = static_cast<int>(std::lround((y1 - y0) * (z1 - z0) * kDensity));
+    std::uniform_real_distribution<double> uy(y0, y1), uz(z0, z1);
+    for (int i = 0; i < count; ++i) points.push_back({x_wall + noise_(rng_), uy(rng_), uz(rng_)});
+  }
+
+  std::vector<Point3> points;
+
+ private:
+  std::mt19937 rng_;
+  std::normal_distribution<double> noise_{0.0, kNoise};
+};
+
+std::vector<Point3> flat_box(double width, double depth, double z, unsigned seed) {
+  SyntheticBuilding b(seed);
+  b.roof(0, 0, width, depth, [z](double, double) { return z; });
+  return b.points;
+}
+
+// Gable roof over [0, 12] x [0, 8], ridge along x at y = 4, eaves at 5 m, slope 35 degrees.
+constexpr double kGableSlope = 35.0;
+std::vector<Point3> gable_roof(unsigned seed) {
+  SyntheticBuilding b(seed);
+  const double t = std::tan(kGableSlope * kPi / 180.0);
+  b.roof(0, 0, 12, 8, [t](double, double y) { return 5.0 + t * (4.0 - std::abs(y - 4.0)); });
+  return b.points;
+}
+
+// [0, 10] x [0, 8]: z = 4 west of x = 5, z = 7 east of it.
+constexpr double kStepX = 5.0;
+std::vector<Point3> two_flat_roofs(unsigned seed) {
+  SyntheticBuilding b(seed);
+  b.roof(0, 0, 10, 8, [](double x, double) { return x < kStepX ? 4.0 : 7.0; });
+  return b.points;
+}
+
+// L-shape: [0, 12] x [0, 5] united with [0, 5] x [0, 12], flat at 6 m; area 95 m2; the notch
+// [5, 12] x [5, 12] is empty.
+bool inside_l(double x, double y) { return x <= 5.0 || y <= 5.0; }
+std::vector<Point3> l_shape(unsigned seed) {
+  SyntheticBuilding b(seed);
+  b.roof(0, 0, 12, 12, [](double, double) { return 6.0; }, inside_l);
+  return b.points;
+}
+
+std::size_t count_kind(const std::vector<PlanarSegment>& segments, PlanarSegment::Kind kind) {
+  return static_cast<std::size_t>(std::count_if(segments.begin(), segments.end(),
+                                                [kind](const PlanarSegment& s) { return s.kind == kind; }));
+}
+
+double tilt_degrees(const city3d::Plane3& plane) { return degrees(std::acos(std::min(1.0, std::abs(plane.c)))); }
+
+std::size_t valid_pixels(const Heightmap& map) {
+  return static_cast<std::size_t>(std::count_if(map.z.begin(), map.z.end(), [](float z) { return !std::isnan(z); }));
+}
+
+float height_at(const Heightmap& map, double x, double y) {
+  const int col = static_cast<int>(std::floor((x - map.origin.x) / map.resolution));
+  const int row = static_cast<int>(std::floor((y - map.origin.y) / map.resolution));
+  if (col < 0 || row < 0 || col >= map.width || row >= map.height) return std::nanf("");
+  return map.at(col, row);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Parameters
+
+TEST(PlaneParams, defaults_are_pinned) {
+  const PlaneParams p;
+  EXPECT_EQ(p.k_neighbors, 12);
+  EXPECT_EQ(p.min_points, 40);
+  EXPECT_DOUBLE_EQ(p.max_distance, 0.2);
+  EXPECT_DOUBLE_EQ(p.max_angle, 20.0);
+  EXPECT_DOUBLE_EQ(p.wall_max_normal_z, 0.17);
+  EXPECT_NO_THROW(p.validate());
+}
+
+TEST(PlaneParams, validate_lists_every_problem_at_once) {
+  PlaneParams p;
+  p.k_neighbors = 2;
+  p.min_points = 0;
+  p.max_distance = -1.0;
+  p.max_angle = 120.0;
+  p.wall_max_normal_z = 1.0;
+  try {
+    p.validate();
+    FAIL() << "expected ConfigError";
+  } catch (const city3d::ConfigError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("planes:"), std::string::npos) << m;
+    for (const char* field : {"k_neighbors", "min_points", "max_distance", "max_angle", "wall_max_normal_z"})
+      EXPECT_NE(m.find(field), std::string::npos) << field << " missing from: " << m;
+  }
+}
+
+TEST(HeightmapParams, defaults_are_pinned) {
+  const HeightmapParams p;
+  EXPECT_DOUBLE_EQ(p.resolution, 0.0);
+  EXPECT_DOUBLE_EQ(p.max_edge_length, 3.0);
+  EXPECT_EQ(p.closing_size, 3);
+  EXPECT_DOUBLE_EQ(p.canny_low, 0.6);
+  EXPECT_DOUBLE_EQ(p.canny_high, 1.5);
+  EXPECT_NO_THROW(p.validate());
+}
+
+TEST(HeightmapParams, validate_lists_every_problem_at_once) {
+  HeightmapParams p;
+  p.resolution = -0.1;
+  p.max_edge_length = 0.0;
+  p.closing_size = 4;
+  p.canny_low = 2.0;
+  p.canny_high = 1.0;
+  try {
+    p.validate();
+    FAIL() << "expected ConfigError";
+  } catch (const city3d::ConfigError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("heightmap:"), std::string::npos) << m;
+    for (const char* field : {"resolution", "max_edge_length", "closing_size", "canny_high"})
+      EXPECT_NE(m.find(field), std::string::npos) << field << " missing from: " << m;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Planes on synthetic buildings
+
+TEST(DetectPlanes, flat_box_roof_gives_one_level_roof_plane_at_its_height) {
+  const auto points = flat_box(10, 8, 6.0, 1);
+  const auto segments = detect_planes(points, PlaneParams{});
+  ASSERT_EQ(segments.size(), 1u);
+  const PlanarSegment& roof = segments[0];
+  EXPECT_EQ(roof.kind, PlanarSegment::Kind::roof);
+  EXPECT_GT(roof.plane.c, 0.0) << "roof normals point up";
+  EXPECT_LT(tilt_degrees(roof.plane), 2.0);
+  EXPECT_NEAR(-roof.plane.d / roof.plane.c, 6.0, 0.05) << "height of the plane at x = y = 0";
+  EXPECT_NEAR(roof.rms, kNoise, 0.01);
+  EXPECT_GT(roof.points.size(), points.size() * 95 / 100) << "nearly every point supports the roof";
+}
+
+TEST(DetectPlanes, gable_roof_gives_two_planes_with_the_true_slope_and_ridge_direction) {
+  const auto points = gable_roof(2);
+  const auto segments = detect_planes(points, PlaneParams{});
+  ASSERT_EQ(segments.size(), 2u);
+  for (const auto& s : segments) {
+    EXPECT_EQ(s.kind, PlanarSegment::Kind::roof);
+    EXPECT_NEAR(tilt_degrees(s.plane), kGableSlope, 2.0);
+    EXPECT_GT(s.points.size(), points.size() * 40 / 100);
+  }
+  // The two slopes face opposite sides of the ridge (south, y < 4, faces -y).
+  const auto& [p, q] = std::pair(segments[0].plane, segments[1].plane);
+  EXPECT_LT(p.b * q.b, 0.0);
+  // Ridge direction = cross product of the normals: along x within 2 degrees.
+  const double rx = p.b * q.c - p.c * q.b, ry = p.c * q.a - p.a * q.c, rz = p.a * q.b - p.b * q.a;
+  const double norm = std::sqrt(rx * rx + ry * ry + rz * rz);
+  EXPECT_LT(degrees(std::acos(std::abs(rx) / norm)), 2.0) << "ridge " << rx << " " << ry << " " << rz;
+  // Ridge height: both planes at (6, 4) should be at 5 + 4 tan(35) = 7.80 m.
+  const double ridge_z = 5.0 + 4.0 * std::tan(kGableSlope * kPi / 180.0);
+  for (const auto& s : segments)
+    EXPECT_NEAR(-(s.plane.a * 6.0 + s.plane.b * 4.0 + s.plane.d) / s.plane.c, ridge_z, 0.1);
+}
+
+TEST(DetectPlanes, two_flat_roofs_at_different_heights_give_two_planes) {
+  const auto points = two_flat_roofs(3);
+  const auto segments = detect_planes(points, PlaneParams{});
+  ASSERT_EQ(segments.size(), 2u);
+  std::vector<double> heights;
+  for (const auto& s : segments) {
+    EXPECT_EQ(s.kind, PlanarSegment::Kind::roof);
+    EXPECT_LT(tilt_degrees(s.plane), 2.0);
+    heights.push_back(-s.plane.d / s.plane.c);
+  }
+  std::sort(heights.begin(), heights.end());
+  EXPECT_NEAR(heights[0], 4.0, 0.05);
+  EXPECT_NEAR(heights[1], 7.0, 0.05);
+}
+
+TEST(DetectPlanes, l_shaped_flat_roof_gives_one_plane_covering_both_wings) {
+  const auto points = l_shape(4);
+  const auto segments = detect_planes(points, PlaneParams{});
+  ASSERT_EQ(segments.size(), 1u);
+  std::size_t east_wing = 0, north_wing = 0;
+  for (std::uint32_t i : segments[0].points) {
+    east_wing += points[i].x > 6.0;
+    north_wing += points[i].y > 6.0;
+  }
+  // Each wing is 6 m x 5 m beyond the 5 x 5 corner: about 450 points.
+  EXPECT_GT(east_wing, 300u);
+  EXPECT_GT(north_wing, 300u);
+  EXPECT_NEAR(-segments[0].plane.d / segments[0].plane.c, 6.0, 0.05);
+}
+
+TEST(DetectPlanes, plane_with_fewer_than_min_points_is_not_reported) {
+  SyntheticBuilding b(5);
+  b.roof(0, 0, 10, 8, [](double, double) { return 6.0; });
+  const std::size_t roof_points = b.points.size();
+  b.flat_patch(13, 3, 15, 5, 9.0, 30);  // a separate 2 m x 2 m patch, 3 m away and 3 m higher
+  const auto is_patch = [&](std::uint32_t i) { return i >= roof_points; };
+
+  const auto segments = detect_planes(b.points, PlaneParams{});  // min_points 40
+  ASSERT_EQ(segments.size(), 1u);
+  EXPECT_TRUE(std::none_of(segments[0].points.begin(), segments[0].points.end(), is_patch));
+
+  // The same patch is found once min_points allows it, so the test above is about min_points.
+  PlaneParams lenient;
+  lenient.min_points = 20;
+  const auto more = detect_planes(b.points, lenient);
+  ASSERT_EQ(more.size(), 2u);
+  EXPECT_TRUE(std::all_of(more[1].points.begin(), more[1].points.end(), is_patch));
+  EXPECT_NEAR(-more[1].plane.d / more[1].plane.c, 9.0, 0.05);
+}
+
+TEST(DetectPlanes, fewer_points_than_min_points_give_no_planes) {
+  const auto points = flat_box(2, 1, 3.0, 6);  // 30 points
+  ASSERT_LT(points.size(), 40u);
+  EXPECT_TRUE(detect_planes(points, PlaneParams{}).empty());
+  EXPECT_TRUE(detect_planes({}, PlaneParams{}).empty());
+}
+
+TEST(DetectPlanes, vertical_wall_points_give_an_outward_wall_segment) {
+  SyntheticBuilding b(7);
+  b.roof(0, 0, 10, 8, [](double, double) { return 6.0; });
+  b.wall_at_x(0.0, 0, 8, 0.5, 5.5);  // west wall, 40 m2 (600 points)
+  const auto segments = detect_planes(b.points, PlaneParams{});
+  ASSERT_EQ(count_kind(segments, PlanarSegment::Kind::wall), 1u);
+  ASSERT_EQ(count_kind(segments, PlanarSegment::Kind::roof), 1u);
+  const auto wall = std::find_if(segments.begin(), segments.end(),
+                                 [](const PlanarSegment& s) { return s.kind == PlanarSegment::Kind::wall; });
+  EXPECT_NEAR(wall->plane.a, -1.0, 0.01) << "normal points west, away from the building";
+  EXPECT_NEAR(wall->plane.d, 0.0, 0.05) << "plane x = 0";
+  EXPECT_GT(wall->points.size(), 500u);
+}
+
+TEST(DetectPlanes, output_is_sorted_by_size_and_identical_between_runs) {
+  const auto points = two_flat_roofs(8);
+  const auto first = detect_planes(points, PlaneParams{});
+  const auto second = detect_planes(points, PlaneParams{});
+  ASSERT_EQ(first.size(), second.size());
+  for (std::size_t i = 0; i < first.size(); ++i) {
+    EXPECT_EQ(first[i].points, second[i].points);
+    EXPECT_EQ(first[i].plane.d, second[i].plane.d);
+    EXPECT_TRUE(std::is_sorted(first[i].points.begin(), first[i].points.end()));
+    if (i > 0) EXPECT_GE(first[i - 1].points.size(), first[i].points.size());
+  }
+}
+
+TEST(DetectPlanes, rejects_non_finite_points_naming_the_index) {
+  auto points = flat_box(10, 8, 6.0, 9);
+  points[17].z = std::nan("");
+  try {
+    detect_planes(points, PlaneParams{});
+    FAIL() << "expected ReconstructionError";
+  } catch (const city3d::ReconstructionError& e) {
+    EXPECT_NE(std::string(e.what()).find("point 17"), std::string::npos) << e.what();
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Heightmap
+
+TEST(Heightmap, automatic_resolution_is_about_twenty_centimetres_at_ahn3_density) {
+  EXPECT_NEAR(city3d::automatic_resolution(15.0), 0.20, 0.005);
+  EXPECT_NEAR(city3d::automatic_resolution(12.0), 0.224, 0.005);
+  EXPECT_DOUBLE_EQ(city3d::automatic_resolution(1e6), 0.05) << "clamped";
+  EXPECT_THROW(city3d::automatic_resolution(0.0), city3d::ConfigError);
+}
+
+TEST(Heightmap, box_raster_has_automatic_resolution_covers_the_footprint_and_the_roof_height) {
+  const auto points = flat_box(20, 12, 6.0, 10);
+  const Heightmap map = rasterise_tin(points, HeightmapParams{});
+  EXPECT_NEAR(map.resolution, 0.20, 0.03) << "measured density should be close to 15 points/m2";
+  ASSERT_EQ(map.z.size(), static_cast<std::size_t>(map.width) * map.height);
+  const double area = valid_pixels(map) * map.resolution * map.resolution;
+  EXPECT_NEAR(area, 240.0, 240.0 * 0.05);
+  EXPECT_NEAR(height_at(map, 10.0, 6.0), 6.0, 0.1);
+  EXPECT_TRUE(std::isnan(height_at(map, -0.5, 6.0))) << "outside the footprint";
+  // Margin of one empty pixel on every side.
+  for (int col = 0; col < map.width; ++col) {
+    EXPECT_TRUE(std::isnan(map.at(col, 0)));
+    EXPECT_TRUE(std::isnan(map.at(col, map.height - 1)));
+  }
+}
+
+TEST(Heightmap, two_flat_roofs_are_interpolated_at_their_heights) {
+  HeightmapParams params;
+  params.resolution = 0.25;
+  const Heightmap map = rasterise_tin(two_flat_roofs(11), params);
+  EXPECT_DOUBLE_EQ(map.resolution, 0.25);
+  EXPECT_NEAR(height_at(map, 2.0, 4.0), 4.0, 0.1);
+  EXPECT_NEAR(height_at(map, 8.0, 4.0), 7.0, 0.1);
+}
+
+TEST(Heightmap, l_shape_raster_leaves_the_notch_empty) {
+  const Heightmap map = rasterise_tin(l_shape(12), HeightmapParams{});
+  EXPECT_TRUE(std::isnan(height_at(map, 8.5, 8.5))) << "long triangles across the notch are dropped";
+  EXPECT_TRUE(std::isnan(height_at(map, 6.5, 11.0)));
+  EXPECT_NEAR(height_at(map, 10.0, 2.5), 6.0, 0.1);
+  EXPECT_NEAR(height_at(map, 2.5, 10.0), 6.0, 0.1);
+  const double area = valid_pixels(map) * map.resolution * map.resolution;
+  EXPECT_NEAR(area, 95.0, 95.0 * 0.05);
+}
+
+TEST(Heightmap, closing_fills_a_one_pixel_hole_and_keeps_the_outline) {
+  // Points exactly on the pixel centres of a 0.2 m grid, 6 m x 4 m, one point missing. Around it
+  // the TIN only has triangles with 0.4 m edges, longer than max_edge_length, so exactly that
+  // pixel has no data before the closing.
+  std::vector<Point3> points;
+  const int hole_i = 12, hole_j = 9;
+  for (int i = 0; i < 30; ++i)
+    for (int j = 0; j < 20; ++j)
+      if (i != hole_i || j != hole_j) points.push_back({0.1 + 0.2 * i, 0.1 + 0.2 * j, 5.0});
+  HeightmapParams params;
+  params.resolution = 0.2;
+  params.max_edge_length = 0.3;
+
+  params.closing_size = 0;
+  const Heightmap open = rasterise_tin(points, params);
+  const double hx = 0.1 + 0.2 * hole_i, hy = 0.1 + 0.2 * hole_j;
+  ASSERT_TRUE(std::isnan(height_at(open, hx, hy))) << "the hole exists without closing";
+  EXPECT_EQ(valid_pixels(open), 30u * 20u - 1u);
+
+  params.closing_size = 3;
+  const Heightmap closed = rasterise_tin(points, params);
+  ASSERT_EQ(closed.width, open.width);
+  ASSERT_EQ(closed.height, open.height);
+  EXPECT_FLOAT_EQ(height_at(closed, hx, hy), 5.0f);
+  EXPECT_EQ(valid_pixels(closed), 30u * 20u) << "only the hole changed: the outline stays";
+}
+
+TEST(Heightmap, rejects_fewer_than_three_distinct_positions) {
+  const std::vector<Point3> points{{0, 0, 1}, {0, 0, 2}, {1, 1, 1}};
+  EXPECT_THROW(rasterise_tin(points, HeightmapParams{}), city3d::ReconstructionError);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Edges
+
+/// Distance of p to the outline of the box [0, w] x [0, d].
+double distance_to_box_outline(const Point2& p, double w, double d) {
+  const double dx = std::max({0.0 - p.x, p.x - w, 0.0});
+  const double dy = std::max({0.0 - p.y, p.y - d, 0.0});
+  if (dx > 0.0 || dy > 0.0) return std::hypot(dx, dy);
+  return std::min({p.x, w - p.x, p.y, d - p.y});
+}
+
+TEST(DetectEdges, height_step_between_flat_roofs_gives_a_line_of_edge_pixels) {
+  const HeightmapParams params;
+  const Heightmap map = rasterise_tin(two_flat_roofs(13), params);
+  const auto edges = detect_edges(map, params);
+  // Every 0.5 m stretch of the step line (away from the outline) has an edge pixel within 0.3 m.
+  for (double y = 0.5; y < 7.5; y += 0.5) {
+    const bool found = std::any_of(edges.begin(), edges.end(), [y](const Point2& p) {
+      return std::abs(p.x - kStepX) <= 0.3 && p.y >= y && p.y < y + 0.5;
+    });
+    EXPECT_TRUE(found) << "no edge pixel near the step at y in [" << y << ", " << y + 0.5 << ")";
+  }
+  // No edge pixel anywhere else: away from the step line and from the outline.
+  for (const Point2& p : edges)
+    EXPECT_TRUE(std::abs(p.x - kStepX) <= 0.5 || distance_to_box_outline(p, 10, 8) <= 0.5)
+        << "stray edge pixel at " << p.x << ", " << p.y;
+}
+
+TEST(DetectEdges, flat_box_gives_edges_on_its_whole_outline_and_nowhere_else) {
+  const HeightmapParams params;
+  const Heightmap map = rasterise_tin(flat_box(10, 8, 6.0, 14), params);
+  const auto edges = detect_edges(map, params);
+  for (const Point2& p : edges) EXPECT_LE(distance_to_box_outline(p, 10, 8), 0.5) << p.x << ", " << p.y;
+  // Each side is covered: an edge pixel within 0.5 m of every 1 m of the outline.
+  for (double t = 0.5; t < 10; t += 1.0)
+    for (double y_side : {0.0, 8.0})
+      EXPECT_TRUE(std::any_of(edges.begin(), edges.end(), [&](const Point2& p) {
+        return std::hypot(p.x - t, p.y - y_side) <= 0.5;
+      })) << "gap at " << t << ", " << y_side;
+  for (double t = 0.5; t < 8; t += 1.0)
+    for (double x_side : {0.0, 10.0})
+      EXPECT_TRUE(std::any_of(edges.begin(), edges.end(), [&](const Point2& p) {
+        return std::hypot(p.x - x_side, p.y - t) <= 0.5;
+      })) << "gap at " << x_side << ", " << t;
+}
+
+TEST(DetectEdges, gable_ridge_and_slopes_give_no_edges) {
+  const HeightmapParams params;
+  const Heightmap map = rasterise_tin(gable_roof(15), params);
+  const auto edges = detect_edges(map, params);
+  EXPECT_FALSE(edges.empty());
+  for (const Point2& p : edges) EXPECT_LE(distance_to_box_outline(p, 12, 8), 0.5) << p.x << ", " << p.y;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Debug images
+
+struct PngHeader {
+  bool signature_ok = false;
+  std::uint32_t width = 0, height = 0;
+  int colour_type = -1;
+};
+
+PngHeader read_png_header(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::vector<unsigned char> b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  PngHeader h;
+  if (b.size() < 26) return h;
+  const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  h.signature_ok = std::equal(signature, signature + 8, b.begin());
+  const auto be32 = [&](std::size_t at) {
+    return (std::uint32_t(b[at]) << 24) | (std::uint32_t(b[at + 1]) << 16) | (std::uint32_t(b[at + 2]) << 8) | b[at + 3];
+  };
+  h.width = be32(16);  // IHDR data follows the 8-byte signature and the chunk's length and type
+  h.height = be32(20);
+  h.colour_type = b[25];
+  return h;
+}
+
+TEST(HeightmapPng, writers_produce_pngs_of_the_raster_size) {
+  const HeightmapParams params;
+  const Heightmap map = rasterise_tin(two_flat_roofs(16), params);
+  const auto dir = std::filesystem::temp_directory_path() / "city3d_test_heightmap_png";
+  std::filesystem::create_directories(dir);
+  const std::string grey = (dir / "heightmap.png").string(), edges = (dir / "edges.png").string();
+  city3d::write_heightmap_png(map, grey);
+  city3d::write_edges_png(map, detect_edges(map, params), edges);
+  const PngHeader g = read_png_header(grey), e = read_png_header(edges);
+  EXPECT_TRUE(g.signature_ok);
+  EXPECT_EQ(g.width, static_cast<std::uint32_t>(map.width));
+  EXPECT_EQ(g.height, static_cast<std::uint32_t>(map.height));
+  EXPECT_EQ(g.colour_type, 0) << "grey";
+  EXPECT_TRUE(e.signature_ok);
+  EXPECT_EQ(e.width, static_cast<std::uint32_t>(map.width));
+  EXPECT_EQ(e.colour_type, 2) << "RGB";
+  std::filesystem::remove_all(dir);
+}
+
+TEST(HeightmapPng, unwritable_path_throws_io_error_naming_it) {
+  const Heightmap map = rasterise_tin(flat_box(4, 4, 3.0, 17), HeightmapParams{});
+  const std::string path = "/nonexistent_city3d_dir/heightmap.png";
+  try {
+    city3d::write_heightmap_png(map, path);
+    FAIL() << "expected IoError";
+  } catch (const city3d::IoError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Real AHN3 buildings (city3d_smoke): plane counts against City3D's own reference models.
+
+std::vector<Point3> read_local_points(const std::string& path) {
+  const city3d::PointCloud cloud = city3d::read_point_cloud(path, city3d::kFieldXyz);
+  city3d::Box3 box;
+  for (const Point3& p : cloud.points) box.add(p);
+  const Point3 centre{(box.min.x + box.max.x) / 2, (box.min.y + box.max.y) / 2, 0.0};
+  std::vector<Point3> local;
+  local.reserve(cloud.points.size());
+  for (const Point3& p : cloud.points) local.push_back({p.x - centre.x, p.y - centre.y, p.z});
+  return local;
+}
+
+TEST(DetectPlanesAhn3, smoke_buildings_give_plausible_roof_plane_counts) {
+  // Reference: roof planes of City3D's own model beside each .ply, i.e. faces that are neither
+  // vertical (|n_z| >= 0.17) nor the floor, merged when coplanar, counted with a script over the
+  // .obj (areas in m2 in the comments). Region growing may legitimately find a little more than
+  // the model keeps: a small flat part or dormer the selection drops (04160 has two flat strips of
+  // 64 and 70 points at 11 m that its model leaves out), a steep strip of wall points, a roof face
+  // split where points are sparse. It should not merge two reference faces or lose a large one.
+  // So the count must lie in [reference, reference + 2].
+  struct Case {
+    const char* file;
+    std::size_t reference_roof_planes;
+  };
+  const Case cases[] = {
+      {"00295", 2},  // gable 29 + 29
+      {"04160", 2},  // gable 31 + 34
+      {"06773", 2},  // 37 + 45
+      {"07827", 3},  // 6, 24, 41
+      {"08439", 4},  // 9, 11, 12, 46
+      {"08541", 1},  // flat 8
+      {"09696", 1},  // flat 24
+      {"13071", 1},  // flat 80
+      {"13639", 4},  // 9, 10, 14, 22
+      {"19960", 4},  // 13, 16, 21, 24
+  };
+  const std::string folder = std::string(CITY3D_SHARED_DATA) + "/city3d_smoke/AHN3/";
+  for (const Case& c : cases) {
+    std::vector<Point3> points;
+    try {
+      points = read_local_points(folder + c.file + ".ply");
+    } catch (const std::exception& e) {
+      GTEST_SKIP() << "point-cloud reader not usable yet (" << e.what() << ")";
+    }
+    const auto segments = detect_planes(points, PlaneParams{});
+    const std::size_t roofs = count_kind(segments, PlanarSegment::Kind::roof);
+    EXPECT_GE(roofs, c.reference_roof_planes) << c.file;
+    EXPECT_LE(roofs, c.reference_roof_planes + 2) << c.file;
+    for (const auto& s : segments) EXPECT_LT(s.rms, 0.1) << c.file << ": a plane fits its points";
+  }
+}
+
+TEST(HeightmapAhn3, smoke_buildings_rasterise_to_their_hull_area_at_the_density_resolution) {
+  // hull_area_m2 and density_pts_m2 (points / hull area) from city3d_smoke/manifest.csv. The TIN
+  // lies inside the convex hull, and these roofs are nearly convex, so the raster should cover
+  // 90-102% of the hull (2% for pixels straddling the hull boundary); the automatic resolution
+  // is 0.775 / sqrt(density), with density measured on the TIN instead of the hull (within 6%).
+  struct Case {
+    const char* file;
+    double hull_area;
+    double density;
+  };
+  const Case cases[] = {{"00295", 49.11, 9.67}, {"04160", 56.33, 18.53}, {"13071", 78.19, 11.60},
+                        {"19960", 60.24, 20.78}};
+  const std::string folder = std::string(CITY3D_SHARED_DATA) + "/city3d_smoke/AHN3/";
+  for (const Case& c : cases) {
+    std::vector<Point3> points;
+    try {
+      points = read_local_points(folder + c.file + ".ply");
+    } catch (const std::exception& e) {
+      GTEST_SKIP() << "point-cloud reader not usable yet (" << e.what() << ")";
+    }
+    const Heightmap map = rasterise_tin(points, HeightmapParams{});
+    const double expected_r = 0.775 / std::sqrt(c.density);
+    EXPECT_NEAR(map.resolution, expected_r, 0.06 * expected_r) << c.file;
+    const double area = valid_pixels(map) * map.resolution * map.resolution;
+    EXPECT_GE(area, 0.90 * c.hull_area) << c.file;
+    EXPECT_LE(area, 1.02 * c.hull_area) << c.file;
+  }
+}
+
+}  // namespace
