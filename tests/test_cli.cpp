@@ -343,3 +343,30 @@ TEST_F(Reconstruct, broken_footprints_are_reported_and_never_stop_the_others) {
                 .exit_code,
             0);
 }
+
+TEST_F(Reconstruct, run_killed_halfway_resumes_to_the_same_output) {
+  const fs::path whole = dir_ / "whole", resumed = dir_ / "resumed";
+  ASSERT_EQ(run("reconstruct " + sample_args() + " -o " + whole.string()).exit_code, 0);
+  // A kill in the middle of writing: the journal holds the header, some finished buildings and half
+  // a line; no other output exists yet.
+  const std::string journal = read_file(whole / "resume.journal");
+  const auto lines = lines_of(journal);
+  ASSERT_EQ(lines.size(), 16u);  // header + 15 buildings
+  std::size_t cut = 0;
+  for (int i = 0; i < 7; ++i) cut = journal.find('\n', cut) + 1;  // header + 6 buildings
+  fs::create_directories(resumed);
+  std::ofstream(resumed / "resume.journal", std::ios::binary) << journal.substr(0, cut + 40);
+  const Result r = run("reconstruct " + sample_args() + " -v -o " + resumed.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "resume: 6 finished buildings")) << r.output;
+  for (const char* f : {"buildings.city.json", "buildings.city.jsonl"})
+    EXPECT_EQ(read_file(whole / f), read_file(resumed / f)) << f;
+  for (const auto& entry : fs::directory_iterator(whole / "models"))
+    EXPECT_EQ(read_file(entry.path()), read_file(resumed / "models" / entry.path().filename())) << entry.path();
+  EXPECT_EQ(lines_of(read_file(resumed / "resume.journal")).size(), 16u);
+  // Other parameters: nothing is reused.
+  const Result other = run("reconstruct " + sample_args() + " -v --roof-percentile 50 -o " + resumed.string());
+  ASSERT_EQ(other.exit_code, 0) << other.output;
+  EXPECT_TRUE(contains(other.output, "from another run")) << other.output;
+  EXPECT_NE(read_file(whole / "buildings.city.json"), read_file(resumed / "buildings.city.json"));
+}

@@ -25,6 +25,10 @@ struct ReconstructionParams {
   void validate() const;
 };
 
+/// Every parameter of every stage as "name = value" lines: logged at the start of a run and part of
+/// the resume fingerprint.
+std::string parameters_text(const ReconstructionParams& params);
+
 /// What happened to one input footprint (or single-building cloud).
 enum class BuildingStatus {
   ok,        ///< reconstructed at the requested level
@@ -103,6 +107,9 @@ struct BatchOptions {
   bool timings_in_cityjson = false; ///< add "seconds" to CityJSON attributes (breaks byte-identity)
   int threads = 1;
   bool progress = false;            ///< progress line on stderr
+  /// Skip buildings a previous run with the same inputs and parameters finished (resume.journal in
+  /// the output folder); false recomputes everything.
+  bool resume = true;
 };
 
 /// Counts of one batch run.

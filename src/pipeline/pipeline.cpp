@@ -10,12 +10,14 @@
 #include <exception>
 #include <filesystem>
 #include <mutex>
+#include <sstream>
 #include <thread>
 
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
 #include "city3d/mesh_check.hpp"
 #include "city3d/point_cloud_io.hpp"
+#include "pipeline/journal.hpp"
 #include "pipeline/report.hpp"
 
 namespace city3d {
@@ -52,6 +54,14 @@ const char* cityjson_lod(ModelLevel level) {
 }
 
 void ReconstructionParams::validate() const { lod1.validate(); }
+
+std::string parameters_text(const ReconstructionParams& p) {
+  std::ostringstream s;
+  s.precision(17);
+  s << "lod1.roof_percentile = " << p.lod1.roof_percentile << "\n"
+    << "lod1.min_height = " << p.lod1.min_height << "\n";
+  return s.str();
+}
 
 namespace {
 
@@ -332,6 +342,10 @@ BatchSummary run_batch(const BatchOptions& options) {
   options.crop.validate();
   if (options.threads < 1) throw ConfigError("batch: threads must be at least 1");
   const std::vector<std::string> files = expand_inputs(options.point_clouds);
+  log_info("parameters:\n" + parameters_text(options.reconstruction));
+  fs::create_directories(options.output_dir);
+  detail::Journal journal((fs::path(options.output_dir) / "resume.journal").string(),
+                          detail::batch_fingerprint(options, files), options.resume);
 
   // Inputs: footprints cropped from the tiles, or one building per single-building cloud.
   std::vector<BuildingInput> inputs;
@@ -348,18 +362,34 @@ BatchSummary run_batch(const BatchOptions& options) {
       row.reason = s.reason;
       skipped_rows.push_back(row);
     }
-    Cropper cropper(set.footprints, options.crop);
-    crop_tiles(files, set.footprints, options.crop, cropper);
-    inputs = cropper.finish();
+    const bool all_done = std::all_of(set.footprints.begin(), set.footprints.end(),
+                                      [&](const Footprint& f) { return journal.find(f.id) != nullptr; });
+    if (all_done) {
+      // Everything was finished by an earlier run: no need to read a single point.
+      for (const Footprint& f : set.footprints) {
+        BuildingInput in;
+        in.id = f.id;
+        inputs.push_back(std::move(in));
+      }
+    } else {
+      Cropper cropper(set.footprints, options.crop);
+      crop_tiles(files, set.footprints, options.crop, cropper);
+      inputs = cropper.finish();
+    }
   } else {
     for (const std::string& file : files) {
       const std::string id = fs::path(file).stem().string();
-      inputs.push_back(building_from_cloud(id, read_all_points(file), options.ground_z));
+      if (journal.find(id)) {
+        BuildingInput in;
+        in.id = id;
+        inputs.push_back(std::move(in));
+      } else {
+        inputs.push_back(building_from_cloud(id, read_all_points(file), options.ground_z));
+      }
     }
   }
 
   // Reconstruct in parallel; write in input order.
-  fs::create_directories(options.output_dir);
   Point3 translate{0, 0, 0};
   {
     Box2 box;
@@ -379,7 +409,13 @@ BatchSummary run_batch(const BatchOptions& options) {
         if (failure) return;
       }
       try {
-        BuildingResult result = reconstruct_building(inputs[i], options.reconstruction);
+        BuildingResult result;
+        if (const BuildingResult* done = journal.find(inputs[i].id)) {
+          result = *done;
+        } else {
+          result = reconstruct_building(inputs[i], options.reconstruction);
+          journal.append(result);
+        }
         // The points are not needed any more: free them early.
         std::vector<Point3>().swap(inputs[i].points);
         writer.submit(i, std::move(result));
