@@ -31,8 +31,10 @@ int run_reconstruct(const city3d::RunOptions& options) {
   batch.point_clouds = options.inputs;
   batch.progress = options.progress == 1 || (options.progress == -1 && options.verbosity > 0 && isatty(2));
   const city3d::BatchSummary s = city3d::run_batch(batch);
-  std::fprintf(stderr, "city3d: %zu buildings: %zu ok, %zu fallback, %zu skipped, %zu failed in %.1f s; report %s\n",
-               s.buildings, s.ok, s.fallback, s.skipped, s.failed, s.seconds, s.report_path.c_str());
+  if (options.verbosity > 0)
+    std::fprintf(stderr,
+                 "city3d: %zu buildings: %zu ok, %zu fallback, %zu skipped, %zu failed in %.1f s; report %s\n",
+                 s.buildings, s.ok, s.fallback, s.skipped, s.failed, s.seconds, s.report_path.c_str());
   return options.strict && s.failed > 0 ? city3d::kExitStrict : city3d::kExitOk;
 }
 
