@@ -1,0 +1,73 @@
+// Regularisation: turns the polylines of the heightmap edges into regular line segments (parallel,
+// collinear, orthogonal), by clustering and adjustment (paper section 3.2, "Regularity enhancement").
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "city3d/polylines.hpp"
+#include "city3d/types.hpp"
+
+namespace city3d {
+
+/// A line segment in a local metric frame.
+struct Segment2 {
+  Point2 a, b;
+};
+
+/// Parameters of the regularisation stage. Angles in degrees, distances in metres.
+struct RegulariseParams {
+  /// Near-parallel / near-orthogonal snapping threshold, and the largest rotation that aligns a cluster
+  /// with a footprint edge direction (the paper's 20 degrees). In [0, 45].
+  double angle_threshold = 20.0;
+  /// DBSCAN neighbourhood distance: the larger of the two minimum distances between one segment and
+  /// the other's supporting line. Also the largest offset between near-collinear segments that are
+  /// made collinear. > 0.
+  double cluster_distance = 0.5;
+  /// DBSCAN neighbourhood angle between two segments' directions. In (0, 90).
+  double cluster_angle = 15.0;
+  /// DBSCAN minimum number of neighbours (the segment included) of a core segment. >= 1. Segments in
+  /// no cluster keep their own direction (they still take part in the snapping).
+  int min_cluster = 1;
+  /// Collinear segments whose extents overlap or are closer than this along their line are merged. >= 0.
+  double merge_gap = 0.3;
+  /// Footprint edges shorter than this do not propose directions. >= 0.
+  double min_footprint_edge = 1.0;
+  /// Segments shorter than this are dropped from the input (degenerate pieces). >= 0.
+  double min_segment_length = 0.05;
+
+  /// Throws ConfigError listing every invalid field.
+  void validate() const;
+};
+
+/// The regular segments and how many there were before and after.
+struct RegularisationResult {
+  std::vector<Segment2> segments;
+  std::size_t segments_before = 0;  ///< segments of the input polylines (after dropping degenerate ones)
+  std::size_t segments_after = 0;   ///< == segments.size()
+};
+
+/// Regularises polylines (local frame).
+///
+/// 1. Splits the polylines into segments.
+/// 2. Clusters them with DBSCAN: two segments are neighbours when their directions differ by at most
+///    cluster_angle and their distance (see cluster_distance) is at most cluster_distance.
+/// 3. Rotates every segment of a cluster, about its midpoint, to the cluster's length-weighted mean
+///    direction (endpoints projected onto the rotated line).
+/// 4. With a footprint, a cluster direction within angle_threshold of a footprint edge direction takes
+///    that direction exactly.
+/// 5. Taking directions by decreasing supporting length (footprint directions first), a direction
+///    within angle_threshold of an earlier one, or of its perpendicular, becomes exactly that.
+/// 6. Segments with the same direction whose offsets differ by at most cluster_distance are moved
+///    onto one common line (length-weighted mean offset): exactly collinear.
+/// 7. Overlapping collinear segments (gap up to merge_gap) are merged.
+/// Deterministic. Throws ConfigError for invalid params.
+RegularisationResult regularise(const std::vector<Polyline2>& polylines,
+                                const std::vector<Polygon2>* footprint_local, const RegulariseParams& params);
+
+/// Writes segments as an OBJ file (`v` lines at height z, one `l i j` per segment), for inspection.
+/// Throws IoError when the file cannot be written.
+void write_segments_obj(const std::string& path, const std::vector<Segment2>& segments, double z = 0.0);
+
+}  // namespace city3d

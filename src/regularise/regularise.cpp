@@ -1,0 +1,303 @@
+// Regularisation of polylines into parallel, collinear and orthogonal segments: DBSCAN clustering of
+// segments by direction and distance, then adjustment (paper section 3.2, "Regularity enhancement").
+//
+// Directions are angles in [0, pi) (a segment and its reverse are the same wall). Averaging uses the
+// doubled angle (length-weighted mean of (cos 2t, sin 2t)), so 179 and 1 degrees average to 0, not 90.
+// After snapping, segments that share a direction share the very same double, so parallelism and
+// orthogonality are exact up to the rounding of one cos/sin evaluation.
+#include "city3d/regularise.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <numeric>
+#include <sstream>
+
+#include "city3d/error.hpp"
+#include "city3d/log.hpp"
+
+namespace city3d {
+
+void RegulariseParams::validate() const {
+  std::ostringstream problems;
+  if (!(angle_threshold >= 0.0 && angle_threshold <= 45.0))
+    problems << " angle_threshold must be in [0, 45] degrees (got " << angle_threshold << ");";
+  if (!(cluster_distance > 0.0))
+    problems << " cluster_distance must be > 0 (got " << cluster_distance << ");";
+  if (!(cluster_angle > 0.0 && cluster_angle < 90.0))
+    problems << " cluster_angle must be in (0, 90) degrees (got " << cluster_angle << ");";
+  if (min_cluster < 1) problems << " min_cluster must be >= 1 (got " << min_cluster << ");";
+  if (!(merge_gap >= 0.0)) problems << " merge_gap must be >= 0 (got " << merge_gap << ");";
+  if (!(min_footprint_edge >= 0.0))
+    problems << " min_footprint_edge must be >= 0 (got " << min_footprint_edge << ");";
+  if (!(min_segment_length >= 0.0))
+    problems << " min_segment_length must be >= 0 (got " << min_segment_length << ");";
+  const std::string text = problems.str();
+  if (!text.empty()) throw ConfigError("regularise: invalid parameters:" + text);
+}
+
+namespace detail {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+double deg2rad(double d) { return d * kPi / 180.0; }
+
+double seg_length(const Segment2& s) { return std::hypot(s.b.x - s.a.x, s.b.y - s.a.y); }
+
+// Direction of a segment as an angle in [0, pi).
+double direction(const Segment2& s) {
+  double t = std::atan2(s.b.y - s.a.y, s.b.x - s.a.x);
+  if (t < 0) t += kPi;
+  if (t >= kPi) t -= kPi;
+  return t;
+}
+
+// Smallest angle between two undirected directions, in [0, pi/2].
+double angle_between(double t1, double t2) {
+  double d = std::fmod(std::abs(t1 - t2), kPi);
+  return std::min(d, kPi - d);
+}
+
+double normalise_angle(double t) {
+  t = std::fmod(t, kPi);
+  if (t < 0) t += kPi;
+  return t;
+}
+
+// Minimum distance from segment s to the supporting line of segment l.
+double segment_to_line(const Segment2& s, const Segment2& l) {
+  const double dx = l.b.x - l.a.x, dy = l.b.y - l.a.y;
+  const double len = std::hypot(dx, dy);
+  if (len <= 0) return std::hypot(s.a.x - l.a.x, s.a.y - l.a.y);
+  const double da = (dx * (s.a.y - l.a.y) - dy * (s.a.x - l.a.x)) / len;
+  const double db = (dx * (s.b.y - l.a.y) - dy * (s.b.x - l.a.x)) / len;
+  if ((da <= 0 && db >= 0) || (da >= 0 && db <= 0)) return 0.0;  // crosses the line
+  return std::min(std::abs(da), std::abs(db));
+}
+
+// Moves s onto the line through its midpoint with direction t (endpoints projected).
+Segment2 rotate_to(const Segment2& s, double t) {
+  const double ux = std::cos(t), uy = std::sin(t);
+  const Point2 m{0.5 * (s.a.x + s.b.x), 0.5 * (s.a.y + s.b.y)};
+  auto project = [&](const Point2& p) {
+    const double k = (p.x - m.x) * ux + (p.y - m.y) * uy;
+    return Point2{m.x + k * ux, m.y + k * uy};
+  };
+  return Segment2{project(s.a), project(s.b)};
+}
+
+// DBSCAN over segments; returns a cluster id per segment, -1 for noise.
+std::vector<int> dbscan(const std::vector<Segment2>& segs, const std::vector<double>& dirs, double max_angle,
+                        double max_distance, int min_points) {
+  const std::size_t n = segs.size();
+  std::vector<std::vector<int>> neighbours(n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j) {
+      if (angle_between(dirs[i], dirs[j]) > max_angle) continue;
+      const double d = std::max(segment_to_line(segs[i], segs[j]), segment_to_line(segs[j], segs[i]));
+      if (d > max_distance) continue;
+      neighbours[i].push_back(static_cast<int>(j));
+      neighbours[j].push_back(static_cast<int>(i));
+    }
+  std::vector<int> label(n, -2);  // -2 unvisited, -1 noise
+  int next = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (label[i] != -2) continue;
+    if (static_cast<int>(neighbours[i].size()) + 1 < min_points) {
+      label[i] = -1;
+      continue;
+    }
+    const int c = next++;
+    label[i] = c;
+    std::vector<int> frontier(neighbours[i]);
+    for (std::size_t k = 0; k < frontier.size(); ++k) {
+      const int j = frontier[k];
+      if (label[j] == -1) label[j] = c;  // border point
+      if (label[j] != -2) continue;
+      label[j] = c;
+      if (static_cast<int>(neighbours[j].size()) + 1 >= min_points)
+        frontier.insert(frontier.end(), neighbours[j].begin(), neighbours[j].end());
+    }
+  }
+  return label;
+}
+
+// Length-weighted mean of undirected directions (doubled-angle average).
+double mean_direction(const std::vector<std::size_t>& members, const std::vector<double>& dirs,
+                      const std::vector<double>& lengths) {
+  double c = 0, s = 0;
+  for (std::size_t i : members) {
+    c += lengths[i] * std::cos(2 * dirs[i]);
+    s += lengths[i] * std::sin(2 * dirs[i]);
+  }
+  return normalise_angle(0.5 * std::atan2(s, c));
+}
+
+}  // namespace
+}  // namespace detail
+
+RegularisationResult regularise(const std::vector<Polyline2>& polylines,
+                                const std::vector<Polygon2>* footprint_local,
+                                const RegulariseParams& params) {
+  using namespace detail;
+  params.validate();
+  RegularisationResult result;
+
+  // 1. Segments.
+  std::vector<Segment2> segs;
+  for (const auto& line : polylines)
+    for (std::size_t i = 1; i < line.size(); ++i) {
+      const Segment2 s{line[i - 1], line[i]};
+      if (seg_length(s) >= std::max(params.min_segment_length, 1e-9)) segs.push_back(s);
+    }
+  result.segments_before = segs.size();
+  if (segs.empty()) return result;
+  const std::size_t n = segs.size();
+  std::vector<double> dirs(n), lengths(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    dirs[i] = direction(segs[i]);
+    lengths[i] = seg_length(segs[i]);
+  }
+
+  // 2. Clusters (noise segments become singleton groups).
+  const std::vector<int> label =
+      dbscan(segs, dirs, deg2rad(params.cluster_angle), params.cluster_distance, params.min_cluster);
+  int groups = 0;
+  for (int l : label) groups = std::max(groups, l + 1);
+  std::vector<int> group(n);
+  for (std::size_t i = 0; i < n; ++i) group[i] = label[i] >= 0 ? label[i] : groups++;
+  std::vector<std::vector<std::size_t>> members(groups);
+  for (std::size_t i = 0; i < n; ++i) members[group[i]].push_back(i);
+
+  // 3. Cluster mean directions.
+  std::vector<double> group_dir(groups), group_len(groups, 0.0);
+  for (int g = 0; g < groups; ++g) {
+    group_dir[g] = mean_direction(members[g], dirs, lengths);
+    for (std::size_t i : members[g]) group_len[g] += lengths[i];
+  }
+
+  // 4. Footprint edge directions.
+  const double threshold = deg2rad(params.angle_threshold);
+  std::vector<char> from_footprint(groups, 0);
+  if (footprint_local) {
+    std::vector<double> fp_dirs;
+    for (const auto& poly : *footprint_local) {
+      std::vector<const Ring2*> rings{&poly.outer};
+      for (const auto& h : poly.holes) rings.push_back(&h);
+      for (const Ring2* ring : rings)
+        for (std::size_t i = 0; i < ring->size(); ++i) {
+          const Segment2 e{(*ring)[i], (*ring)[(i + 1) % ring->size()]};
+          if (seg_length(e) >= std::max(params.min_footprint_edge, 1e-9)) fp_dirs.push_back(direction(e));
+        }
+    }
+    for (int g = 0; g < groups; ++g) {
+      double best = threshold;
+      for (double f : fp_dirs) {
+        const double d = angle_between(group_dir[g], f);
+        if (d <= best) {
+          best = d;
+          group_dir[g] = f;
+          from_footprint[g] = 1;
+        }
+      }
+    }
+  }
+
+  // 5. Snap near-parallel and near-orthogonal directions to earlier (longer) ones.
+  std::vector<int> order(groups);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int x, int y) {
+    if (from_footprint[x] != from_footprint[y]) return from_footprint[x] > from_footprint[y];
+    return group_len[x] > group_len[y];
+  });
+  std::vector<double> references;      // distinct directions, in [0, pi)
+  std::vector<int> group_ref(groups);  // index into references
+  for (int g : order) {
+    int found = -1;
+    for (std::size_t r = 0; r < references.size() && found < 0; ++r) {
+      if (angle_between(group_dir[g], references[r]) <= threshold) found = static_cast<int>(r);
+    }
+    for (std::size_t r = 0; r < references.size() && found < 0; ++r) {
+      if (angle_between(group_dir[g], references[r] + 0.5 * kPi) <= threshold) {
+        const double perpendicular = normalise_angle(references[r] + 0.5 * kPi);
+        // Reuse an existing reference equal to the perpendicular, so that equal directions share ids.
+        for (std::size_t q = 0; q < references.size(); ++q)
+          if (references[q] == perpendicular) found = static_cast<int>(q);
+        if (found < 0) {
+          references.push_back(perpendicular);
+          found = static_cast<int>(references.size()) - 1;
+        }
+      }
+    }
+    if (found < 0) {
+      references.push_back(group_dir[g]);
+      found = static_cast<int>(references.size()) - 1;
+    }
+    group_ref[g] = found;
+  }
+  for (std::size_t i = 0; i < n; ++i) segs[i] = rotate_to(segs[i], references[group_ref[group[i]]]);
+
+  // 6 and 7. Per direction: common lines for close offsets, then merge overlapping extents.
+  for (std::size_t r = 0; r < references.size(); ++r) {
+    const double ux = std::cos(references[r]), uy = std::sin(references[r]);
+    const double nx = -uy, ny = ux;
+    struct Item {
+      double offset, t0, t1, length;
+    };
+    std::vector<Item> items;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (group_ref[group[i]] != static_cast<int>(r)) continue;
+      const Point2 m{0.5 * (segs[i].a.x + segs[i].b.x), 0.5 * (segs[i].a.y + segs[i].b.y)};
+      const double ta = segs[i].a.x * ux + segs[i].a.y * uy, tb = segs[i].b.x * ux + segs[i].b.y * uy;
+      items.push_back({m.x * nx + m.y * ny, std::min(ta, tb), std::max(ta, tb), lengths[i]});
+    }
+    std::stable_sort(items.begin(), items.end(),
+                     [](const Item& x, const Item& y) { return x.offset < y.offset; });
+    for (std::size_t first = 0; first < items.size();) {
+      std::size_t last = first + 1;
+      while (last < items.size() && items[last].offset - items[first].offset <= params.cluster_distance)
+        ++last;
+      double wsum = 0, osum = 0;
+      for (std::size_t k = first; k < last; ++k) {
+        wsum += items[k].length;
+        osum += items[k].length * items[k].offset;
+      }
+      const double offset = wsum > 0 ? osum / wsum : items[first].offset;
+      std::vector<std::pair<double, double>> extents;
+      for (std::size_t k = first; k < last; ++k) extents.push_back({items[k].t0, items[k].t1});
+      std::sort(extents.begin(), extents.end());
+      std::vector<std::pair<double, double>> merged;
+      for (const auto& e : extents) {
+        if (!merged.empty() && e.first <= merged.back().second + params.merge_gap)
+          merged.back().second = std::max(merged.back().second, e.second);
+        else
+          merged.push_back(e);
+      }
+      for (const auto& [t0, t1] : merged)
+        result.segments.push_back(Segment2{{t0 * ux + offset * nx, t0 * uy + offset * ny},
+                                           {t1 * ux + offset * nx, t1 * uy + offset * ny}});
+      first = last;
+    }
+  }
+  result.segments_after = result.segments.size();
+  log_debug("regularise: " + std::to_string(result.segments_before) + " segments -> " +
+            std::to_string(result.segments_after) + " (" + std::to_string(references.size()) +
+            " directions)");
+  return result;
+}
+
+void write_segments_obj(const std::string& path, const std::vector<Segment2>& segments, double z) {
+  std::ofstream out(path);
+  if (!out) throw IoError("regularise: cannot open " + path + " for writing");
+  out.precision(17);
+  out << "# city3d segments: " << segments.size() << "\n";
+  for (const auto& s : segments) {
+    out << "v " << s.a.x << ' ' << s.a.y << ' ' << z << "\n";
+    out << "v " << s.b.x << ' ' << s.b.y << ' ' << z << "\n";
+  }
+  for (std::size_t i = 0; i < segments.size(); ++i) out << "l " << 2 * i + 1 << ' ' << 2 * i + 2 << "\n";
+  if (!out) throw IoError("regularise: write failed for " + path);
+}
+
+}  // namespace city3d
