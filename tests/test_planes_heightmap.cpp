@@ -15,6 +15,7 @@
 
 #include "city3d/error.hpp"
 #include "city3d/heightmap.hpp"
+#include "city3d/regularise.hpp"
 #include "city3d/planes.hpp"
 #include "city3d/point_cloud_io.hpp"
 
@@ -383,6 +384,41 @@ TEST(Heightmap, closing_fills_a_one_pixel_hole_and_keeps_the_outline) {
   EXPECT_FLOAT_EQ(height_at(closed, hx, hy), 5.0f);
   EXPECT_EQ(valid_pixels(closed), 30u * 20u) << "only the hole changed: the outline stays";
 }
+
+TEST(InferOutline, l_shape_outline_has_six_corners_near_the_truth_and_its_area) {
+  const std::vector<Point3> points = l_shape(7);
+  const Heightmap map = rasterise_tin(points, {});
+  const std::vector<city3d::Polygon2> outline = infer_outline(map, points);
+  ASSERT_EQ(outline.size(), 1u);
+  // The raw outline may keep a vertex or two on a jagged edge; regularisation removes them.
+  EXPECT_GE(outline[0].outer.size(), 6u);
+  EXPECT_LE(outline[0].outer.size(), 9u);
+  const city3d::Polygon2 regular = city3d::regularise_outline(outline[0]);
+  const city3d::Ring2& ring = regular.outer;
+  ASSERT_EQ(ring.size(), 6u);
+  double area2 = 0;
+  for (std::size_t i = 0; i < ring.size(); ++i)
+    area2 += ring[i].x * ring[(i + 1) % ring.size()].y - ring[(i + 1) % ring.size()].x * ring[i].y;
+  EXPECT_GT(area2, 0.0);  // counter-clockwise
+  EXPECT_NEAR(area2 / 2, 95.0, 95.0 * 0.05);  // the L covers 95 m2
+  // Every corner is within 0.4 m of one of the six true corners, and consecutive edges are exactly
+  // orthogonal after regularisation.
+  for (std::size_t i = 0; i < ring.size(); ++i) {
+    const auto& a = ring[i];
+    const auto& b = ring[(i + 1) % ring.size()];
+    const auto& c = ring[(i + 2) % ring.size()];
+    const double dot = (b.x - a.x) * (c.x - b.x) + (b.y - a.y) * (c.y - b.y);
+    EXPECT_LT(std::abs(dot) / (std::hypot(b.x - a.x, b.y - a.y) * std::hypot(c.x - b.x, c.y - b.y)), 1e-9);
+  }
+  const city3d::Point2 corners[] = {{0, 0}, {12, 0}, {12, 5}, {5, 5}, {5, 12}, {0, 12}};
+  for (const city3d::Point2& p : ring) {
+    double best = 1e9;
+    for (const city3d::Point2& c : corners) best = std::min(best, std::hypot(p.x - c.x, p.y - c.y));
+    EXPECT_LT(best, 0.4) << p.x << " " << p.y;
+  }
+}
+
+TEST(InferOutline, empty_heightmap_gives_no_outline) { EXPECT_TRUE(infer_outline(Heightmap{}, {}).empty()); }
 
 TEST(Heightmap, rejects_fewer_than_three_distinct_positions) {
   const std::vector<Point3> points{{0, 0, 1}, {0, 0, 2}, {1, 1, 1}};

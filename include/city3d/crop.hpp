@@ -22,6 +22,7 @@ namespace city3d {
 struct BuildingInput {
   BuildingId id;
   Footprint footprint;                ///< the footprint moved to the local frame (same id, fid, rings)
+  bool footprint_given = true;        ///< false for single-building clouds: `footprint` is only their hull
   Point3 origin;                      ///< world = local + origin; z = 0
   std::vector<Point3> points;         ///< building points inside the footprint, local, in input order
   std::vector<Point3> ground_points;  ///< ground points that gave ground_z (see ground_method), local

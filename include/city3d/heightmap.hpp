@@ -76,6 +76,17 @@ Heightmap rasterise_tin(const std::vector<Point3>& local_points, const Heightmap
 /// Throws ConfigError (invalid params).
 std::vector<Point2> detect_edges(const Heightmap& heightmap, const HeightmapParams& params);
 
+/// The outline of the building for a cloud without footprint. The points are binned into the
+/// heightmap's pixel grid and the occupancy closed morphologically over about 1.5 point spacings
+/// (the spacing from the points per heightmap data area), so the outline follows the points and not
+/// the TIN, whose long triangles cut inner corners. The outer boundary of each connected region runs
+/// through its boundary pixels' centres, simplified by Douglas-Peucker with `tolerance` metres plus
+/// the point spacing, then moved outward by half a pixel and half a point spacing (where the true
+/// wall lies on average); regions under `min_area` m2 are dropped. Polygons are counter-clockwise, in the heightmap's
+/// (local) frame, without holes; largest first.
+std::vector<Polygon2> infer_outline(const Heightmap& heightmap, const std::vector<Point3>& local_points,
+                                    double tolerance = 0.25, double min_area = 2.0);
+
 /// Writes the heightmap as an 8-bit grey PNG, north up: lowest data 1, highest 255, no data 0.
 /// Throws IoError naming the file when it cannot be written.
 void write_heightmap_png(const Heightmap& heightmap, const std::string& path);

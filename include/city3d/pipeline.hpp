@@ -12,22 +12,19 @@
 
 #include "city3d/crop.hpp"
 #include "city3d/footprint_io.hpp"
+#include "city3d/heightmap.hpp"
+#include "city3d/hypothesis.hpp"
 #include "city3d/lod1.hpp"
+#include "city3d/model.hpp"
 #include "city3d/model_io.hpp"
+#include "city3d/planes.hpp"
+#include "city3d/polylines.hpp"
+#include "city3d/regularise.hpp"
+#include "city3d/selection.hpp"
 #include "city3d/types.hpp"
+#include "city3d/walls.hpp"
 
 namespace city3d {
-
-/// Parameters of every per-building stage.
-struct ReconstructionParams {
-  Lod1Params lod1;
-  /// Throws ConfigError listing every invalid field of every stage.
-  void validate() const;
-};
-
-/// Every parameter of every stage as "name = value" lines: logged at the start of a run and part of
-/// the resume fingerprint.
-std::string parameters_text(const ReconstructionParams& params);
 
 /// What happened to one input footprint (or single-building cloud).
 enum class BuildingStatus {
@@ -44,6 +41,32 @@ enum class ModelLevel {
   lod22_footprint_walls,  ///< LoD2 with footprint walls only
   lod12,                  ///< LoD1 block: footprint extruded to a robust roof height
 };
+
+/// Parameters of every per-building stage.
+struct ReconstructionParams {
+  PlaneParams planes;
+  HeightmapParams heightmap;
+  PolylineParams polylines;
+  RegulariseParams regularise;
+  WallParams walls;
+  HypothesisParams hypothesis;
+  SelectionParams selection;
+  AssembleParams assemble;
+  Lod1Params lod1;
+  /// Highest rung to try: lod22 (full), lod22_footprint_walls, or lod12 (LoD1 blocks only).
+  ModelLevel max_level = ModelLevel::lod22;
+  /// Wall-clock limit for one building's LoD2 attempts, seconds; the selection gets what is left.
+  double time_limit = 60.0;
+  /// When not empty: per-building intermediate results (heightmap and edge PNGs, polylines before
+  /// and after regularisation, walls, planes, candidate faces) are written into <debug_dir>/<id>/.
+  std::string debug_dir;
+  /// Throws ConfigError listing every invalid field of every stage.
+  void validate() const;
+};
+
+/// Every parameter of every stage as "name = value" lines: logged at the start of a run and part of
+/// the resume fingerprint.
+std::string parameters_text(const ReconstructionParams& params);
 
 const char* to_string(BuildingStatus status);
 const char* to_string(ModelLevel level);

@@ -66,6 +66,13 @@ struct RegularisationResult {
 RegularisationResult regularise(const std::vector<Polyline2>& polylines,
                                 const std::vector<Polygon2>* footprint_local, const RegulariseParams& params);
 
+/// Regularises a closed outline (an inferred footprint): edge directions within `angle_threshold`
+/// degrees of the dominant direction (or its orthogonal) are snapped to it exactly, consecutive edges
+/// that end up parallel are merged into one line (length-weighted offset), and the vertices become
+/// the intersections of consecutive lines. Returns the input unchanged when the result would move a
+/// corner by more than `max_shift` metres, change the area by more than 10%, or self-intersect.
+Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold = 20.0, double max_shift = 1.5);
+
 /// Writes segments as an OBJ file (`v` lines at height z, one `l i j` per segment), for inspection.
 /// Throws IoError when the file cannot be written.
 void write_segments_obj(const std::string& path, const std::vector<Segment2>& segments, double z = 0.0);

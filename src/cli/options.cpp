@@ -119,6 +119,75 @@ const std::vector<OptionSpec>& option_table() {
       {"--roof-percentile", nullptr, "P", "LoD1 roof height: percentile (0-100) of the building points' z",
        [](const O& o) { return number_text(o.batch.reconstruction.lod1.roof_percentile); },
        [](O& o, V v) { o.batch.reconstruction.lod1.roof_percentile = parse_double("--roof-percentile", v); }},
+      // Reconstruction (the paper's parameters; see ../shared/spec/city3d_paper.tex).
+      {"--lod", nullptr, "2.2|1.2", "highest level to reconstruct: 2.2 (LoD2, falling back to LoD1) or 1.2 (blocks)",
+       [](const O& o) { return std::string(cityjson_lod(o.batch.reconstruction.max_level)); },
+       [](O& o, V v) {
+         if (v == "2.2" || v == "2")
+           o.batch.reconstruction.max_level = ModelLevel::lod22;
+         else if (v == "1.2" || v == "1")
+           o.batch.reconstruction.max_level = ModelLevel::lod12;
+         else
+           throw ConfigError("option --lod: '" + v + "' is not 2.2 or 1.2");
+       }},
+      {"--min-points", nullptr, "N", "region growing: points per roof plane",
+       [](const O& o) { return std::to_string(o.batch.reconstruction.planes.min_points); },
+       [](O& o, V v) { o.batch.reconstruction.planes.min_points = parse_int("--min-points", v, 3); }},
+      {"--plane-distance", nullptr, "M", "region growing: point-to-plane distance",
+       [](const O& o) { return number_text(o.batch.reconstruction.planes.max_distance); },
+       [](O& o, V v) { o.batch.reconstruction.planes.max_distance = parse_double("--plane-distance", v); }},
+      {"--plane-angle", nullptr, "DEG", "region growing: normal deviation",
+       [](const O& o) { return number_text(o.batch.reconstruction.planes.max_angle); },
+       [](O& o, V v) { o.batch.reconstruction.planes.max_angle = parse_double("--plane-angle", v); }},
+      {"--resolution", nullptr, "M", "heightmap resolution r; 0 = from the point density (0.20 m at AHN3 density)",
+       [](const O& o) { return number_text(o.batch.reconstruction.heightmap.resolution); },
+       [](O& o, V v) { o.batch.reconstruction.heightmap.resolution = parse_double("--resolution", v); }},
+      {"--eps-d", nullptr, "M", "polylines: Hausdorff distance bound eps_d",
+       [](const O& o) { return number_text(o.batch.reconstruction.polylines.max_hausdorff); },
+       [](O& o, V v) { o.batch.reconstruction.polylines.max_hausdorff = parse_double("--eps-d", v); }},
+      {"--eps-c", nullptr, "X", "polylines: transport cost tolerance eps_c",
+       [](const O& o) { return number_text(o.batch.reconstruction.polylines.max_cost); },
+       [](O& o, V v) { o.batch.reconstruction.polylines.max_cost = parse_double("--eps-c", v); }},
+      {"--snap-angle", nullptr, "DEG", "regularisation: near-parallel / near-orthogonal threshold",
+       [](const O& o) { return number_text(o.batch.reconstruction.regularise.angle_threshold); },
+       [](O& o, V v) { o.batch.reconstruction.regularise.angle_threshold = parse_double("--snap-angle", v); }},
+      {"--walls", nullptr, "auto|footprint|inferred|detected",
+       "vertical planes: footprint edges + inferred inner walls, all inferred, or detected wall planes",
+       [](const O& o) {
+         const WallMode m = o.batch.reconstruction.walls.mode;
+         return std::string(m == WallMode::automatic ? "auto" : m == WallMode::footprint ? "footprint"
+                            : m == WallMode::inferred ? "inferred" : "detected");
+       },
+       [](O& o, V v) {
+         WallMode& m = o.batch.reconstruction.walls.mode;
+         if (v == "auto") m = WallMode::automatic;
+         else if (v == "footprint") m = WallMode::footprint;
+         else if (v == "inferred") m = WallMode::inferred;
+         else if (v == "detected") m = WallMode::detected;
+         else throw ConfigError("option --walls: '" + v + "' is not auto, footprint, inferred or detected");
+       }},
+      {"--lambda-data", nullptr, "W", "weight of the data-fitting term",
+       [](const O& o) { return number_text(o.batch.reconstruction.selection.lambda_data); },
+       [](O& o, V v) { o.batch.reconstruction.selection.lambda_data = parse_double("--lambda-data", v); }},
+      {"--lambda-complexity", nullptr, "W", "weight of the model-complexity term",
+       [](const O& o) { return number_text(o.batch.reconstruction.selection.lambda_complexity); },
+       [](O& o, V v) { o.batch.reconstruction.selection.lambda_complexity = parse_double("--lambda-complexity", v); }},
+      {"--lambda-roof", nullptr, "W", "weight of the roof-preference term",
+       [](const O& o) { return number_text(o.batch.reconstruction.selection.lambda_roof); },
+       [](O& o, V v) { o.batch.reconstruction.selection.lambda_roof = parse_double("--lambda-roof", v); }},
+      {"--solver", nullptr, "auto|glpk|cbc", "integer-program solver (auto: GLPK for small problems, CBC for large)",
+       [](const O& o) { return o.batch.reconstruction.selection.solver; },
+       [](O& o, V v) {
+         if (v != "auto" && v != "glpk" && v != "cbc")
+           throw ConfigError("option --solver: '" + v + "' is not auto, glpk or cbc");
+         o.batch.reconstruction.selection.solver = v;
+       }},
+      {"--time-limit", nullptr, "S", "wall-clock limit per building for LoD2 (then it falls back)",
+       [](const O& o) { return number_text(o.batch.reconstruction.time_limit); },
+       [](O& o, V v) { o.batch.reconstruction.time_limit = parse_double("--time-limit", v); }},
+      {"--debug", nullptr, "DIR", "write each building's intermediate results (planes, heightmap, edges, "
+       "polylines, walls, candidate faces) into DIR/<id>/", nullptr,
+       [](O& o, V v) { o.batch.reconstruction.debug_dir = v; }},
       // Output.
       {"--output", "-o", "DIR", "output folder (created when missing)",
        [](const O& o) { return o.batch.output_dir; }, [](O& o, V v) { o.batch.output_dir = v; }},
@@ -185,6 +254,15 @@ RunOptions parse_command_line(int argc, const char* const* argv) {
       const OptionSpec* spec = nullptr;
       for (const OptionSpec& s : option_table())
         if (arg == s.flag || (s.short_flag && arg == s.short_flag)) spec = &s;
+      // A short option with its value attached ("-j2", "-oout").
+      if (!spec && arg.size() > 2 && arg[1] != '-')
+        for (const OptionSpec& s : option_table())
+          if (s.short_flag && s.value_name && arg.compare(0, 2, s.short_flag) == 0) {
+            spec = &s;
+            value = arg.substr(2);
+            has_inline_value = true;
+            arg = arg.substr(0, 2);
+          }
       if (!spec) {
         problems.push_back("unknown option '" + arg + "' (see city3d --help)");
         continue;

@@ -317,6 +317,68 @@ std::vector<Point2> detect_edges(const Heightmap& heightmap, const HeightmapPara
   return edges;
 }
 
+std::vector<Polygon2> infer_outline(const Heightmap& heightmap, const std::vector<Point3>& local_points,
+                                    double tolerance, double min_area) {
+  std::vector<Polygon2> outline;
+  if (heightmap.width <= 0 || heightmap.height <= 0 || local_points.empty()) return outline;
+  std::size_t data_pixels = 0;
+  for (float z : heightmap.z) data_pixels += !std::isnan(z);
+  const double r = heightmap.resolution;
+  const double spacing = std::sqrt(std::max<double>(data_pixels, 1) * r * r / local_points.size());
+  const int radius = std::max(1, static_cast<int>(std::ceil(1.5 * spacing / r)));
+  // Occupancy with a border of `radius` empty pixels, so the closing never touches the image edge.
+  cv::Mat mask = cv::Mat::zeros(heightmap.height + 2 * radius, heightmap.width + 2 * radius, CV_8U);
+  for (const Point3& p : local_points) {
+    const int col = static_cast<int>(std::floor((p.x - heightmap.origin.x) / r));
+    const int row = static_cast<int>(std::floor((p.y - heightmap.origin.y) / r));
+    if (col >= 0 && col < heightmap.width && row >= 0 && row < heightmap.height)
+      mask.at<std::uint8_t>(row + radius, col + radius) = 255;
+  }
+  const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));
+  cv::morphologyEx(mask, mask, cv::MORPH_CLOSE, kernel, cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
+  std::vector<std::vector<cv::Point>> contours;
+  cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  std::vector<std::pair<double, Polygon2>> found;
+  for (const auto& contour : contours) {
+    std::vector<cv::Point> simplified;
+    // The occupancy boundary is jagged by about one point spacing: simplify beyond it.
+    cv::approxPolyDP(contour, simplified, (tolerance + spacing) / heightmap.resolution, /*closed=*/true);
+    if (simplified.size() < 3) continue;
+    Polygon2 polygon;
+    for (const cv::Point& p : simplified) polygon.outer.push_back(heightmap.pixel_centre(p.x - radius, p.y - radius));
+    double area2 = 0.0;  // twice the signed area
+    for (std::size_t i = 0, n = polygon.outer.size(); i < n; ++i) {
+      const Point2& a = polygon.outer[i];
+      const Point2& b = polygon.outer[(i + 1) % n];
+      area2 += a.x * b.y - b.x * a.y;
+    }
+    if (std::abs(area2) / 2 < min_area) continue;
+    if (area2 < 0) std::reverse(polygon.outer.begin(), polygon.outer.end());
+    // The boundary pixels' centres lie half a pixel inside the occupied area, and the outermost
+    // points lie on average half a point spacing inside the true wall: move every edge outward by
+    // both (a miter offset, limited at sharp corners).
+    const double shift = 0.5 * (r + spacing);
+    const Ring2 ring = polygon.outer;
+    const std::size_t n = ring.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const Point2& prev = ring[(i + n - 1) % n];
+      const Point2& cur = ring[i];
+      const Point2& next = ring[(i + 1) % n];
+      auto outward = [](const Point2& a, const Point2& b) {  // right normal: outward for a CCW ring
+        const double len = std::hypot(b.x - a.x, b.y - a.y);
+        return Point2{(b.y - a.y) / len, -(b.x - a.x) / len};
+      };
+      const Point2 n1 = outward(prev, cur), n2 = outward(cur, next);
+      const double denom = std::max(0.25, 1.0 + n1.x * n2.x + n1.y * n2.y);
+      polygon.outer[i] = {cur.x + shift * (n1.x + n2.x) / denom, cur.y + shift * (n1.y + n2.y) / denom};
+    }
+    found.emplace_back(std::abs(area2) / 2, std::move(polygon));
+  }
+  std::stable_sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  for (auto& f : found) outline.push_back(std::move(f.second));
+  return outline;
+}
+
 void write_heightmap_png(const Heightmap& heightmap, const std::string& path) {
   if (heightmap.width <= 0 || heightmap.height <= 0)
     throw IoError("heightmap: cannot write " + path + ": empty heightmap");

@@ -13,8 +13,9 @@ namespace city3d::detail {
 /// The content of the LASzip VLR (user id "laszip encoded", record id 22204).
 struct LaszipVlr {
   struct Item {
-    std::uint16_t type = 0;     ///< 6 POINT10, 7 GPSTIME11, 8 RGB12, 0 BYTE, 10 POINT14, 11 RGB14, 12 RGBNIR14, 14 BYTE14
-    std::uint16_t size = 0;     ///< bytes of the item in a raw record
+    std::uint16_t type =
+        0;  ///< 6 POINT10, 7 GPSTIME11, 8 RGB12, 0 BYTE, 10 POINT14, 11 RGB14, 12 RGBNIR14, 14 BYTE14
+    std::uint16_t size = 0;  ///< bytes of the item in a raw record
     std::uint16_t version = 0;
   };
   std::uint16_t compressor = 0;  ///< 0 none, 1 pointwise, 2 pointwise-chunked, 3 layered-chunked
@@ -32,6 +33,14 @@ struct LaszipVlr {
 /// Parses the LASzip VLR payload. Throws IoError naming `path` when it is malformed.
 LaszipVlr parse_laszip_vlr(const std::uint8_t* data, std::size_t size, const std::string& path);
 
+/// True when a LAS header point-format byte carries the compression bit (bit 7, or bit 6 in
+/// files from early LASzip versions).
+bool has_compression_bit(std::uint8_t point_format_byte);
+
+/// Throws IoError naming `path` when the point-format byte says "compressed" but the file has no
+/// LASzip VLR (user id "laszip encoded", record id 22204).
+void check_laszip_vlr_present(bool vlr_found, std::uint8_t point_format_byte, const std::string& path);
+
 /// Where the compressed point block is and what it must decode to (taken from the LAS header).
 struct LazLayout {
   std::string path;
@@ -42,8 +51,15 @@ struct LazLayout {
   std::uint64_t file_size = 0;
 };
 
-/// Streams raw point records out of a LAZ file. Errors (truncated file, bad chunk table, unknown
-/// items, corrupt data) throw IoError naming the file and the chunk.
+/// Streams raw point records out of a LAZ file, one chunk in memory at a time. Reads compressor 2
+/// (pointwise-chunked; v1/v2 POINT10, GPSTIME11, RGB12, BYTE), compressor 3 (layered-chunked; v3
+/// POINT14, RGB14, RGBNIR14, BYTE14) and compressor 1 (one unchunked stream; v1/v2 items); fixed and
+/// variable chunk sizes; a chunk-table pointer of -1 (offset stored in the file's last 8 bytes).
+/// The constructor reads the chunk table and throws IoError naming the file when it or the item list
+/// is unusable (missing or out-of-range table, item sizes that do not match the record length,
+/// unsupported items). decode() throws IoError naming the file and the chunk when data is truncated
+/// or corrupt (a stream that runs past its chunk or layer, or does not end exactly there); after
+/// an error every further decode() call throws the same error.
 class LazDecoder {
  public:
   LazDecoder(const LaszipVlr& vlr, const LazLayout& layout);
@@ -52,7 +68,8 @@ class LazDecoder {
   LazDecoder& operator=(const LazDecoder&) = delete;
 
   /// Writes at most `max_points` raw records (record_length bytes each) to `out`; returns how many
-  /// it wrote, 0 once all point_count records have been produced.
+  /// it wrote, 0 once all point_count records have been produced. Records of a call that fails
+  /// are not reported as written.
   std::size_t decode(std::uint8_t* out, std::size_t max_points);
 
  private:

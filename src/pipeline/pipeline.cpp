@@ -53,13 +53,83 @@ const char* cityjson_lod(ModelLevel level) {
   return "";
 }
 
-void ReconstructionParams::validate() const { lod1.validate(); }
+void ReconstructionParams::validate() const {
+  // Each stage collects its own problems; gather them all into one message.
+  std::string problems;
+  auto check = [&](auto&& validate_stage) {
+    try {
+      validate_stage();
+    } catch (const ConfigError& e) {
+      problems += (problems.empty() ? "" : "; ") + std::string(e.what());
+    }
+  };
+  check([&] { planes.validate(); });
+  check([&] { heightmap.validate(); });
+  check([&] { polylines.validate(); });
+  check([&] { regularise.validate(); });
+  check([&] { walls.validate(); });
+  check([&] { hypothesis.validate(); });
+  check([&] { selection.validate(); });
+  check([&] { assemble.validate(); });
+  check([&] { lod1.validate(); });
+  if (!(time_limit > 0)) problems += (problems.empty() ? "" : "; ") + std::string("time_limit must be positive");
+  if (!problems.empty()) throw ConfigError(problems);
+}
 
 std::string parameters_text(const ReconstructionParams& p) {
   std::ostringstream s;
   s.precision(17);
-  s << "lod1.roof_percentile = " << p.lod1.roof_percentile << "\n"
-    << "lod1.min_height = " << p.lod1.min_height << "\n";
+  auto put = [&](const char* name, auto value) { s << name << " = " << value << "\n"; };
+  put("planes.k_neighbors", p.planes.k_neighbors);
+  put("planes.min_points", p.planes.min_points);
+  put("planes.max_distance", p.planes.max_distance);
+  put("planes.max_angle", p.planes.max_angle);
+  put("planes.wall_max_normal_z", p.planes.wall_max_normal_z);
+  put("heightmap.resolution", p.heightmap.resolution);
+  put("heightmap.max_edge_length", p.heightmap.max_edge_length);
+  put("heightmap.closing_size", p.heightmap.closing_size);
+  put("heightmap.canny_low", p.heightmap.canny_low);
+  put("heightmap.canny_high", p.heightmap.canny_high);
+  put("polylines.max_hausdorff", p.polylines.max_hausdorff);
+  put("polylines.max_cost", p.polylines.max_cost);
+  put("polylines.resolution", p.polylines.resolution);
+  put("polylines.link_pixels", p.polylines.link_pixels);
+  put("polylines.min_polyline_length", p.polylines.min_polyline_length);
+  put("polylines.relocate", p.polylines.relocate);
+  put("regularise.angle_threshold", p.regularise.angle_threshold);
+  put("regularise.cluster_distance", p.regularise.cluster_distance);
+  put("regularise.cluster_angle", p.regularise.cluster_angle);
+  put("regularise.min_cluster", p.regularise.min_cluster);
+  put("regularise.merge_gap", p.regularise.merge_gap);
+  put("regularise.min_footprint_edge", p.regularise.min_footprint_edge);
+  put("regularise.min_segment_length", p.regularise.min_segment_length);
+  put("walls.mode", static_cast<int>(p.walls.mode));
+  put("walls.min_wall_length", p.walls.min_wall_length);
+  put("walls.footprint_margin", p.walls.footprint_margin);
+  put("walls.min_detected_lines", p.walls.min_detected_lines);
+  put("walls.detected_length_ratio", p.walls.detected_length_ratio);
+  put("hypothesis.support_distance", p.hypothesis.support_distance);
+  put("hypothesis.min_face_area", p.hypothesis.min_face_area);
+  put("hypothesis.line_support_margin", p.hypothesis.line_support_margin);
+  put("hypothesis.cell_support_margin", p.hypothesis.cell_support_margin);
+  put("hypothesis.min_support_points", p.hypothesis.min_support_points);
+  put("hypothesis.vertex_merge_tolerance", p.hypothesis.vertex_merge_tolerance);
+  put("hypothesis.parallel_tolerance", p.hypothesis.parallel_tolerance);
+  put("hypothesis.min_edge_length", p.hypothesis.min_edge_length);
+  put("selection.lambda_data", p.selection.lambda_data);
+  put("selection.lambda_complexity", p.selection.lambda_complexity);
+  put("selection.lambda_roof", p.selection.lambda_roof);
+  put("selection.solver", p.selection.solver);
+  put("selection.time_limit", p.selection.time_limit);
+  put("selection.node_limit", p.selection.node_limit);
+  put("selection.use_face_prior", p.selection.use_face_prior);
+  put("selection.use_single_layer", p.selection.use_single_layer);
+  put("assemble.collinear_tolerance", p.assemble.collinear_tolerance);
+  put("assemble.merge_coplanar", p.assemble.merge_coplanar);
+  put("lod1.roof_percentile", p.lod1.roof_percentile);
+  put("lod1.min_height", p.lod1.min_height);
+  put("max_level", to_string(p.max_level));
+  put("time_limit", p.time_limit);
   return s.str();
 }
 
@@ -82,6 +152,132 @@ BuildingModel lod1_rung(const BuildingInput& input, const ReconstructionParams& 
                               std::to_string(check.boundary_edges) + " boundary edges, " +
                               std::to_string(check.non_manifold_edges) + " non-manifold edges, volume " +
                               std::to_string(check.signed_volume) + ")");
+  return model;
+}
+
+// The horizontal line of a detected wall segment: its points projected on the wall's horizontal
+// direction, from the lowest to the highest projection.
+std::pair<Point2, Point2> wall_line(const PlanarSegment& wall, const std::vector<Point3>& points) {
+  const double nx = wall.plane.a, ny = wall.plane.b;
+  const double len = std::hypot(nx, ny);
+  const double dx = -ny / len, dy = nx / len;  // along the wall
+  double lo = 1e300, hi = -1e300, cx = 0, cy = 0;
+  for (std::uint32_t i : wall.points) {
+    const double t = points[i].x * dx + points[i].y * dy;
+    lo = std::min(lo, t);
+    hi = std::max(hi, t);
+    cx += points[i].x;
+    cy += points[i].y;
+  }
+  cx /= wall.points.size();
+  cy /= wall.points.size();
+  const double tc = cx * dx + cy * dy;
+  return {{cx + (lo - tc) * dx, cy + (lo - tc) * dy}, {cx + (hi - tc) * dx, cy + (hi - tc) * dy}};
+}
+
+std::string debug_path(const ReconstructionParams& params, const BuildingId& id, const std::string& name) {
+  const fs::path dir = fs::path(params.debug_dir) / model_file_name(id, MeshFormat::obj).substr(0, model_file_name(id, MeshFormat::obj).size() - 4);
+  fs::create_directories(dir);
+  return (dir / name).string();
+}
+
+// Writes the planar segments as a PLY point cloud coloured by segment (grey: no segment).
+void write_planes_ply(const std::string& path, const std::vector<Point3>& points,
+                      const std::vector<PlanarSegment>& segments) {
+  std::vector<int> label(points.size(), -1);
+  for (std::size_t s = 0; s < segments.size(); ++s)
+    for (std::uint32_t i : segments[s].points) label[i] = static_cast<int>(s);
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) throw IoError("debug: cannot write " + path);
+  std::fprintf(f, "ply\nformat ascii 1.0\nelement vertex %zu\nproperty double x\nproperty double y\nproperty double z\n"
+               "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty int segment\nend_header\n",
+               points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    // A fixed pseudo-random colour per segment.
+    const unsigned h = label[i] < 0 ? 0u : static_cast<unsigned>(label[i] + 1) * 2654435761u;
+    const int r = label[i] < 0 ? 160 : 40 + (h >> 8) % 200, g = label[i] < 0 ? 160 : 40 + (h >> 16) % 200,
+              b = label[i] < 0 ? 160 : 40 + (h >> 24) % 200;
+    std::fprintf(f, "%.4f %.4f %.4f %d %d %d %d\n", points[i].x, points[i].y, points[i].z, r, g, b, label[i]);
+  }
+  std::fclose(f);
+}
+
+// A LoD2 rung: planes, walls, hypothesis, selection, model. `footprint_walls_only` skips the
+// inferred inner walls (the second rung). Throws Error naming the stage when a stage fails.
+BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& params, bool footprint_walls_only,
+                        Clock::time_point start, BuildingReport& report) {
+  const bool debug = !params.debug_dir.empty();
+  const auto& points = input.points;
+
+  // Roof planes (and wall planes, if the cloud sees walls).
+  const std::vector<PlanarSegment> segments = detect_planes(points, params.planes);
+  std::vector<PlanarSegment> roofs;
+  std::vector<std::pair<Point2, Point2>> detected_walls;
+  for (const PlanarSegment& s : segments) {
+    if (s.kind == PlanarSegment::Kind::roof)
+      roofs.push_back(s);
+    else
+      detected_walls.push_back(wall_line(s, points));
+  }
+  report.planes = roofs.size();
+  if (debug) write_planes_ply(debug_path(params, input.id, "planes.ply"), points, segments);
+  if (roofs.empty())
+    throw ReconstructionError("planes: no roof plane among " + std::to_string(points.size()) + " points (min_points " +
+                              std::to_string(params.planes.min_points) + ")");
+
+  // Heightmap, edges, polylines, regular lines: the inferred vertical planes (paper section 3.2).
+  const Heightmap heightmap = rasterise_tin(points, params.heightmap);
+  std::vector<Polygon2> outline = input.footprint.polygons;
+  if (!input.footprint_given) {
+    outline.clear();
+    for (const Polygon2& p : infer_outline(heightmap, points, params.polylines.max_hausdorff))
+      outline.push_back(regularise_outline(p, params.regularise.angle_threshold));
+    if (outline.empty()) throw ReconstructionError("walls: no outline could be inferred from the points");
+    outline.resize(1);  // the main part; small detached parts are left to the LoD1 rung
+  }
+  RegularisationResult lines;
+  if (!footprint_walls_only) {
+    const std::vector<Point2> edges = detect_edges(heightmap, params.heightmap);
+    const std::vector<Polyline2> polylines = extract_polylines(edges, params.polylines);
+    lines = regularise(polylines, &outline, params.regularise);
+    if (debug) {
+      write_heightmap_png(heightmap, debug_path(params, input.id, "heightmap.png"));
+      write_edges_png(heightmap, edges, debug_path(params, input.id, "edges.png"));
+      write_polylines_obj(debug_path(params, input.id, "polylines.obj"), polylines, heightmap.z.empty() ? 0.0 : input.ground_z);
+      write_segments_obj(debug_path(params, input.id, "regularised.obj"), lines.segments, input.ground_z);
+    }
+  }
+  WallParams wall_params = params.walls;
+  if (wall_params.mode == WallMode::automatic) wall_params.mode = WallMode::footprint;
+  const std::vector<VerticalPlane> walls =
+      infer_walls(lines, &outline, footprint_walls_only ? std::vector<std::pair<Point2, Point2>>{} : detected_walls,
+                  wall_params);
+  report.walls = walls.size();
+  if (debug) write_walls_obj(debug_path(params, input.id, "walls.obj"), walls, input.ground_z, input.ground_z + 20.0);
+
+  // Face hypothesis and selection (paper section 3.3).
+  const CandidateFaces candidates =
+      generate_candidates(points, roofs, walls, outline, input.ground_z, params.hypothesis);
+  report.candidate_faces = candidates.faces.size();
+  if (debug) write_candidates_obj(debug_path(params, input.id, "candidates.obj"), candidates);
+  SelectionParams selection_params = params.selection;
+  const double left = params.time_limit - seconds_since(start);
+  if (left <= 0) throw ReconstructionError("selection: building time limit of " + std::to_string(params.time_limit) + " s reached before solving");
+  selection_params.time_limit = std::min(selection_params.time_limit, left);
+  SelectionResult selection = solve_selection(candidates.problem, selection_params);
+  if (selection.status == SelectionStatus::infeasible && selection_params.use_face_prior) {
+    // The face prior is a preference of the paper's, not a necessity: retry without it.
+    selection_params.use_face_prior = false;
+    selection = solve_selection(candidates.problem, selection_params);
+  }
+  if (selection.status != SelectionStatus::optimal && selection.status != SelectionStatus::feasible)
+    throw ReconstructionError("selection: " + std::string(selection.status == SelectionStatus::infeasible ? "infeasible" : "no solution within the limits") +
+                              " (" + std::to_string(selection.variables) + " variables; " + selection.message + ")");
+
+  BuildingModel model;
+  model.id = input.id;
+  model.origin = input.origin;
+  model.mesh = assemble_model(candidates, selection.selected, params.assemble, &model.surfaces);
   return model;
 }
 
@@ -127,7 +323,9 @@ BuildingInput building_from_cloud(const BuildingId& id, const std::vector<Point3
     input.points.push_back({p.x - input.origin.x, p.y - input.origin.y, p.z});
     xy.push_back({p.x - input.origin.x, p.y - input.origin.y});
   }
+  // The convex hull serves the LoD1 rung; the LoD2 rungs infer a real outline from the points.
   input.footprint.polygons.push_back({convex_hull(std::move(xy)), {}});
+  input.footprint_given = false;
   if (ground_z) {
     input.ground_z = *ground_z;
     input.ground_method = "given";
@@ -157,20 +355,46 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
     r.stage = "crop";
     r.reason = "no building points inside the footprint";
   } else {
-    // The ladder. LoD2 rungs join here as their stages land; until then LoD1 is the model.
-    try {
-      BuildingModel model = lod1_rung(input, params, r);
-      r.level = ModelLevel::lod12;
-      r.status = BuildingStatus::ok;
-      r.faces = model.mesh.faces.size();
-      r.valid = true;
-      result.model = std::move(model);
-    } catch (const Error& e) {
-      r.status = BuildingStatus::failed;
-      r.stage = "lod1";
-      r.reason = e.what();
+    // The fallback ladder: full LoD2 -> LoD2 with footprint walls only -> LoD1 block. The first rung
+    // that gives a closed, 2-manifold, outward model wins; the report keeps the first failure.
+    struct Rung {
+      ModelLevel level;
+      bool footprint_walls_only;
+    };
+    const Rung rungs[] = {{ModelLevel::lod22, false}, {ModelLevel::lod22_footprint_walls, true}, {ModelLevel::lod12, false}};
+    const ModelLevel requested = params.max_level == ModelLevel::none ? ModelLevel::lod22 : params.max_level;
+    bool started = false;
+    for (const Rung& rung : rungs) {
+      if (rung.level == requested) started = true;
+      if (!started) continue;
+      try {
+        BuildingModel model = rung.level == ModelLevel::lod12
+                                  ? lod1_rung(input, params, r)
+                                  : lod2_rung(input, params, rung.footprint_walls_only, start, r);
+        const MeshCheck check = check_mesh(model.mesh);
+        if (!check.valid())
+          throw ReconstructionError("model: not a valid solid (" + std::to_string(check.boundary_edges) +
+                                    " boundary edges, " + std::to_string(check.non_manifold_edges) +
+                                    " non-manifold edges, " + std::to_string(check.degenerate_faces) +
+                                    " degenerate faces, volume " + std::to_string(check.signed_volume) + ")");
+        r.level = rung.level;
+        r.status = rung.level == requested ? BuildingStatus::ok : BuildingStatus::fallback;
+        r.faces = model.mesh.faces.size();
+        r.valid = true;
+        result.model = std::move(model);
+        break;
+      } catch (const Error& e) {
+        if (r.reason.empty()) {
+          r.reason = e.what();
+          const std::string what = e.what();
+          r.stage = what.substr(0, what.find(':'));
+        }
+      }
     }
+    if (!result.model) r.status = BuildingStatus::failed;
+    if (r.status == BuildingStatus::ok) r.stage.clear(), r.reason.clear();
   }
+
   r.seconds = seconds_since(start);
   return result;
 }

@@ -287,6 +287,129 @@ RegularisationResult regularise(const std::vector<Polyline2>& polylines,
   return result;
 }
 
+namespace {
+
+double ring_area(const Ring2& r) {
+  double a2 = 0.0;
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    const Point2& p = r[i];
+    const Point2& q = r[(i + 1) % r.size()];
+    a2 += p.x * q.y - q.x * p.y;
+  }
+  return a2 / 2;
+}
+
+bool segments_cross(const Point2& a, const Point2& b, const Point2& c, const Point2& d) {
+  auto orient = [](const Point2& p, const Point2& q, const Point2& r) {
+    const double v = (q.x - p.x) * (r.y - p.y) - (q.y - p.y) * (r.x - p.x);
+    return (v > 0) - (v < 0);
+  };
+  return orient(a, b, c) * orient(a, b, d) < 0 && orient(c, d, a) * orient(c, d, b) < 0;
+}
+
+bool ring_is_simple(const Ring2& r) {
+  const std::size_t n = r.size();
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 2; j < n; ++j) {
+      if (i == 0 && j == n - 1) continue;  // neighbours through the closing edge
+      if (segments_cross(r[i], r[(i + 1) % n], r[j], r[(j + 1) % n])) return false;
+    }
+  return true;
+}
+
+}  // namespace
+
+Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold, double max_shift) {
+  const Ring2& ring = polygon.outer;
+  const std::size_t n = ring.size();
+  if (n < 4) return polygon;
+  constexpr double kPi = 3.14159265358979323846;
+  const double threshold = angle_threshold * kPi / 180.0;
+  std::vector<double> angle(n), length(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Point2& a = ring[i];
+    const Point2& b = ring[(i + 1) % n];
+    angle[i] = std::atan2(b.y - a.y, b.x - a.x);
+    length[i] = std::hypot(b.x - a.x, b.y - a.y);
+  }
+  // Angles modulo 90 degrees, folded to [0, pi/2): the dominant direction is the one with the most
+  // edge length within 10 degrees, refined by the length-weighted circular mean (on 4x the angle).
+  auto fold = [&](double t) {
+    const double q = kPi / 2;
+    return t - std::floor(t / q) * q;
+  };
+  double best_score = -1, dominant = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    double score = 0, sx = 0, sy = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+      double d = std::abs(fold(angle[j]) - fold(angle[i]));
+      d = std::min(d, kPi / 2 - d);
+      if (d < 10.0 * kPi / 180.0) {
+        score += length[j];
+        sx += length[j] * std::cos(4 * fold(angle[j]));
+        sy += length[j] * std::sin(4 * fold(angle[j]));
+      }
+    }
+    if (score > best_score) {
+      best_score = score;
+      dominant = std::atan2(sy, sx) / 4;
+    }
+  }
+  // Snap each edge; lines are (unit direction, offset along the normal).
+  struct Line {
+    double angle, offset, weight;
+  };
+  std::vector<Line> lines;
+  for (std::size_t i = 0; i < n; ++i) {
+    double t = angle[i];
+    const double k = std::round((t - dominant) / (kPi / 2));
+    if (std::abs(t - dominant - k * kPi / 2) < threshold) t = dominant + k * kPi / 2;
+    const Point2& a = ring[i];
+    const Point2& b = ring[(i + 1) % n];
+    const double mx = (a.x + b.x) / 2, my = (a.y + b.y) / 2;
+    lines.push_back({t, -std::sin(t) * mx + std::cos(t) * my, length[i]});
+  }
+  auto same_direction = [](double s, double t) { return std::abs(std::remainder(s - t, 2 * 3.14159265358979323846)) < 1e-9; };
+  // Merge runs of consecutive parallel lines (cyclically), weighting offsets by length.
+  std::vector<Line> merged;
+  std::size_t start = 0;
+  while (start < n && same_direction(lines[start].angle, lines[(start + n - 1) % n].angle)) ++start;
+  if (start == n) return polygon;  // every edge parallel: degenerate
+  for (std::size_t k = 0; k < n; ++k) {
+    const Line& l = lines[(start + k) % n];
+    if (!merged.empty() && same_direction(merged.back().angle, l.angle)) {
+      Line& m = merged.back();
+      m.offset = (m.offset * m.weight + l.offset * l.weight) / (m.weight + l.weight);
+      m.weight += l.weight;
+    } else {
+      merged.push_back(l);
+    }
+  }
+  if (merged.size() < 3) return polygon;
+  Polygon2 result;
+  for (std::size_t i = 0; i < merged.size(); ++i) {
+    const Line& p = merged[(i + merged.size() - 1) % merged.size()];
+    const Line& q = merged[i];
+    // Intersection of p and q: -sin(t) x + cos(t) y = offset for both.
+    const double a1 = -std::sin(p.angle), b1 = std::cos(p.angle), a2 = -std::sin(q.angle), b2 = std::cos(q.angle);
+    const double det = a1 * b2 - a2 * b1;
+    if (std::abs(det) < std::sin(5.0 * kPi / 180.0)) return polygon;  // nearly parallel neighbours: keep input
+    result.outer.push_back({(p.offset * b2 - q.offset * b1) / det, (a1 * q.offset - a2 * p.offset) / det});
+  }
+  // Every new corner must stay near the input outline's corners, the area must hold, and the ring
+  // must stay simple; otherwise the snapping did more harm than good.
+  for (const Point2& c : result.outer) {
+    double best = 1e300;
+    for (const Point2& v : ring) best = std::min(best, std::hypot(c.x - v.x, c.y - v.y));
+    if (best > max_shift) return polygon;
+  }
+  const double before = ring_area(ring), after = ring_area(result.outer);
+  if (!(after > 0) || std::abs(after - before) > 0.1 * std::abs(before) || !ring_is_simple(result.outer))
+    return polygon;
+  result.holes = polygon.holes;
+  return result;
+}
+
 void write_segments_obj(const std::string& path, const std::vector<Segment2>& segments, double z) {
   std::ofstream out(path);
   if (!out) throw IoError("regularise: cannot open " + path + " for writing");

@@ -1,0 +1,130 @@
+// Face hypothesis (paper section 3.3): candidate faces of one building from its roof planes, its
+// vertical planes and its floor, and the integer program (SelectionProblem) that selects among them.
+//
+// Construction: a 2.5D arrangement, built in the local xy frame.
+//
+//  1. A 2D arrangement (CGAL Arrangement_2, exact predicates and constructions; coordinates are
+//     rounded to double only at the end) of
+//       (a) the footprint rings (the outer walls; holes are courtyards),
+//       (b) the inner walls (VerticalPlane with outer == false), extended by line_support_margin at
+//           both ends so that walls ending just short of another line still split the cell,
+//       (c) the xy projections of the pairwise intersection lines of the ROOF planes only (the paper's
+//           change to PolyFit), each clipped to where both planes have points nearby: the points of a
+//           plane within line_support_margin (xy) of the line are projected onto it, the two
+//           intervals are intersected, and the result is extended by line_support_margin at both
+//           ends. A pair with no such overlap gives no line. Without this rule every pair of planes
+//           would cut the whole footprint and the arrangement would explode.
+//     Edges shorter than min_edge_length are contracted (nearly concurrent lines otherwise make
+//     cells without area). Dangling edges (an end that reaches no other line) are removed, because a cell with an
+//     "antenna" is not a simple polygon. A cell with a hole is split by two horizontal bridges from
+//     the hole's leftmost and rightmost vertices, so every cell is a simple polygon.
+//     The outer VerticalPlanes are not used: the footprint rings are the outer walls.
+//  2. Roof faces: every bounded cell inside the footprint, lifted onto every roof plane that has at
+//     least min_support_points of its points within cell_support_margin (xy) of the cell (when no
+//     plane qualifies, the plane(s) whose points come nearest). Vertically overlapping roof faces are
+//     exactly the faces over the same cell.
+//  3. Vertical faces: over every arrangement edge, the "levels" are the roof planes of the cells on
+//     both sides (plus the floor on the footprint boundary). The vertical strip over the edge is cut
+//     by the level lines; every cell of that 1D line arrangement (between two consecutive levels) is
+//     a candidate. Where two levels cross inside an edge, the crossing becomes a vertex (a station)
+//     of every face along the edge, so no face is a bow-tie and edges weld exactly.
+//  4. Floor faces: every inside cell at ground_z, forced on.
+//
+// Vertex identity: a vertex is (arrangement vertex or station on an edge, height cluster). The xy
+// part comes from the exact arrangement; at one xy position the heights of the levels through it
+// are sorted and levels closer than vertex_merge_tolerance share a vertex (this is how the two
+// planes of a ridge meet in one vertex). 3D coordinates are never compared across positions.
+//
+// Support (data term): the number of points within support_distance of the face's plane whose
+// projection falls inside the face polygon. For a roof face only the points of its own planar
+// segment count (as in PolyFit); for walls and the floor every point counts. Points are not weighted
+// by distance and no coverage (alpha-shape) term is used, as in City3D's formulation.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "city3d/planes.hpp"
+#include "city3d/selection.hpp"
+#include "city3d/types.hpp"
+#include "city3d/walls.hpp"
+
+namespace city3d {
+
+/// Parameters of generate_candidates(). Distances in metres.
+struct HypothesisParams {
+  double support_distance = 0.3;     ///< epsilon: point-to-face distance for support, > 0
+  double min_face_area = 0.05;       ///< m2; roof faces smaller than this are never chosen as a segment's face
+                                     ///< prior (they stay candidates: removing them could open the model); >= 0
+  double line_support_margin = 1.0;  ///< xy distance of points from a roof intersection line that supports it,
+                                     ///< and the extension of clipped lines and inner walls at both ends, > 0
+  double cell_support_margin = 1.0;  ///< xy distance of a plane's points from a cell that makes the plane a
+                                     ///< candidate on that cell, >= 0
+  int min_support_points = 3;        ///< points a plane needs near a cell (fewer if the segment is smaller), >= 1
+  double vertex_merge_tolerance = 1e-3;  ///< heights at one xy position closer than this share a vertex, > 0
+  double parallel_tolerance = 1e-3;  ///< |n_i x n_j| below this: roof planes treated as parallel (no line), > 0
+  double min_edge_length = 0.01;     ///< arrangement edges shorter than this are contracted (their end
+                                     ///< vertices snap together; sliver cells vanish), >= 0
+
+  /// Throws ConfigError listing every invalid field.
+  void validate() const;
+};
+
+/// What a candidate face is.
+enum class FaceKind : std::uint8_t { roof, wall, floor };
+
+/// One candidate face. Its polygon is the loop `vertices` (indices into CandidateFaces::vertices):
+/// simple, planar, counter-clockwise seen from outside where that is meaningful (roofs face up,
+/// floors down, walls on the footprint boundary outwards; inner walls face the right side of their
+/// arrangement edge).
+struct CandidateFace {
+  FaceKind kind = FaceKind::roof;
+  /// roof: index into roof_planes; wall: index into walls when the face lies on an inner wall, else -1;
+  /// floor: -1.
+  int source = -1;
+  /// Coplanarity key: two faces lie in the same plane exactly when their plane_id is equal (a roof
+  /// plane, the floor, or one vertical line of the arrangement).
+  std::uint32_t plane_id = 0;
+  /// roof/floor: the arrangement cell it lies over; wall: the arrangement edge it stands on.
+  std::uint32_t cell_or_edge = 0;
+  std::vector<std::uint32_t> vertices;
+  double area = 0.0;  ///< m2
+};
+
+/// The candidate faces of one building and the selection problem over them. Face i of `faces`,
+/// `polygons` and `problem` is the same face.
+struct CandidateFaces {
+  std::vector<Point3> vertices;                 ///< local frame; shared by faces (welded by identity)
+  std::vector<CandidateFace> faces;
+  std::vector<std::vector<Point3>> polygons;    ///< faces[i].vertices resolved, for export and tests
+  SelectionProblem problem;
+
+  std::size_t cell_count = 0;   ///< bounded arrangement cells inside the footprint
+  std::size_t edge_count = 0;   ///< arrangement edges bordering at least one inside cell
+  std::size_t line_count = 0;   ///< roof intersection lines inserted (after clipping)
+};
+
+/// Builds the candidate faces (see the file comment) and their SelectionProblem.
+///
+/// `points`: all building points, local frame. `roof_planes`: roof segments (kind roof; walls are
+/// ignored), their point indices refer to `points`. `walls`: only inner walls (outer == false) are
+/// used. `footprint_local`: the outline polygons (outer CCW, holes CW, either orientation accepted),
+/// local frame. `ground_z`: floor height.
+/// The problem's edges each list at least two faces (faces that could never close are pruned), its
+/// floor faces are forced on, its face prior holds the best-supported face of each roof segment that
+/// has support, and vertical_overlaps lists every pair of roof faces over the same cell.
+/// Deterministic: the same input gives the same faces in the same order.
+/// Throws ConfigError (params) and ReconstructionError ("hypothesis: 0 planes, need at least 1 roof
+/// plane", empty footprint, no inside cell).
+CandidateFaces generate_candidates(const std::vector<Point3>& points,
+                                   const std::vector<PlanarSegment>& roof_planes,
+                                   const std::vector<VerticalPlane>& walls,
+                                   const std::vector<Polygon2>& footprint_local, double ground_z,
+                                   const HypothesisParams& params);
+
+/// Writes the candidate faces as an OBJ file (one object per face, named by kind and index), for
+/// inspection. Throws IoError when the file cannot be written.
+void write_candidates_obj(const std::string& path, const CandidateFaces& candidates);
+
+}  // namespace city3d

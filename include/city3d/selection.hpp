@@ -1,0 +1,94 @@
+// Face selection (paper section 3.3 and appendix): choose the subset of candidate faces that forms
+// the building by a binary integer program
+//
+//   min  lambda_d * E_d + lambda_c * E_c + lambda_r * E_r
+//   E_d = 1 - (1/|P|) sum_i x_i support(f_i)                      data fitting (PolyFit)
+//   E_c = (1/|E|) sum_e corner(e)                                  model complexity (PolyFit)
+//   E_r = (1/|F|) sum_i x_i (z_max - z_i) / (z_max - z_min)        roof preference (City3D)
+//   s.t. sum_{j in N(e)} x_j in {0, 2}  for every edge e          watertight, 2-manifold
+//        single-layer roof: vertically overlapping roof faces are never selected together
+//        face prior: x_l = 1 for the best-supported face l of each planar segment
+//        x_i in {0, 1}
+//
+// The problem is solver-independent; backends (GLPK, COIN-OR CBC) sit behind solve_selection().
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace city3d {
+
+/// The integer program of one building, built by the hypothesis module.
+struct SelectionProblem {
+  std::size_t face_count = 0;                 ///< |F|, candidate faces 0..face_count-1
+  std::vector<double> support;                ///< per face: support(f_i), points epsilon-close (may be weighted)
+  std::vector<double> centroid_z;             ///< per face: z of the centroid (for E_r)
+  std::vector<bool> is_roof;                  ///< per face: lies on a roof plane
+  std::size_t point_count = 0;                ///< |P|
+  double z_min = 0.0, z_max = 1.0;            ///< lowest / highest building point z
+
+  /// An edge of the candidate faces (a pairwise intersection): the faces that contain it, and the
+  /// pairs of them whose joint selection makes a sharp (non-coplanar) edge.
+  struct Edge {
+    std::vector<std::uint32_t> faces;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> sharp_pairs;
+  };
+  std::vector<Edge> edges;
+
+  /// Pairs of roof faces whose vertical projections overlap (area above a tolerance).
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> vertical_overlaps;
+  /// Faces fixed to 1 by the face prior (best-supported face of each planar segment).
+  std::vector<std::uint32_t> face_prior;
+  /// Faces fixed to 1 for other reasons (e.g. the floor), and faces fixed to 0.
+  std::vector<std::uint32_t> forced_on;
+  std::vector<std::uint32_t> forced_off;
+};
+
+/// Energy weights and solver limits. Defaults are the paper's weights.
+struct SelectionParams {
+  double lambda_data = 0.34;        ///< lambda_d
+  double lambda_complexity = 0.62;  ///< lambda_c
+  double lambda_roof = 0.04;        ///< lambda_r
+  std::string solver = "auto";      ///< "auto", "glpk" or "cbc"
+  double time_limit = 10.0;         ///< wall-clock safety limit per solve, seconds
+  long node_limit = 100000;         ///< deterministic work limit (branch-and-bound nodes)
+  bool use_face_prior = true;
+  bool use_single_layer = true;
+  /// Throws ConfigError listing every invalid field.
+  void validate() const;
+};
+
+enum class SelectionStatus {
+  optimal,           ///< proven optimum
+  feasible,          ///< a limit was hit; the best feasible solution is returned
+  infeasible,        ///< no assignment satisfies the hard constraints
+  no_solution,       ///< a limit was hit before any feasible solution was found
+};
+
+struct SelectionResult {
+  SelectionStatus status = SelectionStatus::no_solution;
+  std::vector<bool> selected;       ///< per face, valid for optimal / feasible
+  double objective = 0.0;
+  std::string solver;               ///< backend that produced the result
+  double seconds = 0.0;
+  std::size_t variables = 0, constraints = 0;
+  std::size_t components = 0;       ///< independent sub-problems solved separately
+  std::string message;              ///< why, when not optimal
+};
+
+/// Evaluates the objective of an assignment (for tests and for checking solver results).
+double selection_energy(const SelectionProblem& problem, const std::vector<bool>& selected,
+                        const SelectionParams& params);
+
+/// True when the assignment satisfies every hard constraint (edges 0 or 2, single layer, priors).
+bool satisfies_constraints(const SelectionProblem& problem, const std::vector<bool>& selected,
+                           const SelectionParams& params);
+
+/// Solves the program. Never hangs: limits are always applied. Thread-safe (CBC calls are
+/// serialised internally because CbcMain1 in Debian's 2.10.8 is not thread-safe).
+SelectionResult solve_selection(const SelectionProblem& problem, const SelectionParams& params);
+
+}  // namespace city3d

@@ -1,0 +1,1048 @@
+// Candidate faces of one building (paper section 3.3) from a 2.5D arrangement; see hypothesis.hpp for
+// the construction. The only CGAL code is the 2D arrangement in build_arrangement(); everything
+// after it works on plain double structures with explicit vertex identities.
+#include "city3d/hypothesis.hpp"
+
+#include <CGAL/Arr_consolidated_curve_data_traits_2.h>
+#include <CGAL/Arr_extended_dcel.h>
+#include <CGAL/Arr_segment_traits_2.h>
+#include <CGAL/Arrangement_2.h>
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "city3d/error.hpp"
+#include "city3d/log.hpp"
+
+namespace city3d {
+
+void HypothesisParams::validate() const {
+  std::vector<std::string> problems;
+  auto need = [&](bool ok, const std::string& what) {
+    if (!ok) problems.push_back(what);
+  };
+  need(support_distance > 0.0, "support_distance must be > 0");
+  need(min_face_area >= 0.0, "min_face_area must be >= 0");
+  need(line_support_margin > 0.0, "line_support_margin must be > 0");
+  need(cell_support_margin >= 0.0, "cell_support_margin must be >= 0");
+  need(min_support_points >= 1, "min_support_points must be >= 1");
+  need(vertex_merge_tolerance > 0.0, "vertex_merge_tolerance must be > 0");
+  need(parallel_tolerance > 0.0, "parallel_tolerance must be > 0");
+  need(min_edge_length >= 0.0, "min_edge_length must be >= 0");
+  if (problems.empty()) return;
+  std::string message = "hypothesis: invalid parameters: ";
+  for (std::size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];
+  throw ConfigError(message);
+}
+
+namespace detail {
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// The 2D arrangement, as plain data.
+
+enum class CurveKind { footprint, inner_wall, roof_line, bridge };
+
+struct InputCurve {
+  Point2 a, b;
+  CurveKind kind;
+  int source;  // inner wall: index into walls; others -1
+};
+
+struct PlainArrangement {
+  std::vector<Point2> vertices;
+  struct Edge {
+    std::uint32_t u = 0, w = 0;  // u < w
+    int left = -1, right = -1;   // inside cell on the left / right of u -> w, or -1 (outside)
+    std::uint32_t line = 0;      // collinearity class of the curves it lies on
+    int wall_source = -1;        // smallest inner-wall index among its curves
+  };
+  std::vector<Edge> edges;
+  struct Cell {
+    std::vector<std::pair<std::uint32_t, bool>> loop;  // (edge, walked u -> w), counter-clockwise
+    std::vector<Point2> polygon;                       // loop vertices, counter-clockwise
+    double area = 0.0;
+  };
+  std::vector<Cell> cells;
+};
+
+using Kernel = CGAL::Exact_predicates_exact_constructions_kernel;
+using SegmentTraits = CGAL::Arr_segment_traits_2<Kernel>;
+using Traits = CGAL::Arr_consolidated_curve_data_traits_2<SegmentTraits, unsigned>;
+using Dcel = CGAL::Arr_extended_dcel<Traits, int, int, int>;
+using Arrangement = CGAL::Arrangement_2<Traits, Dcel>;
+
+// Removes every edge with the same face on both sides (a dangling "antenna" or a bridge without a
+// partner): such a face would not be a simple polygon.
+void remove_antennas(Arrangement& arr) {
+  for (;;) {
+    std::vector<Arrangement::Halfedge_handle> antennas;
+    for (auto e = arr.edges_begin(); e != arr.edges_end(); ++e)
+      if (e->face() == e->twin()->face()) antennas.push_back(e);
+    if (antennas.empty()) return;
+    for (auto e : antennas) arr.remove_edge(e);
+  }
+}
+
+// Marks faces inside (data 1) or outside (0) the footprint: walk from the unbounded face, toggling
+// across edges that lie on an odd number of footprint segments (an edge shared by two footprint
+// polygons of a multipolygon does not toggle).
+void classify_faces(Arrangement& arr, const std::vector<InputCurve>& curves) {
+  for (auto f = arr.faces_begin(); f != arr.faces_end(); ++f) f->set_data(-1);
+  std::vector<Arrangement::Face_handle> queue{arr.unbounded_face()};
+  arr.unbounded_face()->set_data(0);
+  auto visit_ccb = [&](Arrangement::Ccb_halfedge_circulator first, int inside) {
+    auto he = first;
+    do {
+      int footprint_count = 0;
+      for (unsigned id : he->curve().data())
+        if (curves[id].kind == CurveKind::footprint) ++footprint_count;
+      auto other = he->twin()->face();
+      if (other->data() < 0) {
+        other->set_data((footprint_count % 2 == 1) ? 1 - inside : inside);
+        queue.push_back(other);
+      }
+    } while (++he != first);
+  };
+  for (std::size_t q = 0; q < queue.size(); ++q) {
+    auto f = queue[q];
+    if (!f->is_unbounded()) visit_ccb(f->outer_ccb(), f->data());
+    for (auto h = f->inner_ccbs_begin(); h != f->inner_ccbs_end(); ++h) visit_ccb(*h, f->data());
+  }
+}
+
+// Splits every inside face that has a hole with two horizontal segments from the hole's leftmost and
+// rightmost vertices to beyond the footprint. Returns false when no face needed it.
+bool bridge_holes(Arrangement& arr, std::vector<InputCurve>& curves, std::vector<Traits::Curve_2>& bridges,
+                  double x_min, double x_max) {
+  bridges.clear();
+  for (auto f = arr.faces_begin(); f != arr.faces_end(); ++f) {
+    if (f->is_unbounded() || f->data() != 1) continue;
+    for (auto h = f->inner_ccbs_begin(); h != f->inner_ccbs_end(); ++h) {
+      auto he = *h;
+      Kernel::Point_2 lo = he->source()->point(), hi = lo;
+      auto first = he;
+      do {
+        const auto& p = he->source()->point();
+        if (CGAL::compare_xy(p, lo) == CGAL::SMALLER) lo = p;
+        if (CGAL::compare_xy(p, hi) == CGAL::LARGER) hi = p;
+      } while (++he != first);
+      const auto id = static_cast<unsigned>(curves.size());
+      curves.push_back({{}, {}, CurveKind::bridge, -1});
+      bridges.emplace_back(Kernel::Segment_2(lo, Kernel::Point_2(Kernel::FT(x_min), lo.y())), id);
+      curves.push_back({{}, {}, CurveKind::bridge, -1});
+      bridges.emplace_back(Kernel::Segment_2(hi, Kernel::Point_2(Kernel::FT(x_max), hi.y())), id + 1);
+    }
+  }
+  return !bridges.empty();
+}
+
+PlainArrangement build_arrangement(std::vector<InputCurve> curves) {
+  std::vector<Traits::Curve_2> input;
+  double x_min = std::numeric_limits<double>::infinity(), x_max = -x_min;
+  for (unsigned i = 0; i < curves.size(); ++i) {
+    const auto& c = curves[i];
+    Kernel::Point_2 a(c.a.x, c.a.y), b(c.b.x, c.b.y);
+    if (a == b) continue;
+    input.emplace_back(Kernel::Segment_2(a, b), i);
+    x_min = std::min({x_min, c.a.x, c.b.x});
+    x_max = std::max({x_max, c.a.x, c.b.x});
+  }
+  Arrangement arr;
+  CGAL::insert(arr, input.begin(), input.end());
+  remove_antennas(arr);
+  classify_faces(arr, curves);
+  std::vector<Traits::Curve_2> bridges;
+  for (int round = 0; round < 8 && bridge_holes(arr, curves, bridges, x_min - 1.0, x_max + 1.0); ++round) {
+    for (const auto& c : bridges) {
+      CGAL::insert(arr, c);
+      input.push_back(c);
+    }
+    remove_antennas(arr);
+    classify_faces(arr, curves);
+  }
+
+  // Collinearity classes of the curves (exact predicates on the input segments): the vertical plane
+  // over an edge is identified by its class, so walls over collinear pieces are coplanar.
+  std::vector<unsigned> klass(curves.size());
+  std::iota(klass.begin(), klass.end(), 0u);
+  auto find = [&](unsigned i) {
+    while (klass[i] != i) i = klass[i] = klass[klass[i]];
+    return i;
+  };
+  for (std::size_t i = 0; i < input.size(); ++i) {
+    for (std::size_t j = i + 1; j < input.size(); ++j) {
+      const auto& si = input[i];
+      const auto& sj = input[j];
+      if (CGAL::collinear(si.source(), si.target(), sj.source()) &&
+          CGAL::collinear(si.source(), si.target(), sj.target())) {
+        const unsigned a = find(si.data()), b = find(sj.data());
+        if (a != b) klass[std::max(a, b)] = std::min(a, b);
+      }
+    }
+  }
+
+  // Vertices incident to an edge of an inside face, in exact lexicographic order (deterministic).
+  std::vector<Arrangement::Vertex_handle> vertices;
+  for (auto v = arr.vertices_begin(); v != arr.vertices_end(); ++v) {
+    v->set_data(-1);
+    if (v->is_isolated()) continue;
+    bool used = false;
+    auto he = v->incident_halfedges(), first = he;
+    do {
+      if (he->face()->data() == 1 || he->twin()->face()->data() == 1) used = true;
+    } while (++he != first);
+    if (used) vertices.push_back(v);
+  }
+  std::sort(vertices.begin(), vertices.end(), [](auto a, auto b) {
+    return CGAL::compare_xy(a->point(), b->point()) == CGAL::SMALLER;
+  });
+  PlainArrangement out;
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    vertices[i]->set_data(static_cast<int>(i));
+    out.vertices.push_back({CGAL::to_double(vertices[i]->point().x()), CGAL::to_double(vertices[i]->point().y())});
+  }
+
+  // Inside cells, ordered by their first directed edge (smallest vertex, then its successor).
+  struct CellRef {
+    std::pair<int, int> key;
+    Arrangement::Face_handle face;
+  };
+  std::vector<CellRef> cells;
+  for (auto f = arr.faces_begin(); f != arr.faces_end(); ++f) {
+    if (f->is_unbounded() || f->data() != 1) continue;
+    std::pair<int, int> key{std::numeric_limits<int>::max(), 0};
+    auto he = f->outer_ccb(), first = he;
+    do key = std::min(key, std::make_pair(he->source()->data(), he->target()->data()));
+    while (++he != first);
+    cells.push_back({key, f});
+  }
+  std::sort(cells.begin(), cells.end(), [](const CellRef& a, const CellRef& b) { return a.key < b.key; });
+  for (auto f = arr.faces_begin(); f != arr.faces_end(); ++f) f->set_data(-1);
+  for (std::size_t i = 0; i < cells.size(); ++i) cells[i].face->set_data(static_cast<int>(i));
+
+  // Edges bordering an inside cell, ordered by (u, w).
+  std::vector<std::pair<std::pair<int, int>, Arrangement::Halfedge_handle>> edges;
+  for (auto e = arr.edges_begin(); e != arr.edges_end(); ++e) {
+    Arrangement::Halfedge_handle he = e;
+    if (he->face()->data() < 0 && he->twin()->face()->data() < 0) continue;
+    if (he->source()->data() > he->target()->data()) he = he->twin();
+    edges.push_back({{he->source()->data(), he->target()->data()}, he});
+  }
+  std::sort(edges.begin(), edges.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (std::size_t i = 0; i < edges.size(); ++i) {
+    auto he = edges[i].second;
+    he->set_data(static_cast<int>(i));
+    he->twin()->set_data(static_cast<int>(i));
+    PlainArrangement::Edge e;
+    e.u = static_cast<std::uint32_t>(edges[i].first.first);
+    e.w = static_cast<std::uint32_t>(edges[i].first.second);
+    e.left = he->face()->data();
+    e.right = he->twin()->face()->data();
+    unsigned line = std::numeric_limits<unsigned>::max();
+    for (unsigned id : he->curve().data()) {
+      line = std::min(line, find(id));
+      if (curves[id].kind == CurveKind::inner_wall && (e.wall_source < 0 || curves[id].source < e.wall_source))
+        e.wall_source = curves[id].source;
+    }
+    e.line = line;
+    out.edges.push_back(e);
+  }
+  // Renumber the line classes densely in edge order.
+  std::map<std::uint32_t, std::uint32_t> dense;
+  for (auto& e : out.edges) e.line = dense.emplace(e.line, static_cast<std::uint32_t>(dense.size())).first->second;
+
+  for (const auto& ref : cells) {
+    PlainArrangement::Cell cell;
+    auto he = ref.face->outer_ccb();
+    while (he->source()->data() != ref.key.first || he->target()->data() != ref.key.second) ++he;
+    auto first = he;
+    do {
+      const auto& e = out.edges[static_cast<std::size_t>(he->data())];
+      cell.loop.emplace_back(static_cast<std::uint32_t>(he->data()),
+                             static_cast<int>(e.u) == he->source()->data());
+      cell.polygon.push_back(out.vertices[static_cast<std::size_t>(he->source()->data())]);
+    } while (++he != first);
+    double area = 0.0;
+    for (std::size_t i = 0; i < cell.polygon.size(); ++i) {
+      const auto& p = cell.polygon[i];
+      const auto& q = cell.polygon[(i + 1) % cell.polygon.size()];
+      area += p.x * q.y - q.x * p.y;
+    }
+    cell.area = 0.5 * area;
+    out.cells.push_back(std::move(cell));
+  }
+  return out;
+}
+
+// Contracts arrangement edges shorter than `min_length` (nearly concurrent lines make tiny cells whose
+// faces have no area and would leave their neighbours open). The endpoints of a short edge become one
+// vertex (the lower index, keeping its coordinates); cells left with fewer than three edges vanish,
+// and the two edges that bounded such a sliver become one. Throws ReconstructionError when the
+// result is not a valid subdivision (two cells claiming the same side of an edge, or a pinched cell).
+PlainArrangement contract_short_edges(const PlainArrangement& in, double min_length) {
+  const std::size_t nv = in.vertices.size();
+  std::vector<std::uint32_t> root(nv);
+  std::iota(root.begin(), root.end(), 0u);
+  auto find = [&](std::uint32_t i) {
+    while (root[i] != i) i = root[i] = root[root[i]];
+    return i;
+  };
+  bool any = false;
+  for (const auto& e : in.edges) {
+    const Point2 a = in.vertices[e.u], b = in.vertices[e.w];
+    if (std::hypot(b.x - a.x, b.y - a.y) >= min_length) continue;
+    const std::uint32_t ra = find(e.u), rb = find(e.w);
+    if (ra != rb) root[std::max(ra, rb)] = std::min(ra, rb);
+    any = true;
+  }
+  if (!any) return in;
+
+  PlainArrangement out;
+  std::vector<std::uint32_t> new_vertex(nv, std::numeric_limits<std::uint32_t>::max());
+  auto vertex_of = [&](std::uint32_t v) {
+    const std::uint32_t r = find(v);
+    if (new_vertex[r] == std::numeric_limits<std::uint32_t>::max()) {
+      new_vertex[r] = static_cast<std::uint32_t>(out.vertices.size());
+      out.vertices.push_back(in.vertices[r]);
+    }
+    return new_vertex[r];
+  };
+  // Number the surviving vertices in old order (deterministic).
+  for (std::uint32_t v = 0; v < nv; ++v)
+    if (find(v) == v) vertex_of(v);
+
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> edge_index;
+  std::vector<std::vector<std::uint32_t>> loops;  // per surviving cell: directed vertex loop
+  std::vector<std::vector<std::uint32_t>> loop_old_edges;
+  for (const auto& cell : in.cells) {
+    std::vector<std::uint32_t> loop, old_edges;
+    for (const auto& [e, forward] : cell.loop) {
+      const auto& edge = in.edges[e];
+      const std::uint32_t a = vertex_of(forward ? edge.u : edge.w), b = vertex_of(forward ? edge.w : edge.u);
+      if (a == b) continue;
+      loop.push_back(a);
+      old_edges.push_back(e);
+    }
+    if (loop.size() < 3) continue;  // a sliver: gone
+    std::vector<std::uint32_t> sorted(loop);
+    std::sort(sorted.begin(), sorted.end());
+    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
+      throw ReconstructionError("hypothesis: degenerate arrangement (a cell pinches after snapping vertices closer than " +
+                                std::to_string(min_length) + " m)");
+    loops.push_back(std::move(loop));
+    loop_old_edges.push_back(std::move(old_edges));
+  }
+  for (std::size_t c = 0; c < loops.size(); ++c) {
+    PlainArrangement::Cell cell;
+    const auto& loop = loops[c];
+    for (std::size_t i = 0; i < loop.size(); ++i) {
+      const std::uint32_t a = loop[i], b = loop[(i + 1) % loop.size()];
+      const auto key = std::make_pair(std::min(a, b), std::max(a, b));
+      auto it = edge_index.find(key);
+      if (it == edge_index.end()) {
+        it = edge_index.emplace(key, static_cast<std::uint32_t>(out.edges.size())).first;
+        PlainArrangement::Edge edge;
+        edge.u = key.first;
+        edge.w = key.second;
+        edge.line = in.edges[loop_old_edges[c][i]].line;
+        out.edges.push_back(edge);
+      }
+      auto& edge = out.edges[it->second];
+      const auto& old = in.edges[loop_old_edges[c][i]];
+      if (old.wall_source >= 0 && (edge.wall_source < 0 || old.wall_source < edge.wall_source))
+        edge.wall_source = old.wall_source;
+      int& side = (a == edge.u) ? edge.left : edge.right;
+      if (side >= 0)
+        throw ReconstructionError("hypothesis: degenerate arrangement (two cells on one side of an edge after snapping)");
+      side = static_cast<int>(c);
+      cell.loop.emplace_back(it->second, a == edge.u);
+      cell.polygon.push_back(out.vertices[a]);
+    }
+    double area = 0.0;
+    for (std::size_t i = 0; i < cell.polygon.size(); ++i) {
+      const auto& p = cell.polygon[i];
+      const auto& q = cell.polygon[(i + 1) % cell.polygon.size()];
+      area += p.x * q.y - q.x * p.y;
+    }
+    cell.area = 0.5 * area;
+    out.cells.push_back(std::move(cell));
+  }
+  // Edges are numbered in cell order; renumber them by (u, w) as build_arrangement does.
+  std::vector<std::uint32_t> order(out.edges.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), [&](std::uint32_t x, std::uint32_t y) {
+    return std::make_pair(out.edges[x].u, out.edges[x].w) < std::make_pair(out.edges[y].u, out.edges[y].w);
+  });
+  std::vector<std::uint32_t> rank(order.size());
+  std::vector<PlainArrangement::Edge> edges;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    rank[order[i]] = static_cast<std::uint32_t>(i);
+    edges.push_back(out.edges[order[i]]);
+  }
+  out.edges = std::move(edges);
+  for (auto& cell : out.cells)
+    for (auto& entry : cell.loop) entry.first = rank[entry.first];
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Plain geometry helpers.
+
+bool inside_polygon(const std::vector<Point2>& poly, double x, double y) {
+  bool inside = false;
+  for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+    const auto& a = poly[i];
+    const auto& b = poly[j];
+    if ((a.y > y) != (b.y > y) && x < (b.x - a.x) * (y - a.y) / (b.y - a.y) + a.x) inside = !inside;
+  }
+  return inside;
+}
+
+double distance_to_segment(const Point2& a, const Point2& b, double x, double y) {
+  const double dx = b.x - a.x, dy = b.y - a.y;
+  const double len2 = dx * dx + dy * dy;
+  double t = len2 > 0 ? ((x - a.x) * dx + (y - a.y) * dy) / len2 : 0.0;
+  t = std::clamp(t, 0.0, 1.0);
+  return std::hypot(a.x + t * dx - x, a.y + t * dy - y);
+}
+
+double distance_to_polygon(const std::vector<Point2>& poly, double x, double y) {
+  if (inside_polygon(poly, x, y)) return 0.0;
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < poly.size(); ++i)
+    best = std::min(best, distance_to_segment(poly[i], poly[(i + 1) % poly.size()], x, y));
+  return best;
+}
+
+struct Vec3 {
+  double x, y, z;
+};
+Vec3 newell_normal(const std::vector<Point3>& poly) {
+  Vec3 n{0, 0, 0};
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const auto& p = poly[i];
+    const auto& q = poly[(i + 1) % poly.size()];
+    n.x += (p.y - q.y) * (p.z + q.z);
+    n.y += (p.z - q.z) * (p.x + q.x);
+    n.z += (p.x - q.x) * (p.y + q.y);
+  }
+  return {0.5 * n.x, 0.5 * n.y, 0.5 * n.z};
+}
+
+double centroid_z(const std::vector<Point3>& poly) {
+  // Area-weighted centroid of the fan triangles (all coplanar, so the weights have one sign).
+  double total = 0.0, z = 0.0;
+  for (std::size_t i = 1; i + 1 < poly.size(); ++i) {
+    const auto& a = poly[0];
+    const auto& b = poly[i];
+    const auto& c = poly[i + 1];
+    const Vec3 u{b.x - a.x, b.y - a.y, b.z - a.z}, v{c.x - a.x, c.y - a.y, c.z - a.z};
+    const double area = 0.5 * std::sqrt(std::pow(u.y * v.z - u.z * v.y, 2) + std::pow(u.z * v.x - u.x * v.z, 2) +
+                                        std::pow(u.x * v.y - u.y * v.x, 2));
+    total += area;
+    z += area * (a.z + b.z + c.z) / 3.0;
+  }
+  if (total <= 0.0) {
+    double s = 0.0;
+    for (const auto& p : poly) s += p.z;
+    return poly.empty() ? 0.0 : s / static_cast<double>(poly.size());
+  }
+  return z / total;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Levels (roof planes 0..R-1 and the floor R) and the vertices at one xy position.
+
+struct Levels {
+  const std::vector<PlanarSegment>* roofs;
+  double ground_z;
+  int floor() const { return static_cast<int>(roofs->size()); }
+  double height(int level, double x, double y) const {
+    if (level == floor()) return ground_z;
+    const Plane3& p = (*roofs)[static_cast<std::size_t>(level)].plane;
+    return -(p.a * x + p.b * y + p.d) / p.c;
+  }
+};
+
+// The vertices above one xy position (an arrangement vertex or a station inside an edge): the
+// levels through it, clustered by height; column holds the vertex ids from bottom to top.
+struct Column {
+  std::vector<int> levels;             // ascending level id
+  std::vector<std::uint32_t> cluster;  // per entry of levels: index into column
+  std::vector<std::uint32_t> column;   // vertex ids, ascending height
+
+  std::uint32_t cluster_of(int level) const {
+    const auto it = std::lower_bound(levels.begin(), levels.end(), level);
+    return cluster[static_cast<std::size_t>(it - levels.begin())];
+  }
+  std::uint32_t vertex_of(int level) const { return column[cluster_of(level)]; }
+};
+
+Column make_column(const Levels& lv, std::vector<int> levels, double x, double y, double tolerance,
+                   std::vector<Point3>& vertices) {
+  Column col;
+  std::sort(levels.begin(), levels.end());
+  levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+  std::vector<std::pair<double, int>> by_height;
+  for (int l : levels) by_height.emplace_back(lv.height(l, x, y), l);
+  std::sort(by_height.begin(), by_height.end());
+  col.levels = levels;
+  col.cluster.assign(levels.size(), 0);
+  std::size_t i = 0;
+  while (i < by_height.size()) {
+    std::size_t j = i + 1;
+    while (j < by_height.size() && by_height[j].first - by_height[j - 1].first < tolerance) ++j;
+    double z = 0.0;
+    for (std::size_t k = i; k < j; ++k) z += by_height[k].first;
+    z /= static_cast<double>(j - i);
+    const auto cluster = static_cast<std::uint32_t>(col.column.size());
+    col.column.push_back(static_cast<std::uint32_t>(vertices.size()));
+    vertices.push_back({x, y, z});
+    for (std::size_t k = i; k < j; ++k) {
+      const auto pos = std::lower_bound(levels.begin(), levels.end(), by_height[k].second) - levels.begin();
+      col.cluster[static_cast<std::size_t>(pos)] = cluster;
+    }
+    i = j;
+  }
+  return col;
+}
+
+struct EdgeStrip {
+  std::vector<int> levels;       // H(e)
+  std::vector<double> stations;  // metres from u; front 0, back length
+  std::vector<Column> interior;  // columns at stations 1..n-2
+};
+
+bool inside_footprint(const std::vector<Polygon2>& footprint, double x, double y) {
+  bool inside = false;  // even-odd over every ring
+  for (const auto& poly : footprint) {
+    if (inside_polygon(poly.outer, x, y)) inside = !inside;
+    for (const auto& hole : poly.holes)
+      if (inside_polygon(hole, x, y)) inside = !inside;
+  }
+  return inside;
+}
+
+// A roof line or inner wall whose end lies inside the footprint with no other curve crossing it
+// within `reach` of that end would be a dangling edge (removed, leaving the cell unsplit). Such an
+// end is extended to the first curve ahead of it (plus a hair, so the exact arrangement sees a
+// proper crossing; the hair is an antenna and is removed). Curves are processed in order and
+// extended curves count for later ones, so the result is deterministic.
+void extend_dangling_ends(std::vector<InputCurve>& curves, const std::vector<Polygon2>& footprint, double reach) {
+  constexpr double hair = 1e-6;
+  for (std::size_t i = 0; i < curves.size(); ++i) {
+    if (curves[i].kind != CurveKind::roof_line && curves[i].kind != CurveKind::inner_wall) continue;
+    for (int end = 0; end < 2; ++end) {
+      InputCurve& c = curves[i];
+      const Point2 p = end ? c.b : c.a, q = end ? c.a : c.b;
+      const double len = std::hypot(p.x - q.x, p.y - q.y);
+      if (len <= 0.0 || !inside_footprint(footprint, p.x, p.y)) continue;
+      const Point2 d{(p.x - q.x) / len, (p.y - q.y) / len};
+      const double back = -std::min(reach, len);
+      double ahead = std::numeric_limits<double>::infinity();
+      bool connected = false;
+      for (std::size_t j = 0; j < curves.size() && !connected; ++j) {
+        if (j == i) continue;
+        const Point2 a = curves[j].a, b = curves[j].b;
+        const Point2 e{b.x - a.x, b.y - a.y};
+        const double denom = d.x * e.y - d.y * e.x;
+        if (std::abs(denom) < 1e-12) continue;
+        // p + t d == a + s e
+        const double t = ((a.x - p.x) * e.y - (a.y - p.y) * e.x) / denom;
+        const double s = ((a.x - p.x) * d.y - (a.y - p.y) * d.x) / denom;
+        if (s < 0.0 || s > 1.0) continue;
+        if (t >= back && t <= 0.0) connected = true;
+        else if (t > 0.0) ahead = std::min(ahead, t);
+      }
+      if (connected || !std::isfinite(ahead)) continue;
+      const Point2 moved{p.x + (ahead + hair) * d.x, p.y + (ahead + hair) * d.y};
+      (end ? c.b : c.a) = moved;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace detail
+
+// -------------------------------------------------------------------------------------------------
+
+CandidateFaces generate_candidates(const std::vector<Point3>& points,
+                                   const std::vector<PlanarSegment>& roof_planes_in,
+                                   const std::vector<VerticalPlane>& walls,
+                                   const std::vector<Polygon2>& footprint_local, double ground_z,
+                                   const HypothesisParams& params) {
+  using namespace detail;
+  params.validate();
+
+  std::vector<PlanarSegment> roofs;
+  for (const auto& s : roof_planes_in)
+    if (s.kind == PlanarSegment::Kind::roof && std::abs(s.plane.c) > 1e-6) roofs.push_back(s);
+  if (roofs.empty())
+    throw ReconstructionError("hypothesis: " + std::to_string(roof_planes_in.size()) +
+                              " planes, need at least 1 roof plane");
+  for (const auto& s : roofs)
+    for (std::uint32_t i : s.points)
+      if (i >= points.size())
+        throw ReconstructionError("hypothesis: roof segment refers to point " + std::to_string(i) + " of " +
+                                  std::to_string(points.size()));
+  const std::size_t R = roofs.size();
+  const Levels lv{&roofs, ground_z};
+  const int F = lv.floor();
+
+  // 1. Curves of the arrangement.
+  std::vector<InputCurve> curves;
+  for (const auto& poly : footprint_local) {
+    std::vector<const Ring2*> rings{&poly.outer};
+    for (const auto& h : poly.holes) rings.push_back(&h);
+    for (const Ring2* ring : rings)
+      for (std::size_t i = 0; i < ring->size(); ++i)
+        curves.push_back({(*ring)[i], (*ring)[(i + 1) % ring->size()], CurveKind::footprint, -1});
+  }
+  if (curves.size() < 3) throw ReconstructionError("hypothesis: empty footprint");
+  const double margin = params.line_support_margin;
+  for (std::size_t i = 0; i < walls.size(); ++i) {
+    const auto& w = walls[i];
+    if (w.outer) continue;
+    const double len = std::hypot(w.b.x - w.a.x, w.b.y - w.a.y);
+    if (len <= 0.0) continue;
+    const double dx = (w.b.x - w.a.x) / len, dy = (w.b.y - w.a.y) / len;
+    curves.push_back({{w.a.x - margin * dx, w.a.y - margin * dy},
+                      {w.b.x + margin * dx, w.b.y + margin * dy},
+                      CurveKind::inner_wall,
+                      static_cast<int>(i)});
+  }
+  std::size_t line_count = 0;
+  for (std::size_t i = 0; i < R; ++i) {
+    for (std::size_t j = i + 1; j < R; ++j) {
+      // z_i(x, y) == z_j(x, y)  <=>  A x + B y + C == 0.
+      const Plane3& p = roofs[i].plane;
+      const Plane3& q = roofs[j].plane;
+      const double A = p.a / p.c - q.a / q.c, B = p.b / p.c - q.b / q.c, C = p.d / p.c - q.d / q.c;
+      const double norm = std::hypot(A, B);
+      const double cross = std::sqrt(std::pow(p.b * q.c - p.c * q.b, 2) + std::pow(p.c * q.a - p.a * q.c, 2) +
+                                     std::pow(p.a * q.b - p.b * q.a, 2));
+      if (cross < params.parallel_tolerance || norm < 1e-12) continue;
+      const Point2 origin{-A * C / (norm * norm), -B * C / (norm * norm)};
+      const Point2 dir{-B / norm, A / norm};
+      auto interval = [&](const PlanarSegment& s) {
+        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+        for (std::uint32_t k : s.points) {
+          const Point3& pt = points[k];
+          if (std::abs(A * pt.x + B * pt.y + C) / norm > margin) continue;
+          const double t = (pt.x - origin.x) * dir.x + (pt.y - origin.y) * dir.y;
+          lo = std::min(lo, t);
+          hi = std::max(hi, t);
+        }
+        return std::make_pair(lo, hi);
+      };
+      const auto a = interval(roofs[i]);
+      const auto b = interval(roofs[j]);
+      const double lo = std::max(a.first, b.first), hi = std::min(a.second, b.second);
+      if (!(lo <= hi)) continue;
+      curves.push_back({{origin.x + (lo - margin) * dir.x, origin.y + (lo - margin) * dir.y},
+                        {origin.x + (hi + margin) * dir.x, origin.y + (hi + margin) * dir.y},
+                        CurveKind::roof_line,
+                        -1});
+      ++line_count;
+    }
+  }
+
+  extend_dangling_ends(curves, footprint_local, 2.0 * margin);
+  const PlainArrangement arr = contract_short_edges(build_arrangement(curves), params.min_edge_length);
+  if (arr.cells.empty()) throw ReconstructionError("hypothesis: the footprint has no inside cell");
+  const std::size_t cell_count = arr.cells.size();
+
+  // 2. Candidate roof planes per cell.
+  std::vector<std::vector<int>> cell_planes(cell_count);
+  for (std::size_t c = 0; c < cell_count; ++c) {
+    const auto& poly = arr.cells[c].polygon;
+    Box2 box;
+    for (const auto& p : poly) box.add(p);
+    const double cm = params.cell_support_margin;
+    for (std::size_t r = 0; r < R; ++r) {
+      const std::size_t need = std::min<std::size_t>(static_cast<std::size_t>(params.min_support_points),
+                                                     roofs[r].points.size());
+      std::size_t count = 0;
+      for (std::uint32_t k : roofs[r].points) {
+        const Point3& pt = points[k];
+        if (pt.x < box.min.x - cm || pt.x > box.max.x + cm || pt.y < box.min.y - cm || pt.y > box.max.y + cm) continue;
+        if (distance_to_polygon(poly, pt.x, pt.y) <= cm && ++count >= need) break;
+      }
+      if (need > 0 && count >= need) cell_planes[c].push_back(static_cast<int>(r));
+    }
+    if (cell_planes[c].empty()) {
+      // No plane has points near this cell: take the plane(s) whose points come nearest.
+      std::vector<double> nearest(R, std::numeric_limits<double>::infinity());
+      for (std::size_t r = 0; r < R; ++r)
+        for (std::uint32_t k : roofs[r].points)
+          nearest[r] = std::min(nearest[r], distance_to_polygon(poly, points[k].x, points[k].y));
+      const double best = *std::min_element(nearest.begin(), nearest.end());
+      for (std::size_t r = 0; r < R; ++r)
+        if (nearest[r] <= best + cm) cell_planes[c].push_back(static_cast<int>(r));
+    }
+  }
+
+  // 3. Levels per edge and per vertex; stations where levels cross inside an edge.
+  const double tol = params.vertex_merge_tolerance;
+  std::vector<Point3> vertices;
+  std::vector<EdgeStrip> strips(arr.edges.size());
+  std::vector<std::vector<int>> vertex_levels(arr.vertices.size(), std::vector<int>{F});
+  for (std::size_t e = 0; e < arr.edges.size(); ++e) {
+    const auto& edge = arr.edges[e];
+    auto& levels = strips[e].levels;
+    if (edge.left >= 0) levels = cell_planes[static_cast<std::size_t>(edge.left)];
+    if (edge.right >= 0)
+      levels.insert(levels.end(), cell_planes[static_cast<std::size_t>(edge.right)].begin(),
+                    cell_planes[static_cast<std::size_t>(edge.right)].end());
+    if (edge.left < 0 || edge.right < 0) levels.push_back(F);
+    std::sort(levels.begin(), levels.end());
+    levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+    for (std::uint32_t v : {edge.u, edge.w})
+      vertex_levels[v].insert(vertex_levels[v].end(), levels.begin(), levels.end());
+  }
+  std::vector<Column> vertex_columns;
+  for (std::size_t v = 0; v < arr.vertices.size(); ++v)
+    vertex_columns.push_back(
+        make_column(lv, vertex_levels[v], arr.vertices[v].x, arr.vertices[v].y, tol, vertices));
+
+  for (std::size_t e = 0; e < arr.edges.size(); ++e) {
+    const auto& edge = arr.edges[e];
+    auto& strip = strips[e];
+    const Point2 a = arr.vertices[edge.u], b = arr.vertices[edge.w];
+    const double len = std::hypot(b.x - a.x, b.y - a.y);
+    std::vector<double> crossings;
+    for (std::size_t i = 0; i < strip.levels.size(); ++i) {
+      for (std::size_t j = i + 1; j < strip.levels.size(); ++j) {
+        const double d0 = lv.height(strip.levels[i], a.x, a.y) - lv.height(strip.levels[j], a.x, a.y);
+        const double d1 = lv.height(strip.levels[i], b.x, b.y) - lv.height(strip.levels[j], b.x, b.y);
+        if (std::abs(d0) < tol || std::abs(d1) < tol || (d0 > 0) == (d1 > 0)) continue;
+        const double t = len * d0 / (d0 - d1);
+        if (t > 1e-6 && t < len - 1e-6) crossings.push_back(t);
+      }
+    }
+    std::sort(crossings.begin(), crossings.end());
+    strip.stations.push_back(0.0);
+    for (std::size_t i = 0; i < crossings.size();) {
+      std::size_t j = i + 1;
+      while (j < crossings.size() && crossings[j] - crossings[j - 1] < 1e-6) ++j;
+      strip.stations.push_back(std::accumulate(crossings.begin() + static_cast<std::ptrdiff_t>(i),
+                                               crossings.begin() + static_cast<std::ptrdiff_t>(j), 0.0) /
+                               static_cast<double>(j - i));
+      i = j;
+    }
+    strip.stations.push_back(len);
+    for (std::size_t k = 1; k + 1 < strip.stations.size(); ++k) {
+      const double t = strip.stations[k] / len;
+      strip.interior.push_back(
+          make_column(lv, strip.levels, a.x + t * (b.x - a.x), a.y + t * (b.y - a.y), tol, vertices));
+    }
+  }
+  auto column_at = [&](std::size_t e, std::size_t k) -> const Column& {
+    const auto& strip = strips[e];
+    if (k == 0) return vertex_columns[arr.edges[e].u];
+    if (k + 1 == strip.stations.size()) return vertex_columns[arr.edges[e].w];
+    return strip.interior[k - 1];
+  };
+
+  // 4. Faces.
+  std::vector<CandidateFace> faces;
+  // A face that walks along the level of `level` over edge e (in direction `forward`), from the
+  // start vertex up to (not including) the end vertex, visiting the stations of e.
+  auto walk_edge = [&](std::size_t e, bool forward, int level, std::vector<std::uint32_t>& loop) {
+    const auto& strip = strips[e];
+    const std::size_t n = strip.stations.size();
+    const bool on_strip = std::binary_search(strip.levels.begin(), strip.levels.end(), level);
+    loop.push_back(column_at(e, forward ? 0 : n - 1).vertex_of(level));
+    if (!on_strip) return;
+    for (std::size_t i = 1; i + 1 < n; ++i) loop.push_back(column_at(e, forward ? i : n - 1 - i).vertex_of(level));
+  };
+  for (std::size_t c = 0; c < cell_count; ++c) {
+    const auto& cell = arr.cells[c];
+    for (int r : cell_planes[c]) {
+      CandidateFace f;
+      f.kind = FaceKind::roof;
+      f.source = r;
+      f.plane_id = static_cast<std::uint32_t>(r);
+      f.cell_or_edge = static_cast<std::uint32_t>(c);
+      for (const auto& [e, forward] : cell.loop) walk_edge(e, forward, r, f.vertices);
+      faces.push_back(std::move(f));
+    }
+    CandidateFace floor;
+    floor.kind = FaceKind::floor;
+    floor.plane_id = static_cast<std::uint32_t>(R);
+    floor.cell_or_edge = static_cast<std::uint32_t>(c);
+    for (const auto& [e, forward] : cell.loop) walk_edge(e, forward, F, floor.vertices);
+    std::reverse(floor.vertices.begin(), floor.vertices.end());  // faces down
+    faces.push_back(std::move(floor));
+  }
+
+  for (std::size_t e = 0; e < arr.edges.size(); ++e) {
+    const auto& strip = strips[e];
+    const auto& edge = arr.edges[e];
+    const std::size_t n = strip.stations.size();
+    // Pieces: between consecutive tracks over each interval between stations.
+    struct Piece {
+      std::size_t k;                      // interval k .. k+1
+      std::uint32_t lo0, lo1, hi0, hi1;   // cluster indices at stations k and k+1
+    };
+    std::vector<Piece> pieces;
+    for (std::size_t k = 0; k + 1 < n; ++k) {
+      const Column& c0 = column_at(e, k);
+      const Column& c1 = column_at(e, k + 1);
+      std::vector<std::pair<double, std::pair<std::uint32_t, std::uint32_t>>> tracks;
+      for (int l : strip.levels) {
+        const std::uint32_t a = c0.cluster_of(l), b = c1.cluster_of(l);
+        tracks.push_back({vertices[c0.column[a]].z + vertices[c1.column[b]].z, {a, b}});
+      }
+      std::sort(tracks.begin(), tracks.end());
+      tracks.erase(std::unique(tracks.begin(), tracks.end(),
+                               [](const auto& x, const auto& y) { return x.second == y.second; }),
+                   tracks.end());
+      for (std::size_t i = 0; i + 1 < tracks.size(); ++i)
+        pieces.push_back({k, tracks[i].second.first, tracks[i].second.second, tracks[i + 1].second.first,
+                          tracks[i + 1].second.second});
+    }
+    // Join pieces across interior stations where the vertical side between them has length.
+    std::vector<std::size_t> next(pieces.size(), pieces.size());
+    std::vector<bool> has_prev(pieces.size(), false);
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+      if (pieces[i].k + 2 >= n || pieces[i].lo1 == pieces[i].hi1) continue;
+      for (std::size_t j = i + 1; j < pieces.size(); ++j) {
+        if (pieces[j].k == pieces[i].k + 1 && pieces[j].lo0 == pieces[i].lo1 && pieces[j].hi0 == pieces[i].hi1) {
+          next[i] = j;
+          has_prev[j] = true;
+          break;
+        }
+      }
+    }
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+      if (has_prev[i]) continue;
+      std::vector<std::size_t> chain{i};
+      while (next[chain.back()] < pieces.size()) chain.push_back(next[chain.back()]);
+      const std::size_t k0 = pieces[chain.front()].k, k1 = pieces[chain.back()].k + 1;
+      std::vector<std::uint32_t> loop;
+      // Bottom, left to right.
+      for (std::size_t q = 0; q < chain.size(); ++q) loop.push_back(column_at(e, k0 + q).column[pieces[chain[q]].lo0]);
+      // Right side, bottom to top (every vertex of the column on the way).
+      const Column& right = column_at(e, k1);
+      for (std::uint32_t c = pieces[chain.back()].lo1; c <= pieces[chain.back()].hi1; ++c) loop.push_back(right.column[c]);
+      // Top, right to left.
+      for (std::size_t q = chain.size(); q-- > 0;) loop.push_back(column_at(e, k0 + q).column[pieces[chain[q]].hi0]);
+      // Left side, top to bottom, without the end points.
+      const Column& left = column_at(e, k0);
+      for (std::uint32_t c = pieces[chain.front()].hi0; c-- > pieces[chain.front()].lo0 + 1;) loop.push_back(left.column[c]);
+      std::vector<std::uint32_t> clean;
+      for (std::uint32_t v : loop)
+        if (clean.empty() || clean.back() != v) clean.push_back(v);
+      while (clean.size() > 1 && clean.front() == clean.back()) clean.pop_back();
+      if (clean.size() < 3) continue;
+      // As built the face is counter-clockwise seen from the right of u -> w; face the outside.
+      if (edge.left < 0) std::reverse(clean.begin(), clean.end());
+      CandidateFace f;
+      f.kind = FaceKind::wall;
+      f.source = edge.wall_source;
+      f.plane_id = static_cast<std::uint32_t>(R + 1 + edge.line);
+      f.cell_or_edge = static_cast<std::uint32_t>(e);
+      f.vertices = std::move(clean);
+      faces.push_back(std::move(f));
+    }
+  }
+
+  // 5. Areas; drop degenerate faces; prune faces with an edge no other face has (they could never
+  // be part of a closed surface).
+  for (auto& f : faces) {
+    std::vector<Point3> poly;
+    for (auto v : f.vertices) poly.push_back(vertices[v]);
+    const Vec3 n = newell_normal(poly);
+    f.area = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+  }
+  std::vector<bool> alive(faces.size());
+  for (std::size_t i = 0; i < faces.size(); ++i) alive[i] = faces[i].vertices.size() >= 3 && faces[i].area > 1e-9;
+  using EdgeKey = std::pair<std::uint32_t, std::uint32_t>;
+  auto edge_key = [](std::uint32_t a, std::uint32_t b) { return a < b ? EdgeKey{a, b} : EdgeKey{b, a}; };
+  std::map<EdgeKey, std::vector<std::uint32_t>> edge_faces;
+  for (;;) {
+    edge_faces.clear();
+    for (std::uint32_t i = 0; i < faces.size(); ++i) {
+      if (!alive[i]) continue;
+      const auto& vs = faces[i].vertices;
+      for (std::size_t k = 0; k < vs.size(); ++k) edge_faces[edge_key(vs[k], vs[(k + 1) % vs.size()])].push_back(i);
+    }
+    bool changed = false;
+    for (const auto& [key, list] : edge_faces) {
+      if (list.size() == 1 && alive[list[0]]) {
+        if (std::getenv("CITY3D_HYP_DEBUG")) {
+          const auto& A = vertices[key.first]; const auto& B = vertices[key.second];
+          std::fprintf(stderr, "prune face %u kind %d edge %u(%.3f %.3f %.3f)-%u(%.3f %.3f %.3f)\n", list[0], (int)faces[list[0]].kind, key.first, A.x, A.y, A.z, key.second, B.x, B.y, B.z);
+        }
+        alive[list[0]] = false;
+        changed = true;
+      }
+    }
+    if (!changed) break;
+  }
+  for (std::size_t i = 0; i < faces.size(); ++i)
+    if (!alive[i] && faces[i].kind == FaceKind::floor && !std::getenv("CITY3D_HYP_DEBUG"))
+      throw ReconstructionError("hypothesis: floor face over cell " + std::to_string(faces[i].cell_or_edge) +
+                                " cannot be closed (internal error)");
+
+  CandidateFaces out;
+  std::vector<std::uint32_t> new_index(faces.size(), 0);
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    if (!alive[i]) continue;
+    new_index[i] = static_cast<std::uint32_t>(out.faces.size());
+    out.faces.push_back(std::move(faces[i]));
+  }
+  // Compact the vertices to those in use, keeping their order.
+  std::vector<std::uint32_t> vertex_index(vertices.size(), std::numeric_limits<std::uint32_t>::max());
+  for (const auto& f : out.faces)
+    for (auto v : f.vertices) vertex_index[v] = 0;
+  for (std::size_t v = 0; v < vertices.size(); ++v) {
+    if (vertex_index[v] == 0) {
+      vertex_index[v] = static_cast<std::uint32_t>(out.vertices.size());
+      out.vertices.push_back(vertices[v]);
+    }
+  }
+  for (auto& f : out.faces)
+    for (auto& v : f.vertices) v = vertex_index[v];
+  for (const auto& f : out.faces) {
+    std::vector<Point3> poly;
+    for (auto v : f.vertices) poly.push_back(out.vertices[v]);
+    out.polygons.push_back(std::move(poly));
+  }
+
+  // 6. The selection problem.
+  SelectionProblem& prob = out.problem;
+  const std::size_t nf = out.faces.size();
+  prob.face_count = nf;
+  prob.point_count = points.size();
+  prob.support.assign(nf, 0.0);
+  prob.centroid_z.resize(nf);
+  prob.is_roof.resize(nf);
+  if (!points.empty()) {
+    prob.z_min = std::numeric_limits<double>::infinity();
+    prob.z_max = -prob.z_min;
+    for (const auto& p : points) {
+      prob.z_min = std::min(prob.z_min, p.z);
+      prob.z_max = std::max(prob.z_max, p.z);
+    }
+    if (!(prob.z_max > prob.z_min)) prob.z_max = prob.z_min + 1.0;
+  }
+  std::vector<int> segment_of(points.size(), -1);
+  for (std::size_t r = 0; r < R; ++r)
+    for (auto k : roofs[r].points) segment_of[k] = static_cast<int>(r);
+  const double eps = params.support_distance;
+  // Roof and floor faces: the points over their cell.
+  std::vector<std::vector<std::uint32_t>> cell_points(cell_count);
+  for (std::size_t c = 0; c < cell_count; ++c) {
+    Box2 box;
+    for (const auto& p : arr.cells[c].polygon) box.add(p);
+    for (std::uint32_t k = 0; k < points.size(); ++k) {
+      const auto& p = points[k];
+      if (p.x < box.min.x || p.x > box.max.x || p.y < box.min.y || p.y > box.max.y) continue;
+      if (inside_polygon(arr.cells[c].polygon, p.x, p.y)) cell_points[c].push_back(k);
+    }
+  }
+  for (std::size_t i = 0; i < nf; ++i) {
+    const auto& f = out.faces[i];
+    const auto& poly = out.polygons[i];
+    prob.centroid_z[i] = centroid_z(poly);
+    prob.is_roof[i] = f.kind == FaceKind::roof;
+    double support = 0.0;
+    if (f.kind == FaceKind::roof) {
+      const Plane3& pl = roofs[static_cast<std::size_t>(f.source)].plane;
+      for (auto k : cell_points[f.cell_or_edge])
+        if (segment_of[k] == f.source && std::abs(pl.signed_distance(points[k])) <= eps) support += 1.0;
+    } else if (f.kind == FaceKind::floor) {
+      for (auto k : cell_points[f.cell_or_edge])
+        if (std::abs(points[k].z - ground_z) <= eps) support += 1.0;
+    } else {
+      const auto& edge = arr.edges[f.cell_or_edge];
+      const Point2 a = arr.vertices[edge.u], b = arr.vertices[edge.w];
+      const double len = std::hypot(b.x - a.x, b.y - a.y);
+      const double dx = (b.x - a.x) / len, dy = (b.y - a.y) / len;
+      std::vector<Point2> tz;  // the face in (along the edge, z)
+      double zlo = std::numeric_limits<double>::infinity(), zhi = -zlo;
+      for (const auto& p : poly) {
+        tz.push_back({(p.x - a.x) * dx + (p.y - a.y) * dy, p.z});
+        zlo = std::min(zlo, p.z);
+        zhi = std::max(zhi, p.z);
+      }
+      for (const auto& p : points) {
+        if (p.z < zlo || p.z > zhi) continue;
+        const double across = -(p.x - a.x) * dy + (p.y - a.y) * dx;
+        if (std::abs(across) > eps) continue;
+        const double along = (p.x - a.x) * dx + (p.y - a.y) * dy;
+        if (along < 0.0 || along > len) continue;
+        if (inside_polygon(tz, along, p.z)) support += 1.0;
+      }
+    }
+    prob.support[i] = support;
+  }
+
+  for (const auto& [key, list] : edge_faces) {
+    SelectionProblem::Edge edge;
+    for (auto f : list) edge.faces.push_back(new_index[f]);
+    std::sort(edge.faces.begin(), edge.faces.end());
+    for (std::size_t i = 0; i < edge.faces.size(); ++i)
+      for (std::size_t j = i + 1; j < edge.faces.size(); ++j)
+        if (out.faces[edge.faces[i]].plane_id != out.faces[edge.faces[j]].plane_id)
+          edge.sharp_pairs.emplace_back(edge.faces[i], edge.faces[j]);
+    prob.edges.push_back(std::move(edge));
+  }
+
+  std::vector<std::vector<std::uint32_t>> roofs_over_cell(cell_count);
+  std::vector<long> prior(R, -1);
+  for (std::uint32_t i = 0; i < nf; ++i) {
+    const auto& f = out.faces[i];
+    if (f.kind == FaceKind::floor) prob.forced_on.push_back(i);
+    if (f.kind != FaceKind::roof) continue;
+    roofs_over_cell[f.cell_or_edge].push_back(i);
+    auto& best = prior[static_cast<std::size_t>(f.source)];
+    if (prob.support[i] > 0.0 && f.area >= params.min_face_area &&
+        (best < 0 || prob.support[i] > prob.support[static_cast<std::size_t>(best)]))
+      best = i;
+  }
+  for (const auto& list : roofs_over_cell)
+    for (std::size_t i = 0; i < list.size(); ++i)
+      for (std::size_t j = i + 1; j < list.size(); ++j) prob.vertical_overlaps.emplace_back(list[i], list[j]);
+  for (long p : prior)
+    if (p >= 0) prob.face_prior.push_back(static_cast<std::uint32_t>(p));
+  std::sort(prob.face_prior.begin(), prob.face_prior.end());
+
+  out.cell_count = cell_count;
+  out.edge_count = arr.edges.size();
+  out.line_count = line_count;
+  log_debug("hypothesis: " + std::to_string(R) + " roof planes, " + std::to_string(line_count) +
+            " intersection lines, " + std::to_string(cell_count) + " cells, " + std::to_string(nf) +
+            " candidate faces, " + std::to_string(prob.edges.size()) + " edges");
+  return out;
+}
+
+void write_candidates_obj(const std::string& path, const CandidateFaces& candidates) {
+  std::FILE* file = std::fopen(path.c_str(), "w");
+  if (!file) throw IoError("hypothesis: cannot write " + path);
+  std::fprintf(file, "# city3d candidate faces\n");
+  for (const auto& v : candidates.vertices) std::fprintf(file, "v %.6f %.6f %.6f\n", v.x, v.y, v.z);
+  static const char* kind_names[] = {"roof", "wall", "floor"};
+  for (std::size_t i = 0; i < candidates.faces.size(); ++i) {
+    const auto& f = candidates.faces[i];
+    std::fprintf(file, "o %s_%zu\nf", kind_names[static_cast<int>(f.kind)], i);
+    for (auto v : f.vertices) std::fprintf(file, " %u", v + 1);
+    std::fprintf(file, "\n");
+  }
+  if (std::fclose(file) != 0) throw IoError("hypothesis: cannot write " + path);
+}
+
+}  // namespace city3d

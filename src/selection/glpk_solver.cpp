@@ -1,0 +1,168 @@
+// GLPK backend of face selection: MipModel -> glp_prob -> glp_intopt, with a node-count limit.
+#include <glpk.h>
+
+#include <algorithm>
+#include <climits>
+#include <cstdlib>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "city3d/error.hpp"
+#include "selection/solver.hpp"
+
+namespace city3d::detail {
+namespace {
+
+struct ProblemDeleter {
+  void operator()(glp_prob* p) const { glp_delete_prob(p); }
+};
+
+struct NodeBudget {
+  long limit = 0;
+  bool hit = false;
+};
+
+// GLPK has no node limit. t_cnt from glp_ios_tree_size counts every subproblem created so far
+// (active and already fathomed), which is the same node count CBC's -maxNodes bounds up to a
+// constant; it depends only on the search, so the limit is deterministic unlike tm_lim.
+void count_nodes(glp_tree* tree, void* info) {
+  auto* budget = static_cast<NodeBudget*>(info);
+  if (glp_ios_reason(tree) != GLP_ISELECT) return;
+  int active = 0, alive = 0, total = 0;
+  glp_ios_tree_size(tree, &active, &alive, &total);
+  if (total > budget->limit) {
+    budget->hit = true;
+    glp_ios_terminate(tree);
+  }
+}
+
+int row_type(const MipModel::Row& row) {
+  const bool has_lower = std::isfinite(row.lower), has_upper = std::isfinite(row.upper);
+  if (has_lower && has_upper) return row.lower == row.upper ? GLP_FX : GLP_DB;
+  if (has_lower) return GLP_LO;
+  if (has_upper) return GLP_UP;
+  return GLP_FR;
+}
+
+}  // namespace
+
+MipSolution solve_with_glpk(const MipModel& model, const MipLimits& limits) {
+  MipSolution solution;
+  const int n = static_cast<int>(model.columns.size());
+  if (n == 0) {
+    solution.status = MipStatus::optimal;
+    return solution;
+  }
+  std::unique_ptr<glp_prob, ProblemDeleter> lp(glp_create_prob());
+  glp_prob* p = lp.get();
+  glp_set_obj_dir(p, GLP_MIN);
+
+  glp_add_cols(p, n);
+  for (int j = 0; j < n; ++j) {
+    const auto& c = model.columns[j];
+    glp_set_col_kind(p, j + 1, c.integer ? GLP_IV : GLP_CV);
+    glp_set_col_bnds(p, j + 1, c.lower == c.upper ? GLP_FX : GLP_DB, c.lower, c.upper);
+    glp_set_obj_coef(p, j + 1, c.cost);
+  }
+
+  // glp_load_matrix takes 1-based triplets; index 0 is unused by GLPK's convention.
+  std::vector<int> ia{0}, ja{0};
+  std::vector<double> ar{0.0};
+  if (!model.rows.empty()) glp_add_rows(p, static_cast<int>(model.rows.size()));
+  for (std::size_t i = 0; i < model.rows.size(); ++i) {
+    const auto& r = model.rows[i];
+    const int type = row_type(r);
+    glp_set_row_bnds(p, static_cast<int>(i) + 1, type, std::isfinite(r.lower) ? r.lower : 0.0,
+                     std::isfinite(r.upper) ? r.upper : 0.0);
+    for (std::size_t k = 0; k < r.columns.size(); ++k) {
+      ia.push_back(static_cast<int>(i) + 1);
+      ja.push_back(r.columns[k] + 1);
+      ar.push_back(r.values[k]);
+    }
+  }
+  glp_load_matrix(p, static_cast<int>(ia.size()) - 1, ia.data(), ja.data(), ar.data());
+
+  NodeBudget budget{limits.node_limit, false};
+  glp_iocp parm;
+  glp_init_iocp(&parm);
+  parm.msg_lev = GLP_MSG_OFF;
+  parm.presolve = GLP_ON;  // glp_intopt then solves the LP relaxation itself
+  // Cuts help on these set-partitioning-like rows (measured with bench_selection).
+  parm.gmi_cuts = GLP_ON;
+  parm.mir_cuts = GLP_ON;
+  parm.cov_cuts = GLP_ON;
+  parm.clq_cuts = GLP_ON;
+  if (const char* cuts = std::getenv("CITY3D_GLPK_CUTS")) {  // EXPERIMENT, remove
+    const std::string c = cuts;
+    parm.gmi_cuts = c.find('g') != std::string::npos ? GLP_ON : GLP_OFF;
+    parm.mir_cuts = c.find('m') != std::string::npos ? GLP_ON : GLP_OFF;
+    parm.cov_cuts = c.find('v') != std::string::npos ? GLP_ON : GLP_OFF;
+    parm.clq_cuts = c.find('q') != std::string::npos ? GLP_ON : GLP_OFF;
+    parm.fp_heur = c.find('f') != std::string::npos ? GLP_ON : GLP_OFF;
+  }
+  const double ms = std::ceil(limits.time_limit * 1000.0);
+  parm.tm_lim = ms >= static_cast<double>(INT_MAX) ? INT_MAX : static_cast<int>(std::max(1.0, ms));
+  parm.cb_func = count_nodes;
+  parm.cb_info = &budget;
+
+  // msg_lev does not silence everything: the clique-cut code prints "Constructing conflict graph..."
+  // through GLPK's terminal hook. glp_term_out acts on this thread's GLPK environment only.
+  const int previous_term_out = glp_term_out(GLP_OFF);
+  const int ret = glp_intopt(p, &parm);
+  glp_term_out(previous_term_out);
+  const int mip_status = glp_mip_status(p);
+  const auto take_values = [&] {
+    solution.values.resize(n);
+    for (int j = 0; j < n; ++j) solution.values[j] = glp_mip_col_val(p, j + 1);
+    solution.objective = glp_mip_obj_val(p);
+  };
+
+  switch (ret) {
+    case 0:
+      if (mip_status == GLP_OPT) {
+        solution.status = MipStatus::optimal;
+        take_values();
+      } else if (mip_status == GLP_NOFEAS) {
+        solution.status = MipStatus::infeasible;
+        solution.message = "glpk: no integer solution exists";
+      } else if (mip_status == GLP_FEAS) {
+        solution.status = MipStatus::feasible;
+        solution.message = "glpk: stopped at a feasible solution";
+        take_values();
+      } else {
+        solution.status = MipStatus::no_solution;
+        solution.message = "glpk: solution undefined";
+      }
+      return solution;
+    case GLP_ENOPFS:  // the presolver proved the LP relaxation (hence the program) infeasible
+    case GLP_ENOFEAS:
+      solution.status = MipStatus::infeasible;
+      solution.message = "glpk: no feasible solution (LP relaxation infeasible)";
+      return solution;
+    case GLP_ETMLIM:
+    case GLP_ESTOP:
+    case GLP_EMIPGAP: {
+      const std::string why =
+          ret == GLP_ETMLIM ? "time limit " + std::to_string(limits.time_limit) + " s reached"
+          : budget.hit      ? "node limit " + std::to_string(limits.node_limit) + " reached"
+                            : "stopped";
+      if (mip_status == GLP_FEAS || mip_status == GLP_OPT) {
+        solution.status = MipStatus::feasible;
+        take_values();
+        solution.message = "glpk: " + why + "; best feasible solution returned";
+      } else {
+        solution.status = MipStatus::no_solution;
+        solution.message = "glpk: " + why + " before any feasible solution";
+      }
+      return solution;
+    }
+    default:
+      throw ReconstructionError("selection: glpk glp_intopt failed with code " + std::to_string(ret) +
+                                " on " + std::to_string(n) + " columns, " +
+                                std::to_string(model.rows.size()) + " rows");
+  }
+}
+
+}  // namespace city3d::detail

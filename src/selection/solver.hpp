@@ -1,0 +1,58 @@
+// The small interface between face selection and its mixed-integer backends (GLPK, COIN-OR CBC):
+// a plain row-wise model in, a status and a value per column out. No solver header leaks from here.
+#pragma once
+
+#include <cstddef>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace city3d::detail {
+
+/// A mixed-integer linear program: minimise cost . v subject to row_lower <= A v <= row_upper and
+/// column bounds. Infinite bounds are +/- std::numeric_limits<double>::infinity().
+struct MipModel {
+  struct Column {
+    double cost = 0.0;
+    double lower = 0.0;
+    double upper = 1.0;
+    bool integer = true;
+  };
+  struct Row {
+    std::vector<int> columns;    ///< column indices, each at most once
+    std::vector<double> values;  ///< same length as columns
+    double lower = -std::numeric_limits<double>::infinity();
+    double upper = std::numeric_limits<double>::infinity();
+  };
+  std::vector<Column> columns;
+  std::vector<Row> rows;
+};
+
+/// Limits of one solve. Both are always applied.
+struct MipLimits {
+  double time_limit = 10.0;  ///< wall clock, seconds (> 0)
+  long node_limit = 100000;  ///< branch-and-bound nodes (>= 1); deterministic
+};
+
+enum class MipStatus { optimal, feasible, infeasible, no_solution };
+
+struct MipSolution {
+  MipStatus status = MipStatus::no_solution;
+  std::vector<double> values;  ///< per column, when optimal or feasible
+  double objective = 0.0;      ///< cost . values as the backend reports it
+  std::string message;         ///< which limit was hit, or the backend's status code
+};
+
+/// A backend: solves `model` within `limits`. Throws ReconstructionError when the backend fails in a
+/// way that is not a status (e.g. an internal error code).
+using MipBackend = MipSolution (*)(const MipModel& model, const MipLimits& limits);
+
+/// GLPK 5.0 branch-and-cut (glp_intopt with its presolver). Thread-safe (GLPK keeps its environment
+/// per thread). The node limit is emulated with a callback (GLPK has none).
+MipSolution solve_with_glpk(const MipModel& model, const MipLimits& limits);
+
+/// COIN-OR CBC 2.10 through CbcMain1 (preprocessing, cuts, heuristics). Calls are serialised with a
+/// process-wide mutex because CbcMain1 in 2.10.8 is not thread-safe.
+MipSolution solve_with_cbc(const MipModel& model, const MipLimits& limits);
+
+}  // namespace city3d::detail

@@ -1,0 +1,499 @@
+// Tests of the face hypothesis (candidate faces, SelectionProblem) and the model assembly, on
+// synthetic buildings built in code (fixed seed, 0.03 m noise). Selection uses a small exact
+// reference selector written here, so these tests do not depend on the solver backends.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <map>
+#include <random>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "city3d/error.hpp"
+#include "city3d/hypothesis.hpp"
+#include "city3d/mesh_check.hpp"
+#include "city3d/model.hpp"
+#include "city3d/selection.hpp"
+
+namespace city3d {
+namespace {
+
+// ------------------------------------------------------------------------------------------------
+// Synthetic buildings.
+
+struct RoofPart {
+  Ring2 region;   // xy region of the roof plane, counter-clockwise
+  double sx, sy, z0;  // z = sx x + sy y + z0
+};
+
+struct Synthetic {
+  std::vector<Point3> points;
+  std::vector<PlanarSegment> roofs;
+  std::vector<VerticalPlane> walls;
+  std::vector<Polygon2> footprint;
+  double ground_z = 0.0;
+  double volume = 0.0;  // exact volume of the intended model
+};
+
+bool inside(const Ring2& ring, double x, double y) {
+  bool in = false;
+  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+    const auto& a = ring[i];
+    const auto& b = ring[j];
+    if ((a.y > y) != (b.y > y) && x < (b.x - a.x) * (y - a.y) / (b.y - a.y) + a.x) in = !in;
+  }
+  return in;
+}
+
+Plane3 plane_of(const RoofPart& part) {
+  const double n = std::sqrt(part.sx * part.sx + part.sy * part.sy + 1.0);
+  return {-part.sx / n, -part.sy / n, 1.0 / n, -part.z0 / n};
+}
+
+Synthetic make_building(const std::vector<Polygon2>& footprint, const std::vector<RoofPart>& parts,
+                        double volume, std::uint32_t seed = 7) {
+  Synthetic b;
+  b.footprint = footprint;
+  b.volume = volume;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> jitter(-0.1, 0.1);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  const double spacing = 0.35;  // about 8 points per m2, as AHN3
+  for (const auto& part : parts) {
+    PlanarSegment seg;
+    seg.plane = plane_of(part);
+    seg.kind = PlanarSegment::Kind::roof;
+    Box2 box;
+    for (const auto& p : part.region) box.add(p);
+    for (double y = box.min.y + spacing / 2; y < box.max.y; y += spacing) {
+      for (double x = box.min.x + spacing / 2; x < box.max.x; x += spacing) {
+        const double px = x + jitter(rng), py = y + jitter(rng);
+        if (!inside(part.region, px, py)) continue;
+        seg.points.push_back(static_cast<std::uint32_t>(b.points.size()));
+        b.points.push_back({px, py, part.sx * px + part.sy * py + part.z0 + noise(rng)});
+      }
+    }
+    b.roofs.push_back(seg);
+  }
+  // Outer walls from the footprint (the hypothesis uses the footprint itself; these are passed for
+  // realism and must be ignored).
+  for (const auto& poly : footprint) {
+    for (std::size_t i = 0; i < poly.outer.size(); ++i) {
+      VerticalPlane w;
+      w.a = poly.outer[i];
+      w.b = poly.outer[(i + 1) % poly.outer.size()];
+      const double len = std::hypot(w.b.x - w.a.x, w.b.y - w.a.y);
+      w.normal = {(w.b.y - w.a.y) / len, -(w.b.x - w.a.x) / len};
+      w.offset = w.normal.x * w.a.x + w.normal.y * w.a.y;
+      w.outer = true;
+      w.source = VerticalPlane::Source::footprint;
+      b.walls.push_back(w);
+    }
+  }
+  return b;
+}
+
+Polygon2 rectangle(double x0, double y0, double x1, double y1) {
+  return Polygon2{{{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}}, {}};
+}
+
+Synthetic box_building() {  // 10 x 6, flat roof at 5 m
+  return make_building({rectangle(0, 0, 10, 6)}, {{{{0, 0}, {10, 0}, {10, 6}, {0, 6}}, 0.0, 0.0, 5.0}}, 300.0);
+}
+
+Synthetic gable_building() {  // 10 x 8, ridge along x at y = 4: eaves 4 m, ridge 6 m
+  return make_building({rectangle(0, 0, 10, 8)},
+                       {{{{0, 0}, {10, 0}, {10, 4}, {0, 4}}, 0.0, 0.5, 4.0},
+                        {{{0, 4}, {10, 4}, {10, 8}, {0, 8}}, 0.0, -0.5, 8.0}},
+                       10.0 * (8.0 * 4.0 + 0.5 * 8.0 * 2.0));
+}
+
+Synthetic l_building() {  // L-shape, flat at 3 m, area 64 m2
+  const Ring2 ring{{0, 0}, {10, 0}, {10, 4}, {4, 4}, {4, 10}, {0, 10}};
+  return make_building({Polygon2{ring, {}}}, {{ring, 0.0, 0.0, 3.0}}, 64.0 * 3.0);
+}
+
+Synthetic step_building() {  // 12 x 6: x < 6 at 7 m, x > 6 at 4 m, an inner wall at x = 6
+  Synthetic b = make_building({rectangle(0, 0, 12, 6)},
+                              {{{{0, 0}, {6, 0}, {6, 6}, {0, 6}}, 0.0, 0.0, 7.0},
+                               {{{6, 0}, {12, 0}, {12, 6}, {6, 6}}, 0.0, 0.0, 4.0}},
+                              36.0 * 7.0 + 36.0 * 4.0);
+  VerticalPlane inner;
+  inner.a = {6, 0};
+  inner.b = {6, 6};
+  inner.normal = {-1, 0};
+  inner.offset = -6;
+  inner.outer = false;
+  b.walls.push_back(inner);
+  return b;
+}
+
+Synthetic courtyard_building() {  // 12 x 12 with a 4 x 4 courtyard in the middle, flat at 5 m
+  Polygon2 poly = rectangle(0, 0, 12, 12);
+  poly.holes.push_back({{4, 4}, {4, 8}, {8, 8}, {8, 4}});  // clockwise
+  Synthetic b = make_building({rectangle(0, 0, 12, 12)}, {{{{0, 0}, {12, 0}, {12, 12}, {0, 12}}, 0.0, 0.0, 5.0}},
+                              (144.0 - 16.0) * 5.0);
+  // No roof points over the courtyard.
+  std::vector<Point3> kept;
+  PlanarSegment seg = b.roofs[0];
+  seg.points.clear();
+  for (const auto& p : b.points) {
+    if (p.x > 4 && p.x < 8 && p.y > 4 && p.y < 8) continue;
+    seg.points.push_back(static_cast<std::uint32_t>(kept.size()));
+    kept.push_back(p);
+  }
+  b.points = kept;
+  b.roofs = {seg};
+  b.footprint = {poly};
+  return b;
+}
+
+CandidateFaces candidates_of(const Synthetic& b, const HypothesisParams& params = {}) {
+  return generate_candidates(b.points, b.roofs, b.walls, b.footprint, b.ground_z, params);
+}
+
+std::size_t count_kind(const CandidateFaces& c, FaceKind kind) {
+  return static_cast<std::size_t>(
+      std::count_if(c.faces.begin(), c.faces.end(), [&](const CandidateFace& f) { return f.kind == kind; }));
+}
+
+// ------------------------------------------------------------------------------------------------
+// Reference selector: exact minimum of the contract's energy by depth-first search with constraint
+// pruning (edges 0 or 2, single layer, face prior, forced faces). Only for small problems.
+
+double reference_energy(const SelectionProblem& p, const std::vector<bool>& x, const SelectionParams& w) {
+  double support = 0.0, roof = 0.0, corners = 0.0;
+  for (std::size_t i = 0; i < p.face_count; ++i) {
+    if (!x[i]) continue;
+    support += p.support[i];
+    roof += (p.z_max - p.centroid_z[i]) / (p.z_max - p.z_min);
+  }
+  for (const auto& e : p.edges)
+    for (const auto& [a, b] : e.sharp_pairs)
+      if (x[a] && x[b]) {
+        corners += 1.0;
+        break;
+      }
+  const double ed = 1.0 - support / static_cast<double>(std::max<std::size_t>(p.point_count, 1));
+  const double ec = corners / static_cast<double>(std::max<std::size_t>(p.edges.size(), 1));
+  const double er = roof / static_cast<double>(std::max<std::size_t>(p.face_count, 1));
+  return w.lambda_data * ed + w.lambda_complexity * ec + w.lambda_roof * er;
+}
+
+std::vector<bool> reference_select(const SelectionProblem& p, const SelectionParams& w = {}) {
+  const std::size_t n = p.face_count;
+  std::vector<int> fixed(n, -1);
+  for (auto f : p.forced_on) fixed[f] = 1;
+  for (auto f : p.face_prior) fixed[f] = 1;
+  for (auto f : p.forced_off) fixed[f] = 0;
+  std::vector<std::vector<std::size_t>> edges_by_last(n);
+  for (std::size_t e = 0; e < p.edges.size(); ++e)
+    edges_by_last[*std::max_element(p.edges[e].faces.begin(), p.edges[e].faces.end())].push_back(e);
+  std::vector<std::vector<std::uint32_t>> overlaps_by_last(n);
+  for (const auto& [a, b] : p.vertical_overlaps) overlaps_by_last[std::max(a, b)].push_back(std::min(a, b));
+  std::vector<bool> x(n, false), best;
+  double best_energy = std::numeric_limits<double>::infinity();
+  std::function<void(std::size_t)> search = [&](std::size_t i) {
+    if (i == n) {
+      const double energy = reference_energy(p, x, w);
+      if (energy < best_energy) {
+        best_energy = energy;
+        best = x;
+      }
+      return;
+    }
+    for (int value : {0, 1}) {
+      if (fixed[i] >= 0 && fixed[i] != value) continue;
+      x[i] = value == 1;
+      bool ok = true;
+      for (std::size_t e : edges_by_last[i]) {
+        int count = 0;
+        for (auto f : p.edges[e].faces) count += x[f] ? 1 : 0;
+        if (count != 0 && count != 2) ok = false;
+      }
+      for (auto other : overlaps_by_last[i])
+        if (x[i] && x[other]) ok = false;
+      if (ok) search(i + 1);
+    }
+    x[i] = false;
+  };
+  search(0);
+  return best;
+}
+
+struct Reconstruction {
+  CandidateFaces candidates;
+  std::vector<bool> selected;
+  PolygonMesh mesh;
+  std::vector<SurfaceType> surfaces;
+  MeshCheck check;
+};
+
+Reconstruction reconstruct(const Synthetic& b) {
+  Reconstruction r;
+  r.candidates = candidates_of(b);
+  r.selected = reference_select(r.candidates.problem);
+  EXPECT_EQ(r.selected.size(), r.candidates.faces.size()) << "the reference selector found no feasible selection";
+  r.mesh = assemble_model(r.candidates, r.selected, AssembleParams{}, &r.surfaces);
+  r.check = check_mesh(r.mesh);
+  return r;
+}
+
+std::size_t count_surface(const std::vector<SurfaceType>& s, SurfaceType t) {
+  return static_cast<std::size_t>(std::count(s.begin(), s.end(), t));
+}
+
+void expect_valid_solid(const Reconstruction& r, double volume) {
+  EXPECT_TRUE(r.check.closed) << r.check.boundary_edges << " boundary edges";
+  EXPECT_TRUE(r.check.manifold);
+  EXPECT_TRUE(r.check.outward) << "volume " << r.check.signed_volume;
+  EXPECT_EQ(r.check.degenerate_faces, 0u);
+  EXPECT_EQ(r.check.shell_count, 1u);
+  EXPECT_NEAR(r.check.signed_volume, volume, 0.03 * volume);
+  EXPECT_EQ(r.surfaces.size(), r.mesh.faces.size());
+}
+
+// ------------------------------------------------------------------------------------------------
+// Candidate generation.
+
+void expect_well_formed(const CandidateFaces& c) {
+  const auto& p = c.problem;
+  ASSERT_EQ(p.face_count, c.faces.size());
+  ASSERT_EQ(p.support.size(), c.faces.size());
+  ASSERT_EQ(p.centroid_z.size(), c.faces.size());
+  ASSERT_EQ(p.is_roof.size(), c.faces.size());
+  ASSERT_EQ(c.polygons.size(), c.faces.size());
+  for (const auto& e : p.edges) {
+    EXPECT_GE(e.faces.size(), 2u);
+    for (auto f : e.faces) EXPECT_LT(f, p.face_count);
+  }
+  for (std::size_t i = 0; i < c.faces.size(); ++i) {
+    EXPECT_GE(c.faces[i].vertices.size(), 3u);
+    EXPECT_GT(c.faces[i].area, 0.0);
+    EXPECT_EQ(p.is_roof[i], c.faces[i].kind == FaceKind::roof);
+    // Every vertex lies on the face's plane: roofs on their plane, floors at the ground, walls vertical.
+    std::set<std::uint32_t> distinct(c.faces[i].vertices.begin(), c.faces[i].vertices.end());
+    EXPECT_EQ(distinct.size(), c.faces[i].vertices.size()) << "face " << i << " repeats a vertex";
+  }
+}
+
+TEST(Hypothesis, box_gives_one_roof_four_walls_and_a_floor) {
+  const auto c = candidates_of(box_building());
+  expect_well_formed(c);
+  EXPECT_EQ(c.cell_count, 1u);
+  EXPECT_EQ(c.faces.size(), 6u);
+  EXPECT_EQ(count_kind(c, FaceKind::roof), 1u);
+  EXPECT_EQ(count_kind(c, FaceKind::wall), 4u);
+  EXPECT_EQ(count_kind(c, FaceKind::floor), 1u);
+  EXPECT_EQ(c.problem.edges.size(), 12u);
+  for (const auto& e : c.problem.edges) EXPECT_EQ(e.faces.size(), 2u);
+}
+
+TEST(Hypothesis, gable_roof_planes_meet_in_one_ridge) {
+  const auto c = candidates_of(gable_building());
+  expect_well_formed(c);
+  EXPECT_EQ(c.line_count, 1u);
+  EXPECT_EQ(c.cell_count, 2u);
+  // Both planes over both cells; 2 floors; every boundary edge carries floor-to-lower-roof and
+  // lower-to-upper-roof walls: 2 long eaves (2 each) and 4 gable halves (2 each).
+  EXPECT_EQ(count_kind(c, FaceKind::roof), 4u);
+  EXPECT_EQ(count_kind(c, FaceKind::floor), 2u);
+  EXPECT_EQ(count_kind(c, FaceKind::wall), 12u);
+  EXPECT_EQ(c.faces.size(), 18u);
+  EXPECT_EQ(c.problem.vertical_overlaps.size(), 2u);
+}
+
+TEST(Hypothesis, ridge_edge_is_welded_by_identity_across_four_roof_faces) {
+  const auto c = candidates_of(gable_building());
+  // The ridge runs along y = 4 at z = 6 from x = 0 to x = 10; all four roof faces contain it.
+  std::size_t ridge_edges = 0;
+  for (const auto& e : c.problem.edges) {
+    bool all_roof = true;
+    for (auto f : e.faces) all_roof = all_roof && c.faces[f].kind == FaceKind::roof;
+    if (!all_roof || e.faces.size() != 4) continue;
+    ++ridge_edges;
+    EXPECT_EQ(e.sharp_pairs.size(), 4u);  // A-B pairs are sharp, A-A and B-B are not
+  }
+  EXPECT_EQ(ridge_edges, 1u);
+  // The ridge end vertices: both planes give the same height there, within noise of the fit.
+  std::size_t ridge_vertices = 0;
+  for (const auto& v : c.vertices)
+    if (std::abs(v.y - 4.0) < 0.05 && std::abs(v.z - 6.0) < 0.1) ++ridge_vertices;
+  EXPECT_EQ(ridge_vertices, 2u);
+}
+
+TEST(Hypothesis, floor_faces_are_forced_on) {
+  for (const auto& b : {box_building(), gable_building(), step_building()}) {
+    const auto c = candidates_of(b);
+    std::vector<std::uint32_t> floors;
+    for (std::uint32_t i = 0; i < c.faces.size(); ++i)
+      if (c.faces[i].kind == FaceKind::floor) floors.push_back(i);
+    EXPECT_EQ(c.problem.forced_on, floors);
+    EXPECT_EQ(floors.size(), c.cell_count);
+    for (auto f : floors)
+      for (const auto& v : c.faces[f].vertices) EXPECT_DOUBLE_EQ(c.vertices[v].z, 0.0);
+  }
+}
+
+TEST(Hypothesis, face_prior_is_the_best_supported_face_of_each_roof_segment) {
+  const auto c = candidates_of(gable_building());
+  const auto& p = c.problem;
+  ASSERT_EQ(p.face_prior.size(), 2u);
+  for (auto prior : p.face_prior) {
+    const int seg = c.faces[prior].source;
+    for (std::size_t i = 0; i < c.faces.size(); ++i)
+      if (c.faces[i].kind == FaceKind::roof && c.faces[i].source == seg) EXPECT_LE(p.support[i], p.support[prior]);
+  }
+  // Plane 0 (y < 4) is best supported over the cell at y < 4, and it holds most of its points.
+  const auto& a = c.faces[p.face_prior[0]];
+  double cy = 0.0;
+  for (auto v : a.vertices) cy += c.vertices[v].y;
+  cy /= static_cast<double>(a.vertices.size());
+  EXPECT_LT(cy, 4.0);
+  EXPECT_EQ(a.source, 0);
+  const double points_a = static_cast<double>(gable_building().roofs[0].points.size());
+  EXPECT_GT(p.support[p.face_prior[0]], 0.9 * points_a);
+}
+
+TEST(Hypothesis, roof_faces_face_up_and_floors_face_down) {
+  const auto c = candidates_of(step_building());
+  for (std::size_t i = 0; i < c.faces.size(); ++i) {
+    const auto& poly = c.polygons[i];
+    double nz = 0.0;
+    for (std::size_t k = 0; k < poly.size(); ++k) {
+      const auto& p = poly[k];
+      const auto& q = poly[(k + 1) % poly.size()];
+      nz += (p.x - q.x) * (p.y + q.y);
+    }
+    if (c.faces[i].kind == FaceKind::roof) EXPECT_GT(nz, 0.0);
+    if (c.faces[i].kind == FaceKind::floor) EXPECT_LT(nz, 0.0);
+    if (c.faces[i].kind == FaceKind::wall) EXPECT_NEAR(nz, 0.0, 1e-9);
+  }
+}
+
+TEST(Hypothesis, inner_wall_splits_the_footprint_and_is_the_source_of_its_faces) {
+  const auto b = step_building();
+  const auto c = candidates_of(b);
+  expect_well_formed(c);
+  EXPECT_EQ(c.cell_count, 2u);
+  std::size_t on_inner = 0;
+  for (const auto& f : c.faces)
+    if (f.kind == FaceKind::wall && f.source == static_cast<int>(b.walls.size() - 1)) ++on_inner;
+  EXPECT_EQ(on_inner, 1u);  // one face between the two flat roofs over x = 6
+}
+
+TEST(Hypothesis, generation_is_deterministic) {
+  const auto a = candidates_of(gable_building());
+  const auto b = candidates_of(gable_building());
+  ASSERT_EQ(a.faces.size(), b.faces.size());
+  for (std::size_t i = 0; i < a.faces.size(); ++i) {
+    EXPECT_EQ(a.faces[i].vertices, b.faces[i].vertices);
+    EXPECT_EQ(a.problem.support[i], b.problem.support[i]);
+  }
+}
+
+TEST(Hypothesis, rejects_input_without_roof_planes) {
+  const auto b = box_building();
+  try {
+    generate_candidates(b.points, {}, b.walls, b.footprint, 0.0, HypothesisParams{});
+    FAIL() << "no exception";
+  } catch (const ReconstructionError& e) {
+    EXPECT_NE(std::string(e.what()).find("need at least 1 roof plane"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Hypothesis, rejects_invalid_parameters_listing_each) {
+  HypothesisParams params;
+  params.support_distance = 0.0;
+  params.min_support_points = 0;
+  try {
+    params.validate();
+    FAIL() << "no exception";
+  } catch (const ConfigError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("support_distance"), std::string::npos);
+    EXPECT_NE(m.find("min_support_points"), std::string::npos);
+  }
+}
+
+// ------------------------------------------------------------------------------------------------
+// End to end: candidates -> reference selection -> assembled model.
+
+TEST(Model, box_is_a_closed_six_faced_solid) {
+  const auto r = reconstruct(box_building());
+  expect_valid_solid(r, 300.0);
+  EXPECT_EQ(r.mesh.faces.size(), 6u);
+  EXPECT_EQ(r.mesh.vertices.size(), 8u);
+  EXPECT_EQ(count_surface(r.surfaces, SurfaceType::roof), 1u);
+  EXPECT_EQ(count_surface(r.surfaces, SurfaceType::wall), 4u);
+  EXPECT_EQ(count_surface(r.surfaces, SurfaceType::ground), 1u);
+}
+
+TEST(Model, gable_has_two_roofs_two_long_walls_two_pentagons_and_a_floor) {
+  const auto r = reconstruct(gable_building());
+  expect_valid_solid(r, 400.0);
+  EXPECT_EQ(r.mesh.faces.size(), 7u);
+  EXPECT_EQ(r.mesh.vertices.size(), 10u);
+  std::size_t pentagons = 0;
+  for (const auto& f : r.mesh.faces) pentagons += f.size() == 5 ? 1 : 0;
+  EXPECT_EQ(pentagons, 2u);
+  EXPECT_EQ(count_surface(r.surfaces, SurfaceType::roof), 2u);
+}
+
+TEST(Model, l_shaped_flat_roof_has_eight_faces) {
+  const auto r = reconstruct(l_building());
+  expect_valid_solid(r, 192.0);
+  EXPECT_EQ(r.mesh.faces.size(), 8u);
+  EXPECT_EQ(count_surface(r.surfaces, SurfaceType::wall), 6u);
+}
+
+TEST(Model, step_building_has_one_step_wall_and_merged_side_walls) {
+  const auto r = reconstruct(step_building());
+  expect_valid_solid(r, 396.0);
+  // floor + 2 roofs + west + east + south + north (each one polygon over both heights) + step wall.
+  EXPECT_EQ(r.mesh.faces.size(), 8u);
+  EXPECT_EQ(count_surface(r.surfaces, SurfaceType::roof), 2u);
+  EXPECT_EQ(count_surface(r.surfaces, SurfaceType::wall), 5u);
+  EXPECT_EQ(count_surface(r.surfaces, SurfaceType::ground), 1u);
+  std::size_t hexagons = 0;
+  for (const auto& f : r.mesh.faces) hexagons += f.size() == 6 ? 1 : 0;
+  EXPECT_EQ(hexagons, 2u);  // south and north walls; the floor is one rectangle again
+}
+
+TEST(Model, courtyard_building_keeps_faces_with_holes_as_simple_pieces) {
+  const auto r = reconstruct(courtyard_building());
+  expect_valid_solid(r, 640.0);
+  EXPECT_EQ(count_surface(r.surfaces, SurfaceType::wall), 8u);
+  EXPECT_EQ(count_surface(r.surfaces, SurfaceType::roof), 2u);
+  EXPECT_EQ(count_surface(r.surfaces, SurfaceType::ground), 2u);
+}
+
+TEST(Model, rejects_an_open_selection_naming_the_edge) {
+  const auto c = candidates_of(box_building());
+  std::vector<bool> selected(c.faces.size(), true);
+  for (std::size_t i = 0; i < c.faces.size(); ++i)
+    if (c.faces[i].kind == FaceKind::roof) selected[i] = false;
+  try {
+    assemble_model(c, selected, AssembleParams{});
+    FAIL() << "no exception";
+  } catch (const ReconstructionError& e) {
+    EXPECT_NE(std::string(e.what()).find("is used by 1 selected faces"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Model, orients_faces_outward_whatever_their_input_orientation) {
+  auto c = candidates_of(box_building());
+  for (auto& f : c.faces) std::reverse(f.vertices.begin(), f.vertices.end());
+  const auto mesh = assemble_model(c, std::vector<bool>(c.faces.size(), true), AssembleParams{});
+  const auto check = check_mesh(mesh);
+  EXPECT_TRUE(check.valid());
+  EXPECT_NEAR(check.signed_volume, 300.0, 9.0);
+}
+
+}  // namespace
+}  // namespace city3d

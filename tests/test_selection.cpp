@@ -1,0 +1,442 @@
+// Tests of face selection: hand-built programs with known optima, brute force over all assignments
+// as the oracle, both backends, limits, components, determinism under threads.
+#include "city3d/selection.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <random>
+#include <thread>
+#include <vector>
+
+#include "../bench/building_problems.hpp"
+#include "city3d/error.hpp"
+
+namespace city3d {
+namespace {
+
+using Edge = SelectionProblem::Edge;
+
+/// Exhaustive search: the minimum energy over every assignment that satisfies the constraints.
+struct BruteForce {
+  bool feasible = false;
+  double objective = 0.0;
+  std::vector<bool> selected;
+  int optima = 0;  // how many assignments reach the minimum (within 1e-12)
+};
+
+BruteForce brute_force(const SelectionProblem& p, const SelectionParams& params) {
+  EXPECT_LE(p.face_count, 22u);
+  BruteForce best;
+  std::vector<bool> x(p.face_count);
+  for (std::uint64_t mask = 0; mask < (std::uint64_t{1} << p.face_count); ++mask) {
+    for (std::size_t i = 0; i < p.face_count; ++i) x[i] = (mask >> i) & 1u;
+    if (!satisfies_constraints(p, x, params)) continue;
+    const double e = selection_energy(p, x, params);
+    if (!best.feasible || e < best.objective - 1e-12) {
+      best = {true, e, x, 1};
+    } else if (e <= best.objective + 1e-12) {
+      ++best.optima;
+    }
+  }
+  return best;
+}
+
+SelectionParams with_solver(const std::string& solver) {
+  SelectionParams params;
+  params.solver = solver;
+  return params;
+}
+
+/// Weights for the 11-face box below. With the paper's weights a toy program with 20 edges makes
+/// every corner cost 0.62 / 20, more than any face's data gain, so the empty set would always win;
+/// real hypotheses have far more edges than the model's sharp corners.
+SelectionParams box_params(const std::string& solver = "auto") {
+  SelectionParams params = with_solver(solver);
+  params.lambda_data = 0.6;
+  params.lambda_complexity = 0.3;
+  params.lambda_roof = 0.1;
+  return params;
+}
+
+/// A unit box cut by the plane z = 0.5: bottom B, top T, middle M, lower sides L0..L3, upper sides
+/// U0..U3 (11 faces, 20 edges). Valid closed surfaces: nothing, the whole box, the lower half, the
+/// upper half. Supports make the lower half (B, M, L*) the clear optimum.
+enum BoxFace : std::uint32_t { B = 0, T = 1, M = 2, L0 = 3, U0 = 7 };
+SelectionProblem cut_box() {
+  SelectionProblem p;
+  p.face_count = 11;
+  p.support = {100, 10, 80, 50, 50, 50, 50, 5, 5, 5, 5};
+  p.centroid_z = {0.0, 1.0, 0.5, 0.25, 0.25, 0.25, 0.25, 0.75, 0.75, 0.75, 0.75};
+  p.is_roof = {false, true, true, false, false, false, false, false, false, false, false};
+  p.point_count = 400;
+  p.z_min = 0.0;
+  p.z_max = 1.0;
+  for (std::uint32_t k = 0; k < 4; ++k) {
+    const std::uint32_t l = L0 + k, u = U0 + k, l_next = L0 + (k + 1) % 4, u_next = U0 + (k + 1) % 4;
+    p.edges.push_back(Edge{{B, l}, {{B, l}}});
+    p.edges.push_back(Edge{{T, u}, {{T, u}}});
+    p.edges.push_back(Edge{{M, l, u}, {{M, l}, {M, u}}});  // l and u are coplanar: not sharp
+    p.edges.push_back(Edge{{l, l_next}, {{l, l_next}}});
+    p.edges.push_back(Edge{{u, u_next}, {{u, u_next}}});
+  }
+  return p;
+}
+
+std::vector<bool> faces(std::size_t n, std::initializer_list<std::uint32_t> on) {
+  std::vector<bool> x(n, false);
+  for (auto f : on) x[f] = true;
+  return x;
+}
+
+TEST(Selection, cut_box_energy_matches_a_hand_computation) {
+  const auto p = cut_box();
+  const SelectionParams params;
+  const auto lower = faces(11, {B, M, L0, L0 + 1, L0 + 2, L0 + 3});
+  ASSERT_TRUE(satisfies_constraints(p, lower, params));
+  // E_d = 1 - 380/400; E_c = 12 sharp edges of 20; E_r = (1 + 0.5 + 4 * 0.75) / 11.
+  const double expected = 0.34 * (1.0 - 380.0 / 400.0) + 0.62 * 12.0 / 20.0 + 0.04 * 4.5 / 11.0;
+  EXPECT_NEAR(selection_energy(p, lower, params), expected, 1e-12);
+  EXPECT_FALSE(satisfies_constraints(p, faces(11, {B, M}), params));
+}
+
+TEST(Selection, cut_box_optimum_is_the_lower_half_with_both_backends) {
+  const auto p = cut_box();
+  const auto oracle = brute_force(p, box_params());
+  ASSERT_TRUE(oracle.feasible);
+  ASSERT_EQ(oracle.optima, 1);
+  ASSERT_EQ(oracle.selected, faces(11, {B, M, L0, L0 + 1, L0 + 2, L0 + 3}));
+  for (const std::string solver : {"glpk", "cbc", "auto"}) {
+    SCOPED_TRACE(solver);
+    const auto r = solve_selection(p, box_params(solver));
+    ASSERT_EQ(r.status, SelectionStatus::optimal) << r.message;
+    EXPECT_EQ(r.selected, oracle.selected);
+    EXPECT_NEAR(r.objective, oracle.objective, 1e-12);
+    EXPECT_EQ(r.components, 1u);
+    EXPECT_EQ(r.solver, solver == "auto" ? "glpk" : solver);
+  }
+}
+
+TEST(Selection, face_prior_forces_the_top_and_changes_the_optimum) {
+  auto p = cut_box();
+  p.face_prior = {T};
+  SelectionParams params = box_params();
+  const auto oracle = brute_force(p, params);
+  ASSERT_TRUE(oracle.feasible);
+  ASSERT_TRUE(oracle.selected[T]);
+  for (const std::string solver : {"glpk", "cbc"}) {
+    SCOPED_TRACE(solver);
+    const auto r = solve_selection(p, box_params(solver));
+    ASSERT_EQ(r.status, SelectionStatus::optimal) << r.message;
+    EXPECT_TRUE(r.selected[T]);
+    EXPECT_EQ(r.selected, oracle.selected);
+    EXPECT_NEAR(r.objective, oracle.objective, 1e-12);
+  }
+  params.use_face_prior = false;
+  const auto without = solve_selection(p, params);
+  EXPECT_FALSE(without.selected[T]);
+}
+
+TEST(Selection, forced_off_face_is_never_selected) {
+  auto p = cut_box();
+  p.forced_off = {M};
+  const auto oracle = brute_force(p, box_params());
+  ASSERT_EQ(oracle.selected, faces(11, {B, T, L0, L0 + 1, L0 + 2, L0 + 3, U0, U0 + 1, U0 + 2, U0 + 3}));
+  const auto r = solve_selection(p, box_params());
+  ASSERT_EQ(r.status, SelectionStatus::optimal) << r.message;
+  EXPECT_EQ(r.selected, oracle.selected);
+}
+
+TEST(Selection, contradictory_fixings_are_infeasible_without_a_solver) {
+  auto p = cut_box();
+  p.forced_on = {M};
+  p.forced_off = {B, T};  // M alone on the middle edges
+  const auto r = solve_selection(p, box_params());
+  EXPECT_EQ(r.status, SelectionStatus::infeasible);
+  EXPECT_EQ(r.solver, "presolve");
+  EXPECT_TRUE(r.selected.empty());
+  EXPECT_FALSE(brute_force(p, box_params()).feasible);
+}
+
+/// Parity infeasibility that fixing propagation cannot see but the LP relaxation survives:
+/// a is on, so b + c = 1 on edge {a, b, c}; d is the only candidate of edge {d}, so d = 0 and edge
+/// {b, c, d} makes b = c; then 2 b = 1 has no integer solution.
+SelectionProblem parity_trap() {
+  SelectionProblem p;
+  p.face_count = 4;
+  p.support = {10, 10, 10, 10};
+  p.centroid_z = {1, 1, 1, 1};
+  p.point_count = 40;
+  p.z_min = 0;
+  p.z_max = 2;
+  p.edges = {Edge{{0, 1, 2}, {}}, Edge{{1, 2, 3}, {}}, Edge{{3}, {}}};
+  p.forced_on = {0};
+  return p;
+}
+
+TEST(Selection, parity_infeasible_program_is_reported_infeasible_by_both_backends) {
+  const auto p = parity_trap();
+  ASSERT_FALSE(brute_force(p, SelectionParams{}).feasible);
+  for (const std::string solver : {"glpk", "cbc"}) {
+    SCOPED_TRACE(solver);
+    const auto r = solve_selection(p, with_solver(solver));
+    EXPECT_EQ(r.status, SelectionStatus::infeasible) << r.message;
+    EXPECT_EQ(r.solver, solver);
+    EXPECT_TRUE(r.selected.empty());
+  }
+}
+
+TEST(Selection, infeasibility_caused_by_the_face_prior_is_reported_and_lifted_without_it) {
+  auto p = parity_trap();
+  p.face_prior = p.forced_on;
+  p.forced_on.clear();
+  SelectionParams params;
+  const auto r = solve_selection(p, params);
+  EXPECT_EQ(r.status, SelectionStatus::infeasible);
+  EXPECT_NE(r.message.find("face prior"), std::string::npos) << r.message;
+  params.use_face_prior = false;
+  const auto retry = solve_selection(p, params);
+  EXPECT_EQ(retry.status, SelectionStatus::optimal) << retry.message;
+  EXPECT_TRUE(satisfies_constraints(p, retry.selected, params));
+}
+
+TEST(Selection, single_layer_forbids_two_overlapping_roofs) {
+  // Supports that make the upper half (M, T, U*) the optimum; then M and T are declared overlapping.
+  SelectionProblem p = cut_box();
+  p.support = {5, 100, 80, 5, 5, 5, 5, 50, 50, 50, 50};
+  SelectionParams params = box_params();
+  params.use_single_layer = true;
+  const auto unconstrained = brute_force(p, params);
+  ASSERT_TRUE(unconstrained.selected[M] && unconstrained.selected[T]);
+  p.vertical_overlaps = {{M, T}};
+  const auto oracle = brute_force(p, params);
+  ASSERT_TRUE(oracle.feasible);
+  ASSERT_FALSE(oracle.selected[M] && oracle.selected[T]);
+  for (const std::string solver : {"glpk", "cbc"}) {
+    SCOPED_TRACE(solver);
+    const auto r = solve_selection(p, box_params(solver));
+    ASSERT_EQ(r.status, SelectionStatus::optimal) << r.message;
+    EXPECT_EQ(r.selected, oracle.selected);
+    EXPECT_NEAR(r.objective, oracle.objective, 1e-12);
+  }
+  params.use_single_layer = false;
+  EXPECT_EQ(solve_selection(p, params).selected, unconstrained.selected);
+}
+
+/// Random programs with a planted closed surface: each edge holds 0 or 2 planted faces plus random
+/// others, so there are non-empty feasible assignments; overlaps, sharp pairs and fixings at random.
+SelectionProblem random_problem(std::mt19937& rng, std::size_t n) {
+  SelectionProblem p;
+  p.face_count = n;
+  p.point_count = 1000;
+  p.z_min = 0.0;
+  p.z_max = 10.0;
+  std::vector<std::uint32_t> planted, others;
+  for (std::uint32_t f = 0; f < n; ++f) {
+    const bool in = rng() % 2 == 0;
+    (in ? planted : others).push_back(f);
+    p.support.push_back(static_cast<double>(rng() % (in ? 200 : 60)));
+    p.centroid_z.push_back(static_cast<double>(rng() % 100) / 10.0);
+  }
+  if (planted.size() < 2 || others.empty()) return random_problem(rng, n);
+  const std::size_t edge_count = n + rng() % n;
+  for (std::size_t e = 0; e < edge_count; ++e) {
+    Edge edge;
+    if (rng() % 3 != 0) {
+      const auto a = planted[rng() % planted.size()], b = planted[rng() % planted.size()];
+      if (a != b) edge.faces = {a, b};
+    }
+    const std::size_t extra = 1 + rng() % 2;
+    for (std::size_t k = 0; k < extra; ++k) {
+      const auto f = others[rng() % others.size()];
+      if (std::find(edge.faces.begin(), edge.faces.end(), f) == edge.faces.end()) edge.faces.push_back(f);
+    }
+    for (std::size_t i = 0; i < edge.faces.size(); ++i)
+      for (std::size_t j = i + 1; j < edge.faces.size(); ++j)
+        if (rng() % 2) edge.sharp_pairs.emplace_back(edge.faces[i], edge.faces[j]);
+    p.edges.push_back(std::move(edge));
+  }
+  for (int k = 0; k < 3; ++k) {
+    const auto a = static_cast<std::uint32_t>(rng() % n), b = static_cast<std::uint32_t>(rng() % n);
+    if (a != b) p.vertical_overlaps.emplace_back(a, b);
+  }
+  if (rng() % 3 == 0) p.face_prior = {planted[rng() % planted.size()]};
+  if (rng() % 3 == 0) p.forced_off = {others[rng() % others.size()]};
+  return p;
+}
+
+TEST(Selection, random_programs_agree_with_brute_force_for_glpk_and_cbc) {
+  std::mt19937 rng(20240611);
+  int feasible = 0, nonempty = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const auto p = random_problem(rng, 6 + trial % 11);
+    SCOPED_TRACE("trial " + std::to_string(trial) + ", " + std::to_string(p.face_count) + " faces");
+    const auto oracle = brute_force(p, SelectionParams{});
+    for (const std::string solver : {"glpk", "cbc"}) {
+      SCOPED_TRACE(solver);
+      const auto r = solve_selection(p, with_solver(solver));
+      if (!oracle.feasible) {
+        EXPECT_EQ(r.status, SelectionStatus::infeasible) << r.message;
+        continue;
+      }
+      ASSERT_EQ(r.status, SelectionStatus::optimal) << r.message;
+      EXPECT_TRUE(satisfies_constraints(p, r.selected, SelectionParams{}));
+      EXPECT_NEAR(r.objective, oracle.objective, 1e-9);
+      if (oracle.optima == 1) EXPECT_EQ(r.selected, oracle.selected);
+    }
+    feasible += oracle.feasible;
+    nonempty += oracle.feasible && std::count(oracle.selected.begin(), oracle.selected.end(), true) > 0;
+  }
+  // The generator must exercise non-trivial optima, or this test proves little.
+  EXPECT_GE(feasible, 25);
+  EXPECT_GE(nonempty, 20);
+}
+
+TEST(Selection, independent_parts_are_solved_as_separate_components_with_the_joint_optimum) {
+  // Two cut boxes side by side in one program (faces 0..10 and 11..21).
+  const auto box = cut_box();
+  SelectionProblem p = box;
+  p.face_count = 22;
+  p.point_count = 800;
+  p.support.insert(p.support.end(), box.support.begin(), box.support.end());
+  p.support[11 + T] = 300;  // the second box prefers being whole
+  p.centroid_z.insert(p.centroid_z.end(), box.centroid_z.begin(), box.centroid_z.end());
+  p.is_roof.insert(p.is_roof.end(), box.is_roof.begin(), box.is_roof.end());
+  for (auto e : box.edges) {
+    for (auto& f : e.faces) f += 11;
+    for (auto& [a, b] : e.sharp_pairs) a += 11, b += 11;
+    p.edges.push_back(e);
+  }
+  const auto oracle = brute_force(p, box_params());
+  for (const std::string solver : {"glpk", "cbc"}) {
+    SCOPED_TRACE(solver);
+    const auto joint = solve_selection(p, box_params(solver));
+    ASSERT_EQ(joint.status, SelectionStatus::optimal) << joint.message;
+    EXPECT_EQ(joint.components, 2u);
+    // Each half solved alone (the other forced off, so every normaliser stays the same).
+    std::vector<bool> combined(22, false);
+    for (int half = 0; half < 2; ++half) {
+      SelectionProblem alone = p;
+      for (std::uint32_t f = 0; f < 11; ++f) alone.forced_off.push_back(half == 0 ? f + 11 : f);
+      const auto r = solve_selection(alone, box_params(solver));
+      ASSERT_EQ(r.status, SelectionStatus::optimal) << r.message;
+      for (std::uint32_t f = 0; f < 11; ++f) combined[half * 11 + f] = r.selected[half * 11 + f];
+    }
+    EXPECT_EQ(joint.selected, combined);
+    EXPECT_NEAR(joint.objective, selection_energy(p, combined, box_params()), 1e-12);
+    EXPECT_EQ(joint.selected, oracle.selected);
+  }
+}
+
+TEST(Selection, building_like_program_is_solved_to_the_same_optimum_by_both_backends) {
+  const auto p = bench::building_problem({5, 4, 3, 3, true}, 7);
+  SelectionParams params;
+  params.time_limit = 60.0;
+  const auto glpk = solve_selection(p, with_solver("glpk"));
+  const auto cbc = solve_selection(p, with_solver("cbc"));
+  ASSERT_EQ(glpk.status, SelectionStatus::optimal) << glpk.message;
+  ASSERT_EQ(cbc.status, SelectionStatus::optimal) << cbc.message;
+  EXPECT_NEAR(glpk.objective, cbc.objective, 1e-9);
+  EXPECT_TRUE(satisfies_constraints(p, cbc.selected, params));
+  // The optimum is a real building, not the empty set.
+  EXPECT_GT(std::count(cbc.selected.begin(), cbc.selected.end(), true), 20);
+}
+
+TEST(Selection, node_and_time_limited_solves_return_promptly_with_a_valid_status) {
+  const auto p = bench::building_problem({14, 12, 4, 6, false}, 3);
+  for (const std::string solver : {"glpk", "cbc"}) {
+    for (const long nodes : {1L, 5L}) {
+      SCOPED_TRACE(solver + ", " + std::to_string(nodes) + " nodes");
+      SelectionParams params = with_solver(solver);
+      params.node_limit = nodes;
+      params.time_limit = 2.0;
+      const auto start = std::chrono::steady_clock::now();
+      const auto r = solve_selection(p, params);
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      EXPECT_LT(seconds, 2.0 + 3.0);  // time limit plus model building and slack for a loaded machine
+      EXPECT_NE(r.status, SelectionStatus::infeasible) << r.message;
+      if (r.status == SelectionStatus::optimal || r.status == SelectionStatus::feasible) {
+        EXPECT_TRUE(satisfies_constraints(p, r.selected, params));
+        EXPECT_NEAR(r.objective, selection_energy(p, r.selected, params), 1e-12);
+      } else {
+        EXPECT_TRUE(r.selected.empty());
+      }
+      if (r.status != SelectionStatus::optimal) EXPECT_FALSE(r.message.empty());
+    }
+  }
+}
+
+TEST(Selection, concurrent_solves_from_four_threads_give_identical_results) {
+  std::vector<SelectionProblem> problems;
+  for (std::uint32_t seed = 1; seed <= 3; ++seed) problems.push_back(bench::building_problem({4, 3, 3, 2, true}, seed));
+  problems.push_back(cut_box());
+  std::vector<SelectionResult> reference;
+  for (const auto& p : problems)
+    for (const std::string solver : {"glpk", "cbc"}) reference.push_back(solve_selection(p, with_solver(solver)));
+  std::vector<std::vector<SelectionResult>> results(4);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t)
+    threads.emplace_back([&, t] {
+      for (int round = 0; round < 2; ++round)
+        for (const auto& p : problems)
+          for (const std::string solver : {"glpk", "cbc"}) results[t].push_back(solve_selection(p, with_solver(solver)));
+    });
+  for (auto& thread : threads) thread.join();
+  for (int t = 0; t < 4; ++t) {
+    ASSERT_EQ(results[t].size(), 2 * reference.size());
+    for (std::size_t i = 0; i < results[t].size(); ++i) {
+      const auto& expected = reference[i % reference.size()];
+      EXPECT_EQ(results[t][i].status, expected.status);
+      EXPECT_EQ(results[t][i].selected, expected.selected);
+      EXPECT_EQ(results[t][i].objective, expected.objective);
+    }
+  }
+}
+
+TEST(Selection, defaults_are_the_papers_weights) {
+  const SelectionParams params;
+  EXPECT_EQ(params.lambda_data, 0.34);
+  EXPECT_EQ(params.lambda_complexity, 0.62);
+  EXPECT_EQ(params.lambda_roof, 0.04);
+  EXPECT_EQ(params.solver, "auto");
+  EXPECT_EQ(params.time_limit, 10.0);
+  EXPECT_EQ(params.node_limit, 100000);
+  EXPECT_NO_THROW(params.validate());
+}
+
+TEST(Selection, validate_lists_every_invalid_field) {
+  SelectionParams params;
+  params.lambda_data = -1.0;
+  params.solver = "scip";
+  params.time_limit = 0.0;
+  params.node_limit = 0;
+  try {
+    params.validate();
+    FAIL() << "validate() accepted invalid parameters";
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    for (const char* field : {"lambda_data", "solver", "time_limit", "node_limit"})
+      EXPECT_NE(what.find(field), std::string::npos) << what;
+  }
+}
+
+TEST(Selection, rejects_a_problem_whose_edge_names_a_missing_face) {
+  auto p = cut_box();
+  p.edges.push_back(Edge{{1, 40}, {}});
+  EXPECT_THROW(solve_selection(p, SelectionParams{}), ReconstructionError);
+}
+
+TEST(Selection, everything_fixed_needs_no_solver) {
+  auto p = cut_box();
+  p.forced_on = {B, M};
+  const auto r = solve_selection(p, box_params());
+  ASSERT_EQ(r.status, SelectionStatus::optimal);
+  EXPECT_EQ(r.solver, "presolve");
+  EXPECT_EQ(r.variables, 0u);
+  EXPECT_EQ(r.selected, faces(11, {B, M, L0, L0 + 1, L0 + 2, L0 + 3}));
+}
+
+}  // namespace
+}  // namespace city3d
