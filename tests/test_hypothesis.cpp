@@ -473,6 +473,40 @@ TEST(Model, courtyard_building_keeps_faces_with_holes_as_simple_pieces) {
   EXPECT_EQ(count_surface(r.surfaces, SurfaceType::ground), 2u);
 }
 
+TEST(Model, inner_wall_ending_short_of_the_outline_is_extended_to_it) {
+  Synthetic b = step_building();
+  b.walls.back().a = {6, 1.5};  // 1.5 m short at both ends: more than line_support_margin
+  b.walls.back().b = {6, 4.5};
+  const auto r = reconstruct(b);
+  EXPECT_EQ(r.candidates.cell_count, 2u);
+  expect_valid_solid(r, 396.0);
+  EXPECT_EQ(r.mesh.faces.size(), 8u);
+}
+
+TEST(Hypothesis, nearly_concurrent_lines_leave_no_cell_without_area) {
+  // Three inner walls through almost one point (within 1 mm): the tiny triangle they make is
+  // contracted, so every face keeps an area and every floor survives.
+  Synthetic b = make_building({rectangle(0, 0, 12, 12)}, {{{{0, 0}, {12, 0}, {12, 12}, {0, 12}}, 0.0, 0.0, 5.0}},
+                              720.0);
+  auto wall = [](Point2 a, Point2 c) {
+    VerticalPlane w;
+    w.a = a;
+    w.b = c;
+    w.outer = false;
+    return w;
+  };
+  b.walls.push_back(wall({6, 0}, {6, 12}));
+  b.walls.push_back(wall({0, 6.0004}, {12, 6.0004}));
+  b.walls.push_back(wall({0, 0.0003}, {12, 12.0001}));
+  const auto c = candidates_of(b);
+  expect_well_formed(c);
+  EXPECT_EQ(c.cell_count, 6u);
+  for (const auto& f : c.faces) EXPECT_GT(f.area, 1e-3);
+  const auto r = reconstruct(b);
+  expect_valid_solid(r, 720.0);
+  EXPECT_EQ(r.mesh.faces.size(), 6u);  // a box: the inner walls are not selected
+}
+
 TEST(Model, rejects_an_open_selection_naming_the_edge) {
   const auto c = candidates_of(box_building());
   std::vector<bool> selected(c.faces.size(), true);

@@ -65,8 +65,6 @@ bool looks_like_point_cloud(const std::string& path) {
 
 PointCloudSummary summarise_point_cloud(const std::string& path) {
   PointCloudSummary summary;
-  summary.info = read_point_cloud_info(path);
-  if (summary.info.compressed) return summary;  // header only until LAZ decoding is wired in
   auto reader = open_point_cloud(path, kFieldClassification);
   summary.info = reader->info();
   PointCloud chunk;
@@ -110,9 +108,7 @@ std::string describe_point_cloud(const PointCloudSummary& s) {
   if (!i.generating_software.empty()) out << "software: " << i.generating_software << "\n";
   out << "fields: " << fields_text(i.fields) << "\n";
   for (const std::string& v : i.vlrs) out << "vlr: " << v << "\n";
-  if (i.compressed) {
-    out << "classes: not counted (LAZ point decoding is not available yet)\n";
-  } else if (s.has_classes) {
+  if (s.has_classes) {
     out << "classes:\n";
     for (int c = 0; c < 256; ++c)
       if (s.class_counts[c] > 0) out << "  " << c << " " << class_name(c) << ": " << s.class_counts[c] << "\n";

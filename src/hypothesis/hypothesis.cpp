@@ -12,7 +12,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <map>
 #include <numeric>
@@ -882,10 +881,6 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
     bool changed = false;
     for (const auto& [key, list] : edge_faces) {
       if (list.size() == 1 && alive[list[0]]) {
-        if (std::getenv("CITY3D_HYP_DEBUG")) {
-          const auto& A = vertices[key.first]; const auto& B = vertices[key.second];
-          std::fprintf(stderr, "prune face %u kind %d edge %u(%.3f %.3f %.3f)-%u(%.3f %.3f %.3f)\n", list[0], (int)faces[list[0]].kind, key.first, A.x, A.y, A.z, key.second, B.x, B.y, B.z);
-        }
         alive[list[0]] = false;
         changed = true;
       }
@@ -893,7 +888,7 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
     if (!changed) break;
   }
   for (std::size_t i = 0; i < faces.size(); ++i)
-    if (!alive[i] && faces[i].kind == FaceKind::floor && !std::getenv("CITY3D_HYP_DEBUG"))
+    if (!alive[i] && faces[i].kind == FaceKind::floor)
       throw ReconstructionError("hypothesis: floor face over cell " + std::to_string(faces[i].cell_or_edge) +
                                 " cannot be closed (internal error)");
 

@@ -1,6 +1,6 @@
 // LAS reader: validates the public header (collecting every problem before throwing once), walks
 // VLRs and EVLRs with bounds checks, and streams point records (formats 0-10) into PointCloud.
-// Raw records come from a RecordSource: a plain file read today, a LAZ decoder later.
+// Raw records come from a RecordSource: a plain file read, or the LAZ decoder (src/laz/).
 #include "io/las_reader.hpp"
 
 #include <algorithm>
@@ -15,6 +15,7 @@
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
 #include "io/input_file.hpp"
+#include "laz/laz_decoder.hpp"
 
 // Fields are copied straight out of the little-endian records with memcpy.
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the LAS reader assumes a little-endian host");
@@ -386,14 +387,32 @@ class FileRecordSource final : public RecordSource {
   std::uint64_t done_ = 0;
 };
 
-/// Picks the record source for a validated header. This is where LAZ plugs in: parse
-/// `h.laszip_vlr` with parse_laszip_vlr() and wrap a LazDecoder (src/laz/laz_decoder.hpp) in a
-/// RecordSource; the conversion below stays the same.
+/// LAZ: the LASzip decoder hands out the same raw records, chunk by chunk.
+class LazRecordSource final : public RecordSource {
+ public:
+  LazRecordSource(const detail::LaszipVlr& vlr, const detail::LazLayout& layout) : decoder_(vlr, layout) {}
+  std::size_t read_records(std::uint8_t* out, std::size_t max_records) override {
+    return decoder_.decode(out, max_records);
+  }
+
+ private:
+  detail::LazDecoder decoder_;
+};
+
+/// Picks the record source for a validated header: the file itself, or the LAZ decoder.
 std::unique_ptr<RecordSource> make_record_source(InputFile file, const LasHeader& h) {
-  if (h.compressed)
-    throw IoError("las: " + file.path() +
-                  " is LAZ (LASzip-compressed); LAZ reading is not available yet");
-  return std::make_unique<FileRecordSource>(std::move(file), h);
+  if (!h.compressed) return std::make_unique<FileRecordSource>(std::move(file), h);
+  detail::check_laszip_vlr_present(!h.laszip_vlr.empty(), static_cast<std::uint8_t>(h.point_format | 0x80),
+                                   file.path());
+  const detail::LaszipVlr vlr = detail::parse_laszip_vlr(h.laszip_vlr.data(), h.laszip_vlr.size(), file.path());
+  detail::LazLayout layout;
+  layout.path = file.path();
+  layout.point_data_offset = h.offset_to_point_data;
+  layout.point_count = h.point_count;
+  layout.record_length = h.record_length;
+  layout.point_format = static_cast<std::uint8_t>(h.point_format);
+  layout.file_size = file.size();
+  return std::make_unique<LazRecordSource>(vlr, layout);
 }
 
 /// Grows a vector geometrically, so that many small appends stay linear.
