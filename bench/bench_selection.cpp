@@ -18,10 +18,14 @@ namespace {
 
 const char* status_name(city3d::SelectionStatus s) {
   switch (s) {
-    case city3d::SelectionStatus::optimal: return "optimal";
-    case city3d::SelectionStatus::feasible: return "feasible";
-    case city3d::SelectionStatus::infeasible: return "infeasible";
-    case city3d::SelectionStatus::no_solution: return "no_solution";
+    case city3d::SelectionStatus::optimal:
+      return "optimal";
+    case city3d::SelectionStatus::feasible:
+      return "feasible";
+    case city3d::SelectionStatus::infeasible:
+      return "infeasible";
+    case city3d::SelectionStatus::no_solution:
+      return "no_solution";
   }
   return "?";
 }
@@ -40,9 +44,12 @@ int main(int argc, char** argv) {
   std::size_t max_faces = 20000;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
-    if (flag == "--time-limit") time_limit = std::atof(argv[i + 1]);
-    else if (flag == "--seeds") seeds = std::atoi(argv[i + 1]);
-    else if (flag == "--max-faces") max_faces = static_cast<std::size_t>(std::atol(argv[i + 1]));
+    if (flag == "--time-limit")
+      time_limit = std::atof(argv[i + 1]);
+    else if (flag == "--seeds")
+      seeds = std::atoi(argv[i + 1]);
+    else if (flag == "--max-faces")
+      max_faces = static_cast<std::size_t>(std::atol(argv[i + 1]));
     else {
       std::fprintf(stderr, "bench_selection: unknown flag %s\n", flag.c_str());
       return 2;
@@ -51,9 +58,8 @@ int main(int argc, char** argv) {
 
   // Grid shapes chosen to span ~100 to ~8,000 variables after the exact reductions.
   const std::vector<city3d::bench::BuildingShape> shapes = {
-      {3, 2, 2, 2, true},  {4, 3, 3, 2, true},   {6, 4, 3, 3, true},   {7, 5, 4, 3, true},
-      {8, 6, 4, 4, true},  {10, 8, 4, 4, true},  {12, 9, 5, 5, true},  {16, 12, 5, 6, true},
-      {20, 16, 6, 8, true}};
+      {3, 2, 2, 2, true},  {4, 3, 3, 2, true},  {6, 4, 3, 3, true},   {7, 5, 4, 3, true},  {8, 6, 4, 4, true},
+      {10, 8, 4, 4, true}, {12, 9, 5, 5, true}, {16, 12, 5, 6, true}, {20, 16, 6, 8, true}};
   // Size classes by reduced variable count.
   const std::vector<std::size_t> class_upper = {300, 600, 900, 1300, 2000, 4000, 8000, 1000000};
   std::map<std::size_t, std::vector<double>> glpk_times, cbc_times;
@@ -73,14 +79,15 @@ int main(int argc, char** argv) {
       params.solver = "cbc";
       const auto cbc = city3d::solve_selection(problem, params);
       char name[32];
-      std::snprintf(name, sizeof name, "%dx%dx%d/%d", shape.cells_x, shape.cells_y, shape.levels, shape.blocks);
-      std::printf("%-14s %6d %6zu %6zu %5zu | %9.3f %-11s | %9.3f %-11s | %.9f / %.9f%s\n", name, seed,
-                  problem.face_count, cbc.variables, cbc.components, glpk.seconds, status_name(glpk.status),
-                  cbc.seconds, status_name(cbc.status), glpk.objective, cbc.objective,
-                  glpk.status == cbc.status && std::fabs(glpk.objective - cbc.objective) > 1e-9 ? "  DIFFER" : "");
+      std::snprintf(name, sizeof name, "%dx%dx%d/%d", shape.cells_x, shape.cells_y, shape.levels,
+                    shape.blocks);
+      std::printf(
+          "%-14s %6d %6zu %6zu %5zu | %9.3f %-11s | %9.3f %-11s | %.9f / %.9f%s\n", name, seed,
+          problem.face_count, cbc.variables, cbc.components, glpk.seconds, status_name(glpk.status),
+          cbc.seconds, status_name(cbc.status), glpk.objective, cbc.objective,
+          glpk.status == cbc.status && std::fabs(glpk.objective - cbc.objective) > 1e-9 ? "  DIFFER" : "");
       std::fflush(stdout);
-      const std::size_t size_class =
-          *std::lower_bound(class_upper.begin(), class_upper.end(), cbc.variables);
+      const std::size_t size_class = *std::lower_bound(class_upper.begin(), class_upper.end(), cbc.variables);
       glpk_times[size_class].push_back(glpk.seconds);
       cbc_times[size_class].push_back(cbc.seconds);
       glpk_unsolved[size_class] += glpk.status != city3d::SelectionStatus::optimal;
@@ -93,7 +100,8 @@ int main(int argc, char** argv) {
   for (std::size_t upper : class_upper) {
     if (glpk_times.count(upper)) {
       std::printf("%5zu-%-6zu %5zu | %9.3f %10d | %9.3f %10d\n", lower, upper, glpk_times[upper].size(),
-                  median(glpk_times[upper]), glpk_unsolved[upper], median(cbc_times[upper]), cbc_unsolved[upper]);
+                  median(glpk_times[upper]), glpk_unsolved[upper], median(cbc_times[upper]),
+                  cbc_unsolved[upper]);
     }
     lower = upper;
   }

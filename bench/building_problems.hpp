@@ -14,11 +14,11 @@
 namespace city3d::bench {
 
 struct BuildingShape {
-  int cells_x = 4;        ///< footprint grid columns
-  int cells_y = 3;        ///< footprint grid rows
-  int levels = 2;         ///< candidate roof heights (horizontal planes)
-  int blocks = 2;         ///< rectangular blocks of the true building
-  bool face_prior = true; ///< fill SelectionProblem::face_prior (best face of each roof level)
+  int cells_x = 4;         ///< footprint grid columns
+  int cells_y = 3;         ///< footprint grid rows
+  int levels = 2;          ///< candidate roof heights (horizontal planes)
+  int blocks = 2;          ///< rectangular blocks of the true building
+  bool face_prior = true;  ///< fill SelectionProblem::face_prior (best face of each roof level)
 };
 
 /// Builds the problem for `shape` from `seed`. Deterministic (std::mt19937 with explicit draws).
@@ -28,7 +28,7 @@ inline SelectionProblem building_problem(const BuildingShape& shape, std::uint32
     return lo + (hi - lo) * (static_cast<double>(rng() >> 8) / static_cast<double>(1u << 24));
   };
   const int nx = shape.cells_x, ny = shape.cells_y, nk = shape.levels;
-  const double cell = 3.0;  // metres
+  const double cell = 3.0;                   // metres
   std::vector<double> level_z(nk + 1, 0.0);  // level 0 is the ground
   for (int k = 1; k <= nk; ++k) level_z[k] = level_z[k - 1] + uniform(2.0, 4.0);
 
@@ -60,7 +60,8 @@ inline SelectionProblem building_problem(const BuildingShape& shape, std::uint32
   for (int c = 0; c < nx * ny; ++c) {
     floor[c] = add_face(0.0, 0.0, false, -1);  // aerial LiDAR sees no floor
     for (int k = 1; k <= nk; ++k) {
-      const double support = truth[c] == k ? cell_points * uniform(0.8, 1.0) : cell_points * uniform(0.0, 0.08);
+      const double support =
+          truth[c] == k ? cell_points * uniform(0.8, 1.0) : cell_points * uniform(0.0, 0.08);
       roof[c][k - 1] = add_face(support, level_z[k], true, k);
     }
   }

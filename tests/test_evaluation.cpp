@@ -1,2 +1,224 @@
-// placeholder until implemented
+// Tests of model evaluation: RMSE against known distances, validity of good and deliberately broken
+// meshes, triangulation of non-convex faces.
 #include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "city3d/error.hpp"
+#include "city3d/evaluation.hpp"
+
+namespace city3d {
+namespace {
+
+/// An axis-aligned box [0, sx] x [0, sy] x [0, sz], faces counter-clockwise seen from outside.
+PolygonMesh box(double sx, double sy, double sz) {
+  PolygonMesh m;
+  m.vertices = {{0, 0, 0},  {sx, 0, 0},  {sx, sy, 0},  {0, sy, 0},
+                {0, 0, sz}, {sx, 0, sz}, {sx, sy, sz}, {0, sy, sz}};
+  m.faces = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+  return m;
+}
+
+/// Points on the surface of box(sx, sy, sz), pushed `offset` metres outward along the face normal.
+std::vector<Point3> box_surface_points(double sx, double sy, double sz, double offset, int per_face) {
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<double> t(0.05, 0.95);  // away from edges, where offsets are exact
+  std::vector<Point3> points;
+  for (int i = 0; i < per_face; ++i) {
+    const double a = t(rng), b = t(rng);
+    points.push_back({a * sx, b * sy, -offset});
+    points.push_back({a * sx, b * sy, sz + offset});
+    points.push_back({a * sx, -offset, b * sz});
+    points.push_back({a * sx, sy + offset, b * sz});
+    points.push_back({-offset, a * sy, b * sz});
+    points.push_back({sx + offset, a * sy, b * sz});
+  }
+  return points;
+}
+
+double triangle_area(const PolygonMesh& m, const std::array<std::uint32_t, 3>& t) {
+  const auto& a = m.vertices[t[0]];
+  const auto& b = m.vertices[t[1]];
+  const auto& c = m.vertices[t[2]];
+  const double ux = b.x - a.x, uy = b.y - a.y, uz = b.z - a.z, vx = c.x - a.x, vy = c.y - a.y, vz = c.z - a.z;
+  const double cx = uy * vz - uz * vy, cy = uz * vx - ux * vz, cz = ux * vy - uy * vx;
+  return 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz);
+}
+
+TEST(Evaluation, rmse_of_points_on_a_box_surface_is_zero) {
+  EXPECT_NEAR(rmse(box(10, 8, 6), box_surface_points(10, 8, 6, 0.0, 200)), 0.0, 1e-12);
+}
+
+TEST(Evaluation, rmse_of_points_offset_outward_by_a_decimetre_is_a_decimetre) {
+  EXPECT_NEAR(rmse(box(10, 8, 6), box_surface_points(10, 8, 6, 0.1, 200)), 0.1, 1e-9);
+}
+
+TEST(Evaluation, rmse_mixes_distances_as_a_root_mean_square) {
+  // One point on the top, one 0.3 m above it: sqrt((0 + 0.09) / 2).
+  EXPECT_NEAR(rmse(box(10, 8, 6), {{5, 4, 6}, {5, 4, 6.3}}), std::sqrt(0.045), 1e-12);
+}
+
+TEST(Evaluation, rmse_rejects_an_empty_point_set) {
+  EXPECT_THROW(rmse(box(1, 1, 1), {}), ReconstructionError);
+}
+
+TEST(Evaluation, box_is_a_valid_solid_with_exact_volume) {
+  const auto v = check_validity(box(10, 8, 6));
+  EXPECT_TRUE(v.closed);
+  EXPECT_TRUE(v.manifold);
+  EXPECT_TRUE(v.outward);
+  EXPECT_TRUE(v.planar);
+  EXPECT_TRUE(v.self_intersecting_checked);
+  EXPECT_FALSE(v.self_intersects);
+  EXPECT_TRUE(v.valid()) << v.problem;
+  EXPECT_TRUE(v.problem.empty()) << v.problem;
+  EXPECT_NEAR(v.volume, 480.0, 1e-9);
+  EXPECT_EQ(v.faces, 6u);
+  EXPECT_EQ(v.vertices, 8u);
+  EXPECT_NEAR(v.max_planarity_error, 0.0, 1e-12);
+}
+
+TEST(Evaluation, box_far_from_the_origin_keeps_its_volume) {
+  auto m = box(10, 8, 6);
+  for (auto& p : m.vertices) p = {p.x + 85000.0, p.y + 447000.0, p.z};
+  EXPECT_NEAR(check_validity(m).volume, 480.0, 1e-6);
+}
+
+TEST(Evaluation, inverted_box_is_not_outward) {
+  auto m = box(2, 3, 4);
+  for (auto& f : m.faces) std::reverse(f.begin(), f.end());
+  const auto v = check_validity(m);
+  EXPECT_TRUE(v.closed);
+  EXPECT_TRUE(v.manifold);
+  EXPECT_FALSE(v.outward);
+  EXPECT_NEAR(v.volume, -24.0, 1e-9);
+  EXPECT_FALSE(v.valid());
+  EXPECT_NE(v.problem.find("outward"), std::string::npos) << v.problem;
+}
+
+TEST(Evaluation, box_with_a_missing_face_is_not_closed) {
+  auto m = box(2, 3, 4);
+  m.faces.pop_back();
+  const auto v = check_validity(m);
+  EXPECT_FALSE(v.closed);
+  EXPECT_FALSE(v.self_intersecting_checked);
+  EXPECT_FALSE(v.valid());
+  EXPECT_NE(v.problem.find("not closed: 4"), std::string::npos) << v.problem;
+}
+
+TEST(Evaluation, three_faces_on_one_edge_are_not_manifold) {
+  // The box plus a fin: a square hanging from the top edge 4-5, so edge 4-5 has three faces.
+  auto m = box(2, 2, 2);
+  m.vertices.push_back({2, -2, 2});
+  m.vertices.push_back({0, -2, 2});
+  m.faces.push_back({5, 4, 9, 8});
+  const auto v = check_validity(m);
+  EXPECT_FALSE(v.manifold);
+  EXPECT_FALSE(v.closed);
+  EXPECT_NE(v.problem.find("more than two faces"), std::string::npos) << v.problem;
+}
+
+TEST(Evaluation, two_boxes_touching_at_one_vertex_are_not_manifold) {
+  // Closed (every edge has its opposite), but vertex 6 of the first box is shared by the second:
+  // its faces form two fans.
+  auto m = box(1, 1, 1);
+  const auto second = box(1, 1, 1);
+  for (const auto& p : second.vertices) m.vertices.push_back({p.x + 1, p.y + 1, p.z + 1});
+  for (auto f : second.faces) {
+    for (auto& i : f) i = i == 0 ? 6 : i + 8;  // second box's vertex 0 is the first box's vertex 6
+    m.faces.push_back(f);
+  }
+  const auto v = check_validity(m);
+  EXPECT_TRUE(v.closed);
+  EXPECT_FALSE(v.manifold);
+  EXPECT_NE(v.problem.find("more than one fan"), std::string::npos) << v.problem;
+}
+
+TEST(Evaluation, non_planar_quad_is_reported_with_its_deviation) {
+  auto m = box(2, 2, 2);
+  m.vertices[6].z =
+      2.2;  // lifts one top corner: the top is no longer planar (the walls through it stay planar)
+  const auto v = check_validity(m, 0.01);
+  EXPECT_TRUE(v.closed);
+  EXPECT_FALSE(v.planar);
+  // Top face (0,0,2) (2,0,2) (2,2,2.2) (0,2,2): Newell normal (-0.05, -0.05, 1) (cross product of
+  // the diagonals), plane through the centroid (1, 1, 2.05); every vertex is 0.05 / |n| from it.
+  EXPECT_NEAR(v.max_planarity_error, 0.05 / std::sqrt(1.0 + 2 * 0.0025), 1e-9);
+  EXPECT_TRUE(check_validity(m, 0.1).planar);
+}
+
+TEST(Evaluation, self_intersecting_closed_mesh_is_detected) {
+  // Two boxes that overlap in space, as one closed manifold mesh of two shells.
+  auto m = box(2, 2, 2);
+  const auto second = box(2, 2, 2);
+  for (const auto& p : second.vertices) m.vertices.push_back({p.x + 1, p.y + 1, p.z + 1});
+  for (auto f : second.faces) {
+    for (auto& i : f) i += 8;
+    m.faces.push_back(f);
+  }
+  const auto v = check_validity(m);
+  EXPECT_TRUE(v.closed);
+  EXPECT_TRUE(v.manifold);
+  EXPECT_TRUE(v.self_intersecting_checked);
+  EXPECT_TRUE(v.self_intersects);
+  EXPECT_FALSE(v.valid());
+}
+
+/// An L-shaped prism: the footprint (0,0) (4,0) (4,2) (2,2) (2,4) (0,4) extruded to height 3. The roof
+/// is a non-convex hexagon.
+PolygonMesh l_prism() {
+  PolygonMesh m;
+  const double xy[6][2] = {{0, 0}, {4, 0}, {4, 2}, {2, 2}, {2, 4}, {0, 4}};
+  for (const auto& p : xy) m.vertices.push_back({p[0], p[1], 0});
+  for (const auto& p : xy) m.vertices.push_back({p[0], p[1], 3});
+  m.faces.push_back({5, 4, 3, 2, 1, 0});    // floor, seen from below
+  m.faces.push_back({6, 7, 8, 9, 10, 11});  // roof
+  for (std::uint32_t i = 0; i < 6; ++i) m.faces.push_back({i, (i + 1) % 6, (i + 1) % 6 + 6, i + 6});
+  return m;
+}
+
+TEST(Evaluation, l_shaped_roof_is_triangulated_without_covering_the_notch) {
+  const auto m = l_prism();
+  PolygonMesh roof_only = m;
+  roof_only.faces = {m.faces[1]};
+  const auto triangles = triangulate(roof_only);
+  ASSERT_EQ(triangles.size(), 4u);
+  double area = 0.0;
+  for (const auto& t : triangles) {
+    area += triangle_area(roof_only, t);
+    // Same orientation as the face: normal up.
+    const auto& a = m.vertices[t[0]];
+    const auto& b = m.vertices[t[1]];
+    const auto& c = m.vertices[t[2]];
+    EXPECT_GT((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x), 0.0);
+  }
+  EXPECT_NEAR(area, 12.0, 1e-12);
+  // A point above the notch (3, 3) is nearest to the roof's notch edges, 1 m away in plan: a
+  // triangulation covering the notch would give 0.5 instead.
+  EXPECT_NEAR(rmse(roof_only, {{3, 3, 3.5}}), std::sqrt(1.0 + 0.25), 1e-12);
+  // Inside the notch at mid height: the roof edge is sqrt(1 + 1.5^2) away, the wall x = 2 only 1 m.
+  EXPECT_NEAR(rmse(roof_only, {{3, 3, 1.5}}), std::sqrt(1.0 + 2.25), 1e-12);
+  EXPECT_NEAR(rmse(m, {{3, 3, 1.5}}), 1.0, 1e-12);
+}
+
+TEST(Evaluation, l_shaped_prism_is_a_valid_solid) {
+  const auto v = check_validity(l_prism());
+  EXPECT_TRUE(v.valid()) << v.problem;
+  EXPECT_NEAR(v.volume, 36.0, 1e-9);
+  EXPECT_EQ(triangulate(l_prism()).size(), 4u + 4u + 6u * 2u);
+}
+
+TEST(Evaluation, face_with_an_index_out_of_range_is_reported_not_crashed_on) {
+  auto m = box(1, 1, 1);
+  m.faces[0][0] = 99;
+  const auto v = check_validity(m);
+  EXPECT_FALSE(v.closed);
+  EXPECT_FALSE(v.valid());
+  EXPECT_NE(v.problem.find("out of range"), std::string::npos) << v.problem;
+}
+
+}  // namespace
+}  // namespace city3d

@@ -1,7 +1,5 @@
 // Tests of face selection: hand-built programs with known optima, brute force over all assignments
 // as the oracle, both backends, limits, components, determinism under threads.
-#include "city3d/selection.hpp"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,6 +11,7 @@
 
 #include "../bench/building_problems.hpp"
 #include "city3d/error.hpp"
+#include "city3d/selection.hpp"
 
 namespace city3d {
 namespace {
@@ -368,20 +367,50 @@ TEST(Selection, node_and_time_limited_solves_return_promptly_with_a_valid_status
   }
 }
 
+TEST(Selection, glpk_node_limit_stops_the_search_deterministically) {
+  // This program needs branching in GLPK (measured: no incumbent after the root node).
+  const auto p = bench::building_problem({7, 5, 4, 3, true}, 3);
+  SelectionParams params = with_solver("glpk");
+  params.node_limit = 1;
+  params.time_limit = 60.0;
+  for (int run = 0; run < 2; ++run) {
+    const auto r = solve_selection(p, params);
+    EXPECT_TRUE(r.status == SelectionStatus::no_solution || r.status == SelectionStatus::feasible);
+    EXPECT_NE(r.message.find("node limit 1 reached"), std::string::npos) << r.message;
+  }
+  params.node_limit = 100000;
+  const auto full = solve_selection(p, params);
+  EXPECT_EQ(full.status, SelectionStatus::optimal) << full.message;
+  EXPECT_NEAR(full.objective, solve_selection(p, with_solver("cbc")).objective, 1e-9);
+}
+
+TEST(Selection, auto_falls_back_to_cbc_when_glpk_stops_on_a_limit) {
+  const auto p = bench::building_problem({7, 5, 4, 3, true}, 3);
+  SelectionParams params = with_solver("auto");
+  params.node_limit = 1;  // GLPK stops at its root without an incumbent; CBC solves it at the root
+  const auto r = solve_selection(p, params);
+  ASSERT_EQ(r.status, SelectionStatus::optimal) << r.message;
+  EXPECT_EQ(r.solver, "glpk+cbc");
+  EXPECT_NEAR(r.objective, solve_selection(p, with_solver("cbc")).objective, 1e-9);
+}
+
 TEST(Selection, concurrent_solves_from_four_threads_give_identical_results) {
   std::vector<SelectionProblem> problems;
-  for (std::uint32_t seed = 1; seed <= 3; ++seed) problems.push_back(bench::building_problem({4, 3, 3, 2, true}, seed));
+  for (std::uint32_t seed = 1; seed <= 3; ++seed)
+    problems.push_back(bench::building_problem({4, 3, 3, 2, true}, seed));
   problems.push_back(cut_box());
   std::vector<SelectionResult> reference;
   for (const auto& p : problems)
-    for (const std::string solver : {"glpk", "cbc"}) reference.push_back(solve_selection(p, with_solver(solver)));
+    for (const std::string solver : {"glpk", "cbc"})
+      reference.push_back(solve_selection(p, with_solver(solver)));
   std::vector<std::vector<SelectionResult>> results(4);
   std::vector<std::thread> threads;
   for (int t = 0; t < 4; ++t)
     threads.emplace_back([&, t] {
       for (int round = 0; round < 2; ++round)
         for (const auto& p : problems)
-          for (const std::string solver : {"glpk", "cbc"}) results[t].push_back(solve_selection(p, with_solver(solver)));
+          for (const std::string solver : {"glpk", "cbc"})
+            results[t].push_back(solve_selection(p, with_solver(solver)));
     });
   for (auto& thread : threads) thread.join();
   for (int t = 0; t < 4; ++t) {

@@ -60,6 +60,10 @@ int main(int argc, char** argv) {
   try {
     if (options.command == "info") return run_info(options);
     if (options.command == "reconstruct") return run_reconstruct(options);
+    if (options.command == "evaluate") {
+      std::cout << city3d::evaluate_model(options.inputs[0], options.inputs[1]);
+      return city3d::kExitOk;
+    }
   } catch (const city3d::ConfigError& e) {
     std::cerr << "city3d: " << e.what() << "\n";
     return city3d::kExitUsage;

@@ -16,8 +16,10 @@
 //           would cut the whole footprint and the arrangement would explode.
 //     Edges shorter than min_edge_length are contracted (nearly concurrent lines otherwise make
 //     cells without area). Dangling edges (an end that reaches no other line) are removed, because a cell with an
-//     "antenna" is not a simple polygon. A cell with a hole is split by two horizontal bridges from
-//     the hole's leftmost and rightmost vertices, so every cell is a simple polygon.
+//     "antenna" is not a simple polygon. A cell with a hole is split by a horizontal line across
+//     the footprint at the hole's middle height, so every cell is a simple polygon. Dangling ends of
+//     roof lines and inner walls that lie inside the footprint, with no crossing within
+//     2 x line_support_margin, are first extended to the next line ahead.
 //     The outer VerticalPlanes are not used: the footprint rings are the outer walls.
 //  2. Roof faces: every bounded cell inside the footprint, lifted onto every roof plane that has at
 //     least min_support_points of its points within cell_support_margin (xy) of the cell (when no

@@ -31,4 +31,10 @@ std::string describe_point_cloud(const PointCloudSummary& summary);
 /// repaired and skipped features with their reasons).
 std::string describe_footprints(const FootprintSet& footprints);
 
+/// The text `city3d evaluate` prints: a model (OBJ or one of ours) against a point cloud: faces,
+/// RMSE of the points to the model surface, and validity (closed, 2-manifold, outward, planar faces,
+/// no self-intersection). Both are moved to the model's bounding-box centre before any geometry.
+/// Throws IoError when either file cannot be read.
+std::string evaluate_model(const std::string& model_path, const std::string& points_path);
+
 }  // namespace city3d

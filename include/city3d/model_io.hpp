@@ -40,6 +40,12 @@ void write_model(const std::string& path, const BuildingModel& model, const Mode
 void write_models(const std::string& path, const std::vector<BuildingModel>& models,
                   const ModelWriteOptions& options);
 
+/// Reads a polygonal model from an OBJ file (`v` and `f` lines; `f` entries may carry `/vt/vn`
+/// parts and negative indices; every other line is ignored), world coordinates as written, origin 0.
+/// For evaluating models made by other tools. Throws IoError naming the file and line on malformed
+/// vertices or faces, and when the file holds no face.
+BuildingModel read_obj_model(const std::string& path);
+
 /// One attribute value of a city object: null, boolean, integer, number or text.
 using AttributeValue = std::variant<std::monostate, bool, std::int64_t, double, std::string>;
 

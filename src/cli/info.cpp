@@ -8,6 +8,8 @@
 #include <sstream>
 
 #include "city3d/error.hpp"
+#include "city3d/evaluation.hpp"
+#include "city3d/model_io.hpp"
 
 namespace city3d {
 namespace {
@@ -142,6 +144,34 @@ std::string describe_footprints(const FootprintSet& f) {
   out << "repaired (invalid): " << f.repaired << "\n";
   out << "skipped: " << f.skipped.size() << "\n";
   for (const SkippedFootprint& s : f.skipped) out << "  " << s.id << ": " << s.reason << "\n";
+  return out.str();
+}
+
+std::string evaluate_model(const std::string& model_path, const std::string& points_path) {
+  BuildingModel model = read_obj_model(model_path);
+  PointCloud cloud = read_point_cloud(points_path, kFieldXyz);
+  Box3 box;
+  for (const Point3& v : model.mesh.vertices) box.add(v);
+  const Point3 centre{std::round((box.min.x + box.max.x) / 2), std::round((box.min.y + box.max.y) / 2),
+                      std::round((box.min.z + box.max.z) / 2)};
+  for (Point3& v : model.mesh.vertices) v = {v.x - centre.x, v.y - centre.y, v.z - centre.z};
+  for (Point3& p : cloud.points) p = {p.x - centre.x, p.y - centre.y, p.z - centre.z};
+  const MeshValidity v = check_validity(model.mesh);
+  std::ostringstream out;
+  auto yes = [](bool b) { return b ? "yes" : "no"; };
+  out << "model: " << model_path << "\n";
+  out << "points: " << points_path << " (" << cloud.size() << ")\n";
+  out << "faces: " << model.mesh.faces.size() << "\n";
+  out << "vertices: " << model.mesh.vertices.size() << "\n";
+  out << "rmse: " << fixed(rmse(model.mesh, cloud.points), 4) << "\n";
+  out << "closed: " << yes(v.closed) << "\n";
+  out << "manifold: " << yes(v.manifold) << "\n";
+  out << "outward: " << yes(v.outward) << "\n";
+  out << "planar: " << yes(v.planar) << " (max error " << fixed(v.max_planarity_error, 4) << " m)\n";
+  out << "self-intersecting: " << (v.self_intersecting_checked ? yes(v.self_intersects) : "not checked") << "\n";
+  out << "volume: " << fixed(v.volume, 3) << "\n";
+  out << "valid: " << yes(v.valid()) << "\n";
+  if (!v.problem.empty()) out << "problems: " << v.problem << "\n";
   return out.str();
 }
 

@@ -233,6 +233,7 @@ const std::vector<OptionSpec>& option_table() {
 
 const char* const kCommands[][2] = {
     {"reconstruct", "CLOUD... [-f FOOTPRINTS]  models of every footprint (or of every single-building cloud)"},
+    {"evaluate", "MODEL.obj POINTS         RMSE of points to a model, face count, validity"},
     {"info", "FILE...                        what point-cloud files (LAS, LAZ, PLY) and footprint sources hold"},
 };
 
@@ -286,7 +287,7 @@ RunOptions parse_command_line(int argc, const char* const* argv) {
       bool known = false;
       for (const auto& c : kCommands) known = known || arg == c[0];
       if (!known)
-        problems.push_back("unknown command '" + arg + "' (commands: reconstruct, info; see city3d --help)");
+        problems.push_back("unknown command '" + arg + "' (commands: reconstruct, evaluate, info; see city3d --help)");
       options.command = arg;
     } else {
       options.inputs.push_back(arg);
@@ -295,6 +296,8 @@ RunOptions parse_command_line(int argc, const char* const* argv) {
   if (!options.help && !options.version && problems.empty()) {
     if (options.command.empty()) problems.push_back("no command given (see city3d --help)");
     if (options.command == "info" && options.inputs.empty()) problems.push_back("info: no file given");
+    if (options.command == "evaluate" && options.inputs.size() != 2)
+      problems.push_back("evaluate: give a model (OBJ) and a point cloud");
     if (options.command == "reconstruct" && options.inputs.empty())
       problems.push_back("reconstruct: no point-cloud file or folder given");
   }

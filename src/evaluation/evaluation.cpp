@@ -1,1 +1,307 @@
-// placeholder until implemented
+// Model evaluation: point-to-surface RMSE (CGAL AABB tree over an ear-clipped triangulation) and
+// validity checks (topology by directed-edge counting, geometry by Newell planes, CGAL
+// self-intersection test on the triangulated surface).
+#include "city3d/evaluation.hpp"
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numeric>
+#include <sstream>
+#include <unordered_map>
+#include <vector>
+
+#include "city3d/error.hpp"
+
+namespace city3d {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Triangle = std::array<std::uint32_t, 3>;
+
+struct Vec {
+  double x, y, z;
+};
+Vec sub(const Point3& a, const Point3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+Vec cross(const Vec& a, const Vec& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+double dot(const Vec& a, const Vec& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+
+bool indices_valid(const PolygonMesh& mesh, const std::vector<std::uint32_t>& face) {
+  return face.size() >= 3 &&
+         std::all_of(face.begin(), face.end(), [&](std::uint32_t v) { return v < mesh.vertices.size(); });
+}
+
+/// Newell's normal of a polygon: twice its vector area, robust for non-convex and slightly
+/// non-planar polygons.
+Vec newell_normal(const PolygonMesh& mesh, const std::vector<std::uint32_t>& face) {
+  Vec n{0, 0, 0};
+  for (std::size_t i = 0; i < face.size(); ++i) {
+    const Point3& a = mesh.vertices[face[i]];
+    const Point3& b = mesh.vertices[face[(i + 1) % face.size()]];
+    n.x += (a.y - b.y) * (a.z + b.z);
+    n.y += (a.z - b.z) * (a.x + b.x);
+    n.z += (a.x - b.x) * (a.y + b.y);
+  }
+  return n;
+}
+
+/// Ear clipping of one face in 2D: drop the dominant axis of the Newell normal, keep the polygon
+/// counter-clockwise, clip strictly convex corners whose triangle holds no other remaining vertex
+/// (a vertex on the triangle's boundary also blocks it, so no T-junction is created).
+void triangulate_face(const PolygonMesh& mesh, const std::vector<std::uint32_t>& face,
+                      std::vector<Triangle>& out) {
+  if (!indices_valid(mesh, face)) return;
+  const std::size_t n = face.size();
+  if (n == 3) {
+    out.push_back({face[0], face[1], face[2]});
+    return;
+  }
+  const Vec normal = newell_normal(mesh, face);
+  const double ax = std::fabs(normal.x), ay = std::fabs(normal.y), az = std::fabs(normal.z);
+  // 2D coordinates (u, v) such that the polygon is counter-clockwise when the normal points at us.
+  std::vector<double> u(n), v(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Point3& p = mesh.vertices[face[i]];
+    if (az >= ax && az >= ay) {
+      u[i] = p.x;
+      v[i] = normal.z >= 0 ? p.y : -p.y;
+    } else if (ax >= ay) {
+      u[i] = p.y;
+      v[i] = normal.x >= 0 ? p.z : -p.z;
+    } else {
+      u[i] = p.z;
+      v[i] = normal.y >= 0 ? p.x : -p.x;
+    }
+  }
+  double scale = 0.0;
+  for (std::size_t i = 0; i < n; ++i)
+    scale = std::max({scale, std::fabs(u[i] - u[0]), std::fabs(v[i] - v[0])});
+  const double eps = 1e-12 * std::max(scale * scale, 1e-300);
+  const auto orient = [&](std::size_t a, std::size_t b, std::size_t c) {
+    return (u[b] - u[a]) * (v[c] - v[a]) - (v[b] - v[a]) * (u[c] - u[a]);
+  };
+
+  std::vector<std::size_t> ring(n);
+  std::iota(ring.begin(), ring.end(), 0);
+  while (ring.size() > 3) {
+    const std::size_t m = ring.size();
+    bool clipped = false;
+    for (std::size_t k = 0; k < m && !clipped; ++k) {
+      const std::size_t a = ring[(k + m - 1) % m], b = ring[k], c = ring[(k + 1) % m];
+      if (orient(a, b, c) <= eps) continue;  // reflex or collinear corner
+      bool empty = true;
+      for (std::size_t q : ring) {
+        if (q == a || q == b || q == c) continue;
+        if ((u[q] == u[a] && v[q] == v[a]) || (u[q] == u[b] && v[q] == v[b]) ||
+            (u[q] == u[c] && v[q] == v[c]))
+          continue;  // a repeated position (e.g. a slit) does not block
+        if (orient(a, b, q) >= -eps && orient(b, c, q) >= -eps && orient(c, a, q) >= -eps) {
+          empty = false;
+          break;
+        }
+      }
+      if (!empty) continue;
+      out.push_back({face[a], face[b], face[c]});
+      ring.erase(ring.begin() + static_cast<std::ptrdiff_t>(k));
+      clipped = true;
+    }
+    if (!clipped) {
+      // No ear: the polygon self-intersects or is degenerate. Fan the rest so that every face still
+      // contributes surface; validity reports such faces through planarity/self-intersection.
+      for (std::size_t k = 1; k + 1 < ring.size(); ++k)
+        out.push_back({face[ring[0]], face[ring[k]], face[ring[k + 1]]});
+      return;
+    }
+  }
+  out.push_back({face[ring[0]], face[ring[1]], face[ring[2]]});
+}
+
+Kernel::Point_3 to_cgal(const Point3& p) { return {p.x, p.y, p.z}; }
+
+void append(std::string& problems, const std::string& problem) {
+  if (!problems.empty()) problems += "; ";
+  problems += problem;
+}
+
+}  // namespace
+
+std::vector<Triangle> triangulate(const PolygonMesh& mesh) {
+  std::vector<Triangle> triangles;
+  for (const auto& face : mesh.faces) triangulate_face(mesh, face, triangles);
+  return triangles;
+}
+
+double rmse(const PolygonMesh& mesh, const std::vector<Point3>& points) {
+  using Tri = Kernel::Triangle_3;
+  using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<Tri>::const_iterator>;
+  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
+  if (points.empty()) throw ReconstructionError("evaluation: rmse needs at least one point");
+  std::vector<Tri> triangles;
+  for (const auto& t : triangulate(mesh)) {
+    Tri tri(to_cgal(mesh.vertices[t[0]]), to_cgal(mesh.vertices[t[1]]), to_cgal(mesh.vertices[t[2]]));
+    if (!tri.is_degenerate()) triangles.push_back(tri);  // AABB distance queries need real triangles
+  }
+  if (triangles.empty())
+    throw ReconstructionError("evaluation: rmse of a mesh without area (" +
+                              std::to_string(mesh.faces.size()) + " faces)");
+  Tree tree(triangles.begin(), triangles.end());
+  tree.accelerate_distance_queries();
+  double sum = 0.0;
+  for (const auto& p : points) sum += tree.squared_distance(to_cgal(p));
+  return std::sqrt(sum / static_cast<double>(points.size()));
+}
+
+MeshValidity check_validity(const PolygonMesh& mesh, double planarity_tolerance) {
+  MeshValidity result;
+  result.faces = mesh.faces.size();
+  result.vertices = mesh.vertices.size();
+
+  std::size_t bad_faces = 0;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const auto& face = mesh.faces[f];
+    std::vector<std::uint32_t> sorted = face;
+    std::sort(sorted.begin(), sorted.end());
+    if (!indices_valid(mesh, face) || std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) {
+      if (bad_faces++ == 0)
+        append(result.problem, "face " + std::to_string(f) +
+                                   " has fewer than 3 vertices, a repeated vertex or an index out of range");
+    }
+  }
+  if (bad_faces > 0) {
+    append(result.problem, std::to_string(bad_faces) + " degenerate faces; topology not checked");
+    return result;
+  }
+  if (mesh.faces.empty()) {
+    append(result.problem, "no faces");
+    return result;
+  }
+
+  // Topology. A directed edge key packs (from, to) into 64 bits.
+  const auto key = [](std::uint32_t a, std::uint32_t b) { return (std::uint64_t{a} << 32) | b; };
+  std::unordered_map<std::uint64_t, int> directed;
+  for (const auto& face : mesh.faces)
+    for (std::size_t i = 0; i < face.size(); ++i) ++directed[key(face[i], face[(i + 1) % face.size()])];
+  std::size_t boundary = 0, overused = 0;
+  for (const auto& [k, count] : directed) {
+    const auto a = static_cast<std::uint32_t>(k >> 32), b = static_cast<std::uint32_t>(k);
+    const auto opposite = directed.find(key(b, a));
+    const int opposite_count = opposite == directed.end() ? 0 : opposite->second;
+    if (count != 1 || opposite_count != 1) ++boundary;
+    if (a < b && count + opposite_count > 2) ++overused;
+    if (a > b && opposite_count == 0 && count > 2) ++overused;
+  }
+  // Vertex fans: the corners of the faces around a vertex, joined when consecutive around the
+  // vertex (sharing an edge through it), must form one connected fan.
+  std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> corners(mesh.vertices.size());
+  for (const auto& face : mesh.faces)
+    for (std::size_t i = 0; i < face.size(); ++i)
+      corners[face[i]].emplace_back(face[(i + face.size() - 1) % face.size()], face[(i + 1) % face.size()]);
+  std::size_t pinched = 0;
+  for (const auto& around : corners) {
+    if (around.size() < 2) continue;
+    std::vector<std::size_t> parent(around.size());
+    std::iota(parent.begin(), parent.end(), 0);
+    const auto find = [&parent](std::size_t i) {
+      while (parent[i] != i) i = parent[i] = parent[parent[i]];
+      return i;
+    };
+    std::unordered_map<std::uint32_t, std::size_t> first_with_neighbour;
+    for (std::size_t c = 0; c < around.size(); ++c)
+      for (std::uint32_t w : {around[c].first, around[c].second}) {
+        const auto [it, inserted] = first_with_neighbour.emplace(w, c);
+        if (!inserted) parent[find(c)] = find(it->second);
+      }
+    std::size_t fans = 0;
+    for (std::size_t c = 0; c < around.size(); ++c) fans += find(c) == c;
+    pinched += fans > 1;
+  }
+  result.closed = boundary == 0;
+  result.manifold = overused == 0 && pinched == 0;
+  if (!result.closed)
+    append(result.problem,
+           "not closed: " + std::to_string(boundary) + " directed edges without exactly one opposite");
+  if (overused > 0)
+    append(result.problem, "not manifold: " + std::to_string(overused) + " edges in more than two faces");
+  if (pinched > 0)
+    append(result.problem, "not manifold: " + std::to_string(pinched) + " vertices with more than one fan");
+
+  // Volume by the divergence theorem over fan triangles (exact for any simple planar polygon, as the
+  // signed contributions of a fan cancel outside it), relative to the bounding-box centre to keep
+  // the products small.
+  Box3 box;
+  for (const auto& p : mesh.vertices) box.add(p);
+  const Point3 centre{0.5 * (box.min.x + box.max.x), 0.5 * (box.min.y + box.max.y),
+                      0.5 * (box.min.z + box.max.z)};
+  double six_volume = 0.0;
+  for (const auto& face : mesh.faces) {
+    const Vec a = sub(mesh.vertices[face[0]], centre);
+    for (std::size_t i = 1; i + 1 < face.size(); ++i)
+      six_volume +=
+          dot(a, cross(sub(mesh.vertices[face[i]], centre), sub(mesh.vertices[face[i + 1]], centre)));
+  }
+  result.volume = six_volume / 6.0;
+  result.outward = result.volume > 0.0;
+  if (result.closed && !result.outward)
+    append(result.problem, "not outward: signed volume " + std::to_string(result.volume));
+
+  // Planarity: distance of each vertex to the plane through the face centroid with Newell's normal.
+  std::size_t degenerate = 0;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const auto& face = mesh.faces[f];
+    const Vec normal = newell_normal(mesh, face);
+    const double length = std::sqrt(dot(normal, normal));
+    if (!(length > 0.0)) {
+      ++degenerate;
+      continue;
+    }
+    Point3 c{0, 0, 0};
+    for (auto v : face) c = {c.x + mesh.vertices[v].x, c.y + mesh.vertices[v].y, c.z + mesh.vertices[v].z};
+    c = {c.x / face.size(), c.y / face.size(), c.z / face.size()};
+    for (auto v : face)
+      result.max_planarity_error =
+          std::max(result.max_planarity_error, std::fabs(dot(sub(mesh.vertices[v], c), normal)) / length);
+  }
+  result.planar = degenerate == 0 && result.max_planarity_error <= planarity_tolerance;
+  if (degenerate > 0) append(result.problem, std::to_string(degenerate) + " faces without area");
+  if (result.max_planarity_error > planarity_tolerance) {
+    std::ostringstream s;
+    s << "not planar: a vertex " << result.max_planarity_error << " m from its face's plane (tolerance "
+      << planarity_tolerance << " m)";
+    append(result.problem, s.str());
+  }
+
+  // Self-intersection on the triangulated surface; PMP's test wants a valid triangle mesh, which
+  // closed + manifold guarantees here.
+  if (result.closed && result.manifold) {
+    using Mesh = CGAL::Surface_mesh<Kernel::Point_3>;
+    std::vector<Kernel::Point_3> points;
+    points.reserve(mesh.vertices.size());
+    for (const auto& p : mesh.vertices) points.push_back(to_cgal(p));
+    std::vector<std::vector<std::size_t>> triangles;
+    for (const auto& t : triangulate(mesh)) triangles.push_back({t[0], t[1], t[2]});
+    namespace PMP = CGAL::Polygon_mesh_processing;
+    if (PMP::is_polygon_soup_a_polygon_mesh(triangles)) {
+      Mesh surface;
+      PMP::polygon_soup_to_polygon_mesh(points, triangles, surface);
+      result.self_intersecting_checked = true;
+      result.self_intersects = PMP::does_self_intersect(surface);
+      if (result.self_intersects) append(result.problem, "self-intersecting");
+    } else {
+      append(result.problem,
+             "triangulated surface is not a valid triangle mesh; self-intersection not checked");
+    }
+  }
+  return result;
+}
+
+}  // namespace city3d

@@ -120,8 +120,11 @@ void classify_faces(Arrangement& arr, const std::vector<InputCurve>& curves) {
   }
 }
 
-// Splits every inside face that has a hole with two horizontal segments from the hole's leftmost and
-// rightmost vertices to beyond the footprint. Returns false when no face needed it.
+// Splits every inside face that has a hole with a horizontal line across the whole footprint at
+// the middle height of the hole: the line crosses the hole's boundary at least twice, so the hole
+// becomes part of the outer boundaries of the pieces above and below (a line through a vertex of the
+// hole, or a ray from it, could merely touch it and leave a pinched, non-simple cell). Returns false
+// when no face needed it.
 bool bridge_holes(Arrangement& arr, std::vector<InputCurve>& curves, std::vector<Traits::Curve_2>& bridges,
                   double x_min, double x_max) {
   bridges.clear();
@@ -129,18 +132,19 @@ bool bridge_holes(Arrangement& arr, std::vector<InputCurve>& curves, std::vector
     if (f->is_unbounded() || f->data() != 1) continue;
     for (auto h = f->inner_ccbs_begin(); h != f->inner_ccbs_end(); ++h) {
       auto he = *h;
-      Kernel::Point_2 lo = he->source()->point(), hi = lo;
+      Kernel::FT lo = he->source()->point().y(), hi = lo;
       auto first = he;
       do {
-        const auto& p = he->source()->point();
-        if (CGAL::compare_xy(p, lo) == CGAL::SMALLER) lo = p;
-        if (CGAL::compare_xy(p, hi) == CGAL::LARGER) hi = p;
+        const auto& y = he->source()->point().y();
+        if (y < lo) lo = y;
+        if (y > hi) hi = y;
       } while (++he != first);
+      // Rounded to double so that the line is a plain input segment; a hole thinner than that
+      // rounding is a degenerate input anyway.
+      const double mid = CGAL::to_double((lo + hi) / 2);
       const auto id = static_cast<unsigned>(curves.size());
-      curves.push_back({{}, {}, CurveKind::bridge, -1});
-      bridges.emplace_back(Kernel::Segment_2(lo, Kernel::Point_2(Kernel::FT(x_min), lo.y())), id);
-      curves.push_back({{}, {}, CurveKind::bridge, -1});
-      bridges.emplace_back(Kernel::Segment_2(hi, Kernel::Point_2(Kernel::FT(x_max), hi.y())), id + 1);
+      curves.push_back({{x_min, mid}, {x_max, mid}, CurveKind::bridge, -1});
+      bridges.emplace_back(Kernel::Segment_2(Kernel::Point_2(x_min, mid), Kernel::Point_2(x_max, mid)), id);
     }
   }
   return !bridges.empty();
@@ -170,6 +174,9 @@ PlainArrangement build_arrangement(std::vector<InputCurve> curves) {
     remove_antennas(arr);
     classify_faces(arr, curves);
   }
+  for (auto f = arr.faces_begin(); f != arr.faces_end(); ++f)
+    if (!f->is_unbounded() && f->data() == 1 && f->number_of_inner_ccbs() > 0)
+      throw ReconstructionError("hypothesis: a cell of the arrangement keeps a hole after bridging");
 
   // Collinearity classes of the curves (exact predicates on the input segments): the vertical plane
   // over an edge is identified by its class, so walls over collinear pieces are coplanar.
@@ -288,7 +295,8 @@ PlainArrangement build_arrangement(std::vector<InputCurve> curves) {
 // faces have no area and would leave their neighbours open). The endpoints of a short edge become one
 // vertex (the lower index, keeping its coordinates); cells left with fewer than three edges vanish,
 // and the two edges that bounded such a sliver become one. Throws ReconstructionError when the
-// result is not a valid subdivision (two cells claiming the same side of an edge, or a pinched cell).
+// result is not a valid subdivision (two cells claiming the same side of an edge, or a pinched cell);
+// contract_robustly() then retries with smaller tolerances.
 PlainArrangement contract_short_edges(const PlainArrangement& in, double min_length) {
   const std::size_t nv = in.vertices.size();
   std::vector<std::uint32_t> root(nv);
@@ -393,6 +401,19 @@ PlainArrangement contract_short_edges(const PlainArrangement& in, double min_len
   for (auto& cell : out.cells)
     for (auto& entry : cell.loop) entry.first = rank[entry.first];
   return out;
+}
+
+// Contracts short edges with min_length, or, when that pinches a cell (features of about that size),
+// with min_length / 10 and / 100, or not at all.
+PlainArrangement contract_robustly(const PlainArrangement& in, double min_length) {
+  for (double length = min_length; length >= min_length / 100.0 && length > 0.0; length /= 10.0) {
+    try {
+      return contract_short_edges(in, length);
+    } catch (const ReconstructionError& e) {
+      log_debug(std::string(e.what()) + "; retrying with a smaller tolerance");
+    }
+  }
+  return in;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -658,7 +679,7 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
   }
 
   extend_dangling_ends(curves, footprint_local, 2.0 * margin);
-  const PlainArrangement arr = contract_short_edges(build_arrangement(curves), params.min_edge_length);
+  const PlainArrangement arr = contract_robustly(build_arrangement(curves), params.min_edge_length);
   if (arr.cells.empty()) throw ReconstructionError("hypothesis: the footprint has no inside cell");
   const std::size_t cell_count = arr.cells.size();
 
@@ -858,7 +879,7 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
     }
   }
 
-  // 5. Areas; drop degenerate faces; prune faces with an edge no other face has (they could never
+  // 5. Areas; prune faces with an edge no other face has (they could never
   // be part of a closed surface).
   for (auto& f : faces) {
     std::vector<Point3> poly;
@@ -867,7 +888,9 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
     f.area = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
   }
   std::vector<bool> alive(faces.size());
-  for (std::size_t i = 0; i < faces.size(); ++i) alive[i] = faces[i].vertices.size() >= 3 && faces[i].area > 1e-9;
+  // Faces of sliver cells (nearly collinear vertices, area ~0 in double) are kept: dropping them would
+  // open their neighbours. The floor and coplanar roofs absorb them when the model is merged.
+  for (std::size_t i = 0; i < faces.size(); ++i) alive[i] = faces[i].vertices.size() >= 3;
   using EdgeKey = std::pair<std::uint32_t, std::uint32_t>;
   auto edge_key = [](std::uint32_t a, std::uint32_t b) { return a < b ? EdgeKey{a, b} : EdgeKey{b, a}; };
   std::map<EdgeKey, std::vector<std::uint32_t>> edge_faces;

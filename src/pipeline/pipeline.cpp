@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "city3d/error.hpp"
+#include "city3d/evaluation.hpp"
 #include "city3d/log.hpp"
 #include "city3d/mesh_check.hpp"
 #include "city3d/point_cloud_io.hpp"
@@ -371,12 +372,10 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
         BuildingModel model = rung.level == ModelLevel::lod12
                                   ? lod1_rung(input, params, r)
                                   : lod2_rung(input, params, rung.footprint_walls_only, start, r);
-        const MeshCheck check = check_mesh(model.mesh);
-        if (!check.valid())
-          throw ReconstructionError("model: not a valid solid (" + std::to_string(check.boundary_edges) +
-                                    " boundary edges, " + std::to_string(check.non_manifold_edges) +
-                                    " non-manifold edges, " + std::to_string(check.degenerate_faces) +
-                                    " degenerate faces, volume " + std::to_string(check.signed_volume) + ")");
+        // Closed, 2-manifold, outward, planar faces, no self-intersection: anything less is a bug
+        // of a rung, never a result.
+        const MeshValidity validity = check_validity(model.mesh);
+        if (!validity.valid()) throw ReconstructionError("model: not a valid solid: " + validity.problem);
         r.level = rung.level;
         r.status = rung.level == requested ? BuildingStatus::ok : BuildingStatus::fallback;
         r.faces = model.mesh.faces.size();
@@ -392,6 +391,7 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
       }
     }
     if (!result.model) r.status = BuildingStatus::failed;
+    if (result.model) r.rmse = rmse(result.model->mesh, input.points);
     if (r.status == BuildingStatus::ok) r.stage.clear(), r.reason.clear();
   }
 

@@ -1,12 +1,11 @@
 // COIN-OR CBC backend of face selection: MipModel -> OsiClpSolverInterface -> CbcModel -> CbcMain1.
+#include <algorithm>
+#include <cmath>
 #include <coin/CbcModel.hpp>
 #include <coin/CbcSolver.hpp>
 #include <coin/CoinPackedMatrix.hpp>
 #include <coin/CoinPackedVector.hpp>
 #include <coin/OsiClpSolverInterface.hpp>
-
-#include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <mutex>
 #include <string>
@@ -59,8 +58,7 @@ MipSolution solve_with_cbc(const MipModel& model, const MipLimits& limits) {
     row_lower.push_back(std::isfinite(r.lower) ? r.lower : -inf);
     row_upper.push_back(std::isfinite(r.upper) ? r.upper : inf);
   }
-  lp.loadProblem(matrix, col_lower.data(), col_upper.data(), cost.data(), row_lower.data(),
-                 row_upper.data());
+  lp.loadProblem(matrix, col_lower.data(), col_upper.data(), cost.data(), row_lower.data(), row_upper.data());
   for (int j = 0; j < n; ++j)
     if (model.columns[j].integer) lp.setInteger(j);
   lp.messageHandler()->setLogLevel(0);
@@ -74,11 +72,18 @@ MipSolution solve_with_cbc(const MipModel& model, const MipLimits& limits) {
   // unless -timeMode elapsed, which on a loaded machine lets a solve run far past the limit).
   const std::string seconds = number(limits.time_limit);
   const std::string nodes = std::to_string(limits.node_limit);
-  const char* argv[] = {"city3d",        "-log",     "0",     "-threads", "0",
-                        "-randomSeed",   "1",        "-randomCbcSeed", "1",
-                        "-timeMode", "elapsed", "-sec", seconds.c_str(), "-maxNodes", nodes.c_str(),
-                        "-solve",        "-quit"};
-  CbcMain1(static_cast<int>(sizeof argv / sizeof argv[0]), argv, cbc);
+  const std::vector<std::string> arguments = {"city3d",                     //
+                                              "-log",           "0",        //
+                                              "-threads",       "0",        //
+                                              "-randomSeed",    "1",        //
+                                              "-randomCbcSeed", "1",        //
+                                              "-timeMode",      "elapsed",  //
+                                              "-sec",           seconds,    //
+                                              "-maxNodes",      nodes,      //
+                                              "-solve",         "-quit"};
+  std::vector<const char*> argv;
+  for (const auto& a : arguments) argv.push_back(a.c_str());
+  CbcMain1(static_cast<int>(argv.size()), argv.data(), cbc);
 
   const double* best = cbc.bestSolution();
   const auto take_values = [&] {
@@ -96,11 +101,10 @@ MipSolution solve_with_cbc(const MipModel& model, const MipLimits& limits) {
   } else {
     // status 1 = stopped on a limit; secondary status 3 = nodes, 4 = time (CbcModel.hpp).
     const int secondary = cbc.secondaryStatus();
-    const std::string why =
-        secondary == 3   ? "node limit " + nodes + " reached"
-        : secondary == 4 ? "time limit " + seconds + " s reached"
-                         : "stopped (status " + std::to_string(cbc.status()) + "/" +
-                               std::to_string(secondary) + ")";
+    const std::string why = secondary == 3   ? "node limit " + nodes + " reached"
+                            : secondary == 4 ? "time limit " + seconds + " s reached"
+                                             : "stopped (status " + std::to_string(cbc.status()) + "/" +
+                                                   std::to_string(secondary) + ")";
     if (best != nullptr) {
       solution.status = MipStatus::feasible;
       take_values();

@@ -31,6 +31,11 @@
 //  - an edge with exactly two free faces and none on makes them equal: they share one variable (and
 //    its sharp corner costs lambda_c / |E| on that variable directly);
 //  - faces linked by no constraint chain are independent: each connected component is solved alone.
+//
+// Limits: node_limit applies to each component's search; time_limit to the whole call (each
+// component gets the time left; backends can overshoot it by their root processing). solver = "auto"
+// uses CBC for components of kAutoCbcThreshold variables or more, else GLPK with half the time left,
+// then CBC on the rest of the time if GLPK stopped on a limit.
 #include "city3d/selection.hpp"
 
 #include <algorithm>
@@ -57,8 +62,14 @@ using detail::MipSolution;
 using detail::MipStatus;
 
 /// Variable count at and above which solver = "auto" uses CBC instead of GLPK, per component.
-/// Measured with bench/bench_selection (see docs): GLPK wins below, CBC above.
-constexpr std::size_t kAutoCbcThreshold = 900;
+/// bench_selection (building-like programs, 3 seeds per size, 2 loaded cores): GLPK median 0.001-0.12 s
+/// below 2,000 variables, 1.5-3x faster than CBC (whose per-call overhead is 5-30 ms); the two are
+/// even from 3,300 to 5,500 (GLPK 0.3-2.2 s, CBC 0.4-1.7 s); at ~9,900 GLPK found no optimum in 30 s
+/// on 2 of 3 while CBC solved 2 of 3 in 4-5 s. CBC calls are also serialised by a mutex, which favours
+/// GLPK in parallel batch runs. Caveat: on the two Delft samples' real programs (5 with 133-364
+/// variables) GLPK took 0.004-0.27 s and CBC 0.02-0.09 s; re-measure on city3d_dev when the
+/// hypothesis module is final.
+constexpr std::size_t kAutoCbcThreshold = 2000;
 
 constexpr std::int8_t kFree = -1;
 
@@ -92,7 +103,8 @@ void check_problem(const SelectionProblem& problem) {
   if (problem.support.size() != n)
     add("support has " + std::to_string(problem.support.size()) + " entries, need " + std::to_string(n));
   if (problem.centroid_z.size() != n)
-    add("centroid_z has " + std::to_string(problem.centroid_z.size()) + " entries, need " + std::to_string(n));
+    add("centroid_z has " + std::to_string(problem.centroid_z.size()) + " entries, need " +
+        std::to_string(n));
   if (!problem.is_roof.empty() && problem.is_roof.size() != n)
     add("is_roof has " + std::to_string(problem.is_roof.size()) + " entries, need 0 or " + std::to_string(n));
   if (problem.point_count == 0) add("point_count is 0");
@@ -105,7 +117,8 @@ void check_problem(const SelectionProblem& problem) {
     if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
       add("edge " + std::to_string(e) + " lists a face twice");
     for (auto f : edge.faces)
-      if (f >= n) add("edge " + std::to_string(e) + " names face " + std::to_string(f) + " of " + std::to_string(n));
+      if (f >= n)
+        add("edge " + std::to_string(e) + " names face " + std::to_string(f) + " of " + std::to_string(n));
     for (const auto& [a, b] : edge.sharp_pairs)
       if (a == b || !std::binary_search(sorted.begin(), sorted.end(), a) ||
           !std::binary_search(sorted.begin(), sorted.end(), b))
@@ -292,11 +305,14 @@ GlobalProgram build_program(const SelectionProblem& problem, const SelectionPara
         always_sharp = true;
         break;
       }
-      if (value[a] == 1) pairs.emplace_back(program.class_of_face[b], SIZE_MAX);
-      else if (value[b] == 1) pairs.emplace_back(program.class_of_face[a], SIZE_MAX);
+      if (value[a] == 1)
+        pairs.emplace_back(program.class_of_face[b], SIZE_MAX);
+      else if (value[b] == 1)
+        pairs.emplace_back(program.class_of_face[a], SIZE_MAX);
       else if (program.class_of_face[a] == program.class_of_face[b])
         pairs.emplace_back(program.class_of_face[a], SIZE_MAX);
-      else pairs.emplace_back(program.class_of_face[a], program.class_of_face[b]);
+      else
+        pairs.emplace_back(program.class_of_face[a], program.class_of_face[b]);
     }
     if (always_sharp || pairs.empty()) continue;
     const bool one_class = std::all_of(pairs.begin(), pairs.end(), [&](const auto& p) {
@@ -360,10 +376,14 @@ std::vector<Component> split_components(const GlobalProgram& program) {
 
 const char* status_name(SelectionStatus status) {
   switch (status) {
-    case SelectionStatus::optimal: return "optimal";
-    case SelectionStatus::feasible: return "feasible";
-    case SelectionStatus::infeasible: return "infeasible";
-    case SelectionStatus::no_solution: return "no_solution";
+    case SelectionStatus::optimal:
+      return "optimal";
+    case SelectionStatus::feasible:
+      return "feasible";
+    case SelectionStatus::infeasible:
+      return "infeasible";
+    case SelectionStatus::no_solution:
+      return "no_solution";
   }
   return "?";
 }
@@ -373,7 +393,8 @@ const char* status_name(SelectionStatus status) {
 void SelectionParams::validate() const {
   std::vector<std::string> errors;
   const auto weight = [&errors](double w, const char* name) {
-    if (!std::isfinite(w) || w < 0.0) errors.push_back(std::string(name) + " = " + std::to_string(w) + " (need >= 0)");
+    if (!std::isfinite(w) || w < 0.0)
+      errors.push_back(std::string(name) + " = " + std::to_string(w) + " (need >= 0)");
   };
   weight(lambda_data, "lambda_data");
   weight(lambda_complexity, "lambda_complexity");
@@ -439,10 +460,10 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
   check_problem(problem);
 
   SelectionResult result;
-  const std::string prior_note =
-      params.use_face_prior && !problem.face_prior.empty()
-          ? " (the face prior fixes " + std::to_string(problem.face_prior.size()) + " faces; retry without it)"
-          : "";
+  const std::string prior_note = params.use_face_prior && !problem.face_prior.empty()
+                                     ? " (the face prior fixes " + std::to_string(problem.face_prior.size()) +
+                                           " faces; retry without it)"
+                                     : "";
 
   std::vector<std::int8_t> value;
   const std::string conflict = propagate_fixings(problem, params, value);
@@ -485,8 +506,8 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
     result.variables += model.columns.size();
     result.constraints += model.rows.size();
 
-    const bool use_cbc =
-        params.solver == "cbc" || (params.solver == "auto" && model.columns.size() >= kAutoCbcThreshold);
+    const bool automatic = params.solver == "auto";
+    const bool use_cbc = params.solver == "cbc" || (automatic && model.columns.size() >= kAutoCbcThreshold);
     MipLimits limits;
     limits.node_limit = params.node_limit;
     limits.time_limit = params.time_limit - elapsed();
@@ -494,9 +515,30 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
     if (limits.time_limit <= 0.0) {
       part.status = MipStatus::no_solution;
       part.message = "time limit " + std::to_string(params.time_limit) + " s reached before this component";
+    } else if (use_cbc) {
+      part = detail::solve_with_cbc(model, limits);
+      used_cbc = true;
+    } else if (!automatic) {
+      part = detail::solve_with_glpk(model, limits);
+      used_glpk = true;
     } else {
-      part = use_cbc ? detail::solve_with_cbc(model, limits) : detail::solve_with_glpk(model, limits);
-      (use_cbc ? used_cbc : used_glpk) = true;
+      // "auto" below the threshold: GLPK first with half the time left. GLPK is erratic on some
+      // programs (no incumbent after its root node, or a long search where CBC's preprocessing and
+      // heuristics finish quickly), so when it stops on a limit CBC gets the rest of the time and
+      // the better of the two answers is kept.
+      limits.time_limit *= 0.5;
+      part = detail::solve_with_glpk(model, limits);
+      used_glpk = true;
+      limits.time_limit = params.time_limit - elapsed();
+      if ((part.status == MipStatus::feasible || part.status == MipStatus::no_solution) &&
+          limits.time_limit > 0.0) {
+        MipSolution second = detail::solve_with_cbc(model, limits);
+        used_cbc = true;
+        const bool better = second.status == MipStatus::optimal || second.status == MipStatus::infeasible ||
+                            (second.status == MipStatus::feasible &&
+                             (part.status == MipStatus::no_solution || second.objective < part.objective));
+        if (better) part = std::move(second);
+      }
     }
 
     const std::string where = "component " + std::to_string(k + 1) + "/" + std::to_string(components.size()) +
@@ -522,8 +564,7 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
   if (result.status == SelectionStatus::optimal || result.status == SelectionStatus::feasible) {
     result.selected.assign(problem.face_count, false);
     for (std::size_t f = 0; f < problem.face_count; ++f)
-      result.selected[f] =
-          value[f] == kFree ? solution[program.class_of_face[f]] > 0.5 : value[f] == 1;
+      result.selected[f] = value[f] == kFree ? solution[program.class_of_face[f]] > 0.5 : value[f] == 1;
     if (!satisfies_constraints(problem, result.selected, params)) {
       // Only a backend's numerical trouble can get here; never hand such a model on.
       result.status = SelectionStatus::no_solution;
@@ -539,8 +580,8 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
 
   std::ostringstream line;
   line << "selection: " << problem.face_count << " faces, " << result.variables << " variables, "
-       << result.constraints << " constraints, " << result.components << " components, " << result.solver << ", "
-       << status_name(result.status) << ", " << result.seconds << " s";
+       << result.constraints << " constraints, " << result.components << " components, " << result.solver
+       << ", " << status_name(result.status) << ", " << result.seconds << " s";
   log_debug(line.str());
   return result;
 }
