@@ -55,8 +55,9 @@ struct ReconstructionParams {
   Lod1Params lod1;
   /// Highest rung to try: lod22 (full), lod22_footprint_walls, or lod12 (LoD1 blocks only).
   ModelLevel max_level = ModelLevel::lod22;
-  /// Wall-clock limit for one building's LoD2 attempts, seconds; the selection gets what is left.
-  double time_limit = 60.0;
+  /// Wall-clock limit for one building's LoD2 attempts, seconds: the full rung gets 60% of it, the
+  /// footprint-walls rung the rest, and each selection what is left of its rung's share.
+  double time_limit = 20.0;
   /// When not empty: per-building intermediate results (heightmap and edge PNGs, polylines before
   /// and after regularisation, walls, planes, candidate faces) are written into <debug_dir>/<id>/.
   std::string debug_dir;

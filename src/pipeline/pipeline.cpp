@@ -156,6 +156,18 @@ BuildingModel lod1_rung(const BuildingInput& input, const ReconstructionParams& 
   return model;
 }
 
+// Share of a building's time limit the full LoD2 rung may use; the second rung gets the rest.
+constexpr double kFullRungShare = 0.6;
+
+// Fewest points a roof plane may have on the retry for small buildings.
+constexpr std::size_t kMinPointsForSmallRoof = 10;
+
+// Throws when the rung's time is used up after `stage`, so the ladder moves on.
+void check_time(Clock::time_point deadline, const char* stage) {
+  if (Clock::now() > deadline)
+    throw ReconstructionError(std::string(stage) + ": the building's time limit is used up (see --time-limit)");
+}
+
 // The horizontal line of a detected wall segment: its points projected on the wall's horizontal
 // direction, from the lowest to the highest projection.
 std::pair<Point2, Point2> wall_line(const PlanarSegment& wall, const std::vector<Point3>& points) {
@@ -206,12 +218,28 @@ void write_planes_ply(const std::string& path, const std::vector<Point3>& points
 // A LoD2 rung: planes, walls, hypothesis, selection, model. `footprint_walls_only` skips the
 // inferred inner walls (the second rung). Throws Error naming the stage when a stage fails.
 BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& params, bool footprint_walls_only,
-                        Clock::time_point start, BuildingReport& report) {
+                        Clock::time_point deadline, BuildingReport& report) {
   const bool debug = !params.debug_dir.empty();
   const auto& points = input.points;
 
   // Roof planes (and wall planes, if the cloud sees walls).
-  const std::vector<PlanarSegment> segments = detect_planes(points, params.planes);
+  std::vector<PlanarSegment> segments = detect_planes(points, params.planes);
+  const auto has_roof = [](const std::vector<PlanarSegment>& found) {
+    return std::any_of(found.begin(), found.end(),
+                       [](const PlanarSegment& s) { return s.kind == PlanarSegment::Kind::roof; });
+  };
+  if (!has_roof(segments) && points.size() >= kMinPointsForSmallRoof) {
+    // A shed or a garage can hold fewer points than min_points in all: rather than a block, try
+    // one more time with a third of its points (at least kMinPointsForSmallRoof) per plane.
+    PlaneParams small = params.planes;
+    small.min_points = std::max<int>(kMinPointsForSmallRoof, static_cast<int>(points.size() / 3));
+    if (small.min_points < params.planes.min_points) {
+      segments = detect_planes(points, small);
+      const std::string note = "small building: planes of at least " + std::to_string(small.min_points) + " points";
+      if (has_roof(segments) && report.note.find(note) == std::string::npos)
+        report.note += (report.note.empty() ? "" : "; ") + note;
+    }
+  }
   std::vector<PlanarSegment> roofs;
   std::vector<std::pair<Point2, Point2>> detected_walls;
   for (const PlanarSegment& s : segments) {
@@ -225,6 +253,8 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
   if (roofs.empty())
     throw ReconstructionError("planes: no roof plane among " + std::to_string(points.size()) + " points (min_points " +
                               std::to_string(params.planes.min_points) + ")");
+
+  check_time(deadline, "planes");
 
   // Heightmap, edges, polylines, regular lines: the inferred vertical planes (paper section 3.2).
   const Heightmap heightmap = rasterise_tin(points, params.heightmap);
@@ -254,17 +284,18 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
       infer_walls(lines, &outline, footprint_walls_only ? std::vector<std::pair<Point2, Point2>>{} : detected_walls,
                   wall_params);
   report.walls = walls.size();
+  check_time(deadline, "walls");
   if (debug) write_walls_obj(debug_path(params, input.id, "walls.obj"), walls, input.ground_z, input.ground_z + 20.0);
 
   // Face hypothesis and selection (paper section 3.3).
   const CandidateFaces candidates =
       generate_candidates(points, roofs, walls, outline, input.ground_z, params.hypothesis);
   report.candidate_faces = candidates.faces.size();
+  check_time(deadline, "hypothesis");
   if (debug) write_candidates_obj(debug_path(params, input.id, "candidates.obj"), candidates);
   SelectionParams selection_params = params.selection;
-  const double left = params.time_limit - seconds_since(start);
-  if (left <= 0) throw ReconstructionError("selection: building time limit of " + std::to_string(params.time_limit) + " s reached before solving");
-  selection_params.time_limit = std::min(selection_params.time_limit, left);
+  const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
+  selection_params.time_limit = std::max(0.1, std::min(selection_params.time_limit, left));
   SelectionResult selection = solve_selection(candidates.problem, selection_params);
   if (selection.status == SelectionStatus::infeasible && selection_params.use_face_prior) {
     // The face prior is a preference of the paper's, not a necessity: retry without it.
@@ -272,8 +303,10 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
     selection = solve_selection(candidates.problem, selection_params);
   }
   if (selection.status != SelectionStatus::optimal && selection.status != SelectionStatus::feasible)
-    throw ReconstructionError("selection: " + std::string(selection.status == SelectionStatus::infeasible ? "infeasible" : "no solution within the limits") +
-                              " (" + std::to_string(selection.variables) + " variables; " + selection.message + ")");
+    throw ReconstructionError(std::string(selection.status == SelectionStatus::infeasible
+                                              ? "selection: infeasible"
+                                              : "selection: no solution within the limits") +
+                              " (" + std::to_string(selection.variables) + " variables): " + selection.message);
 
   BuildingModel model;
   model.id = input.id;
@@ -369,9 +402,13 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
       if (rung.level == requested) started = true;
       if (!started) continue;
       try {
+        // The full rung may use 60% of the building's time, the footprint-walls rung the rest.
+        const double share = rung.level == ModelLevel::lod22 ? kFullRungShare : 1.0;
+        const auto deadline = start + std::chrono::duration_cast<Clock::duration>(
+                                          std::chrono::duration<double>(share * params.time_limit));
         BuildingModel model = rung.level == ModelLevel::lod12
                                   ? lod1_rung(input, params, r)
-                                  : lod2_rung(input, params, rung.footprint_walls_only, start, r);
+                                  : lod2_rung(input, params, rung.footprint_walls_only, deadline, r);
         // Closed, 2-manifold, outward, planar faces, no self-intersection: anything less is a bug
         // of a rung, never a result.
         const MeshValidity validity = check_validity(model.mesh);
