@@ -387,6 +387,7 @@ TEST(Selection, glpk_node_limit_stops_the_search_deterministically) {
 TEST(Selection, auto_falls_back_to_cbc_when_glpk_stops_on_a_limit) {
   const auto p = bench::building_problem({7, 5, 4, 3, true}, 3);
   SelectionParams params = with_solver("auto");
+  params.auto_cbc_variables = 100000;  // GLPK first, whatever the size
   params.node_limit = 1;  // GLPK stops at its root without an incumbent; CBC solves it at the root
   const auto r = solve_selection(p, params);
   ASSERT_EQ(r.status, SelectionStatus::optimal) << r.message;
@@ -427,6 +428,7 @@ TEST(Selection, concurrent_solves_from_four_threads_give_identical_results) {
 TEST(Selection, defaults_are_the_papers_weights) {
   const SelectionParams params;
   EXPECT_EQ(params.lambda_data, 0.34);
+  EXPECT_EQ(params.auto_cbc_variables, 200u);
   EXPECT_EQ(params.lambda_complexity, 0.62);
   EXPECT_EQ(params.lambda_roof, 0.04);
   EXPECT_EQ(params.solver, "auto");

@@ -53,6 +53,9 @@ struct SelectionParams {
   double lambda_complexity = 0.62;  ///< lambda_c
   double lambda_roof = 0.04;        ///< lambda_r
   std::string solver = "auto";      ///< "auto", "glpk" or "cbc"
+  /// "auto": components with at least this many variables go to CBC; smaller ones to GLPK first
+  /// (then CBC on the time left if GLPK stops on a limit). See selection.cpp for the measurement.
+  std::size_t auto_cbc_variables = 200;
   double time_limit = 10.0;         ///< wall-clock safety limit per solve, seconds
   long node_limit = 100000;         ///< deterministic work limit (branch-and-bound nodes)
   bool use_face_prior = true;

@@ -121,6 +121,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("selection.lambda_complexity", p.selection.lambda_complexity);
   put("selection.lambda_roof", p.selection.lambda_roof);
   put("selection.solver", p.selection.solver);
+  put("selection.auto_cbc_variables", p.selection.auto_cbc_variables);
   put("selection.time_limit", p.selection.time_limit);
   put("selection.node_limit", p.selection.node_limit);
   put("selection.use_face_prior", p.selection.use_face_prior);

@@ -34,7 +34,7 @@
 //
 // Limits: node_limit applies to each component's search; time_limit to the whole call (each
 // component gets the time left; backends can overshoot it by their root processing). solver = "auto"
-// uses CBC for components of kAutoCbcThreshold variables or more, else GLPK with half the time left,
+// uses CBC for components of auto_cbc_variables variables or more, else GLPK with half the time left,
 // then CBC on the rest of the time if GLPK stopped on a limit.
 #include "city3d/selection.hpp"
 
@@ -61,15 +61,13 @@ using detail::MipModel;
 using detail::MipSolution;
 using detail::MipStatus;
 
-/// Variable count at and above which solver = "auto" uses CBC instead of GLPK, per component.
-/// bench_selection (building-like programs, 3 seeds per size, 2 loaded cores): GLPK median 0.001-0.12 s
-/// below 2,000 variables, 1.5-3x faster than CBC (whose per-call overhead is 5-30 ms); the two are
-/// even from 3,300 to 5,500 (GLPK 0.3-2.2 s, CBC 0.4-1.7 s); at ~9,900 GLPK found no optimum in 30 s
-/// on 2 of 3 while CBC solved 2 of 3 in 4-5 s. CBC calls are also serialised by a mutex, which favours
-/// GLPK in parallel batch runs. Caveat: on the two Delft samples' real programs (5 with 133-364
-/// variables) GLPK took 0.004-0.27 s and CBC 0.02-0.09 s; re-measure on city3d_dev when the
-/// hypothesis module is final.
-constexpr std::size_t kAutoCbcThreshold = 2000;
+// Why SelectionParams::auto_cbc_variables defaults to 200 (the variable count at and above which
+// solver = "auto" uses CBC instead of GLPK, per component):
+// synthetic building-like programs (bench_selection) favoured GLPK up to ~2,000 variables, but the
+// real programs of the hypothesis do not: on the 10 smoke + 20 Vaihingen buildings (2026-11-23, one
+// thread, `city3d reconstruct ... --solver glpk|cbc`) GLPK took 56.7 s in all and CBC 14.2 s, GLPK
+// needing 5 s where CBC needed 0.3 s on programs of a few hundred variables (Vaihingen 00039, 00049).
+// Below ~200 variables both take milliseconds and GLPK avoids CBC's 5-30 ms per-call overhead.
 
 constexpr std::int8_t kFree = -1;
 
@@ -507,7 +505,7 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
     result.constraints += model.rows.size();
 
     const bool automatic = params.solver == "auto";
-    const bool use_cbc = params.solver == "cbc" || (automatic && model.columns.size() >= kAutoCbcThreshold);
+    const bool use_cbc = params.solver == "cbc" || (automatic && model.columns.size() >= params.auto_cbc_variables);
     MipLimits limits;
     limits.node_limit = params.node_limit;
     limits.time_limit = params.time_limit - elapsed();
