@@ -278,11 +278,15 @@ TEST_F(Reconstruct, cityjson_and_cityjsonseq_validate_against_the_official_schem
   EXPECT_NE(validate_cityjson(broken, false).exit_code, 0);
 }
 
-TEST_F(Reconstruct, output_is_byte_identical_for_one_and_two_jobs) {
+TEST_F(Reconstruct, output_is_byte_identical_for_one_and_two_jobs_and_any_block_size) {
   ASSERT_EQ(run("reconstruct " + sample_args() + " -j 1 -o " + (dir_ / "j1").string()).exit_code, 0);
   ASSERT_EQ(run("reconstruct " + sample_args() + " -j 2 -o " + (dir_ / "j2").string()).exit_code, 0);
-  for (const char* f : {"buildings.city.json", "buildings.city.jsonl"})
+  // Blocks of 20 m split the sample's 15 footprints into many blocks, each cropped on its own.
+  ASSERT_EQ(run("reconstruct " + sample_args() + " -j 2 --block-size 20 -o " + (dir_ / "b20").string()).exit_code, 0);
+  for (const char* f : {"buildings.city.json", "buildings.city.jsonl"}) {
     EXPECT_EQ(read_file(dir_ / "j1" / f), read_file(dir_ / "j2" / f)) << f;
+    EXPECT_EQ(read_file(dir_ / "j1" / f), read_file(dir_ / "b20" / f)) << f;
+  }
   for (const auto& entry : fs::directory_iterator(dir_ / "j1" / "models"))
     EXPECT_EQ(read_file(entry.path()), read_file(dir_ / "j2" / "models" / entry.path().filename())) << entry.path();
 }

@@ -531,3 +531,21 @@ TEST(Model, orients_faces_outward_whatever_their_input_orientation) {
 
 }  // namespace
 }  // namespace city3d
+
+namespace city3d {
+namespace {
+
+// Issue: a roof plane extended to the outline dropped below the floor (ground_z = lowest point), and
+// the roof crossed the floor ("model: not a valid solid: self-intersecting").
+TEST(Model, floor_is_lowered_below_a_roof_that_dips_under_ground_z) {
+  // Shed 10 x 6, z = 1 + 0.5 x: the low eave (z = 1) is below the given ground_z of 1.5.
+  Synthetic b = make_building({rectangle(0, 0, 10, 6)}, {{{{0, 0}, {10, 0}, {10, 6}, {0, 6}}, 0.5, 0.0, 1.0}}, 0.0);
+  b.ground_z = 1.5;
+  const Reconstruction r = reconstruct(b);
+  const double floor_z = 1.0 - HypothesisParams{}.floor_clearance;
+  for (const auto& p : r.mesh.vertices) EXPECT_GE(p.z, floor_z - 1e-9);
+  expect_valid_solid(r, 60.0 * (3.5 - floor_z));
+}
+
+}  // namespace
+}  // namespace city3d

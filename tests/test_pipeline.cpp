@@ -2,6 +2,7 @@
 // fallback ladder's bottom rung, single-building clouds, and report rows for broken footprints.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -126,4 +127,33 @@ TEST(Batch, delft_block_from_laz_tiles_gives_the_same_output_as_from_las) {
   }
   EXPECT_FALSE(outputs[0].empty());
   EXPECT_EQ(outputs[0], outputs[1]);
+}
+
+TEST(Smoke, ten_small_ahn3_buildings_give_valid_lod2_models_as_accurate_as_city3d) {
+  const std::string folder = std::string(CITY3D_SHARED_DATA) + "/city3d_smoke/AHN3/";
+  if (!fs::exists(folder)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  // RMSE of City3D's own model (the .obj beside each .ply) to the same points, measured with our
+  // evaluation code: `city3d evaluate NNNNN.obj NNNNN.ply` (2026-11-23).
+  const std::pair<const char*, double> city3d_rmse[] = {
+      {"00295", 0.0391}, {"04160", 0.3173}, {"06773", 0.0735}, {"07827", 0.1834}, {"08439", 0.0562},
+      {"08541", 0.0748}, {"09696", 0.0185}, {"13071", 0.3247}, {"13639", 0.3681}, {"19960", 0.3476}};
+  std::vector<double> ours, theirs;
+  for (const auto& [name, reference] : city3d_rmse) {
+    SCOPED_TRACE(name);
+    const PointCloud cloud = read_point_cloud(folder + name + ".ply", kFieldXyz);
+    const BuildingResult r = reconstruct_building(building_from_cloud(name, cloud.points), {});
+    EXPECT_EQ(r.report.status, BuildingStatus::ok) << r.report.reason;
+    EXPECT_EQ(r.report.level, ModelLevel::lod22);
+    ASSERT_TRUE(r.model.has_value());
+    EXPECT_TRUE(check_mesh(r.model->mesh).valid());
+    // Per building: never far worse than City3D (chimneys and trees make some RMSEs large for both).
+    EXPECT_LT(r.report.rmse, reference + 0.15);
+    EXPECT_LE(r.report.faces, 40u);
+    ours.push_back(r.report.rmse);
+    theirs.push_back(reference);
+  }
+  std::sort(ours.begin(), ours.end());
+  std::sort(theirs.begin(), theirs.end());
+  const double our_median = (ours[4] + ours[5]) / 2, their_median = (theirs[4] + theirs[5]) / 2;
+  EXPECT_LE(our_median, their_median * 1.1) << "median RMSE " << our_median << " vs City3D " << their_median;
 }

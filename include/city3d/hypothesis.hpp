@@ -21,16 +21,27 @@
 //     roof lines and inner walls that lie inside the footprint, with no crossing within
 //     2 x line_support_margin, are first extended to the next line ahead.
 //     The outer VerticalPlanes are not used: the footprint rings are the outer walls.
-//  2. Roof faces: every bounded cell inside the footprint, lifted onto every roof plane that has at
-//     least min_support_points of its points within cell_support_margin (xy) of the cell (when no
-//     plane qualifies, the plane(s) whose points come nearest). Vertically overlapping roof faces are
-//     exactly the faces over the same cell.
+//     Contracting short edges can make a cell's loop visit a vertex twice (a sliver part collapsed
+//     onto a point): the loop is split there into simple loops; two-vertex pieces vanish, the others
+//     are cells (even when snapping turned them clockwise: dropping one would open a crack).
+//     Detached parts of the inside cells (connected across inner edges) smaller than min_part_area
+//     are dropped, never the largest part: a self-touching outline leaves lobes of a few cm2.
+//  2. Roof faces: every bounded cell inside the footprint, lifted onto the roof planes that have at
+//     least min_support_points of their points within cell_support_margin (xy) of the cell (when no
+//     plane qualifies, the plane(s) whose points come nearest), at most max_planes_per_cell of them:
+//     the ones with most points inside the cell, then most points within the margin, then the lower
+//     plane index. Vertically overlapping roof faces are exactly the faces over the same cell.
+//     The floor lies below every roof face: over a cell, a plane that comes lower than
+//     ground_z + floor_clearance at a cell vertex is dropped when another of the cell's planes stays
+//     above that; the floor is then lowered (never raised) to floor_clearance below the lowest
+//     remaining roof vertex (without ground points ground_z is the lowest point, and a roof plane
+//     extended to the outline can come lower; the roof then crossed the floor).
 //  3. Vertical faces: over every arrangement edge, the "levels" are the roof planes of the cells on
 //     both sides (plus the floor on the footprint boundary). The vertical strip over the edge is cut
 //     by the level lines; every cell of that 1D line arrangement (between two consecutive levels) is
 //     a candidate. Where two levels cross inside an edge, the crossing becomes a vertex (a station)
 //     of every face along the edge, so no face is a bow-tie and edges weld exactly.
-//  4. Floor faces: every inside cell at ground_z, forced on.
+//  4. Floor faces: every inside cell at the floor height (ground_z, or lower, see 2), forced on.
 //
 // Vertex identity: a vertex is (arrangement vertex or station on an edge, height cluster). The xy
 // part comes from the exact arrangement; at one xy position the heights of the levels through it
@@ -66,6 +77,12 @@ struct HypothesisParams {
   int min_support_points = 3;        ///< points a plane needs near a cell (fewer if the segment is smaller), >= 1
   double vertex_merge_tolerance = 1e-3;  ///< heights at one xy position closer than this share a vertex, > 0
   double parallel_tolerance = 1e-3;  ///< |n_i x n_j| below this: roof planes treated as parallel (no line), > 0
+  int max_planes_per_cell = 4;        ///< roof planes lifted onto one cell: the best-supported ones (most of
+                                     ///< their points inside the cell, then near it), >= 1
+  double floor_clearance = 0.1;      ///< least height of a roof vertex above the floor; the floor is lowered
+                                     ///< (never raised) to keep it, > 0
+  double min_part_area = 1.0;        ///< m2; detached parts of the inside cells smaller than this are dropped
+                                     ///< (never the largest part), >= 0
   double min_edge_length = 0.01;     ///< arrangement edges shorter than this are contracted (their end
                                      ///< vertices snap together; sliver cells vanish), >= 0
 

@@ -130,6 +130,11 @@ struct BatchOptions {
   bool cityjson_seq = false;        ///< buildings.city.jsonl
   bool timings_in_cityjson = false; ///< add "seconds" to CityJSON attributes (breaks byte-identity)
   int threads = 1;
+  /// Footprints are cropped and reconstructed in square blocks of this size (metres, by their
+  /// bounding-box centres), so memory follows one block's points, not the whole footprint set; the
+  /// tiles overlapping a block are streamed once per block. 0 = everything in one block. The output
+  /// does not depend on it.
+  double block_size = 1000.0;
   bool progress = false;            ///< progress line on stderr
   /// Skip buildings a previous run with the same inputs and parameters finished (resume.journal in
   /// the output folder); false recomputes everything.

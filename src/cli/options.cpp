@@ -217,6 +217,11 @@ const std::vector<OptionSpec>& option_table() {
       {"--no-resume", nullptr, nullptr,
        "recompute every building, even those an interrupted earlier run into the same folder finished", nullptr,
        [](O& o, V) { o.batch.resume = false; }},
+      {"--block-size", nullptr, "M",
+       "footprints are processed in square blocks of this size, so memory follows one block's points "
+       "(0 = all at once; the output is the same)",
+       [](const O& o) { return number_text(o.batch.block_size); },
+       [](O& o, V v) { o.batch.block_size = parse_double("--block-size", v); }},
       {"--strict", nullptr, nullptr, "exit with code 4 when any building failed", nullptr,
        [](O& o, V) { o.strict = true; }},
       {"--progress", nullptr, nullptr, "progress on stderr even when it is not a terminal", nullptr,

@@ -37,6 +37,9 @@ void HypothesisParams::validate() const {
   need(min_support_points >= 1, "min_support_points must be >= 1");
   need(vertex_merge_tolerance > 0.0, "vertex_merge_tolerance must be > 0");
   need(parallel_tolerance > 0.0, "parallel_tolerance must be > 0");
+  need(max_planes_per_cell >= 1, "max_planes_per_cell must be >= 1");
+  need(floor_clearance > 0.0, "floor_clearance must be > 0");
+  need(min_part_area >= 0.0, "min_part_area must be >= 0");
   need(min_edge_length >= 0.0, "min_edge_length must be >= 0");
   if (problems.empty()) return;
   std::string message = "hypothesis: invalid parameters: ";
@@ -342,13 +345,28 @@ PlainArrangement contract_short_edges(const PlainArrangement& in, double min_len
       old_edges.push_back(e);
     }
     if (loop.size() < 3) continue;  // a sliver: gone
-    std::vector<std::uint32_t> sorted(loop);
-    std::sort(sorted.begin(), sorted.end());
-    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
-      throw ReconstructionError("hypothesis: degenerate arrangement (a cell pinches after snapping vertices closer than " +
-                                std::to_string(min_length) + " m)");
-    loops.push_back(std::move(loop));
-    loop_old_edges.push_back(std::move(old_edges));
+    // A loop that visits a vertex twice (a sliver part of the cell collapsed onto a point) is split
+    // there into simple loops: pieces of two vertices are slivers (gone), the others become cells
+    // of their own. A piece is kept even when snapping turned it clockwise: dropping it would open
+    // a crack between its neighbours, whose walls nearly touch.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> stack;  // (vertex, old edge leaving it)
+    auto emit = [&](std::size_t from) {
+      std::vector<std::uint32_t> piece, piece_edges;
+      for (std::size_t k = from; k < stack.size(); ++k) {
+        piece.push_back(stack[k].first);
+        piece_edges.push_back(stack[k].second);
+      }
+      stack.resize(from);
+      if (piece.size() < 3) return;
+      loops.push_back(std::move(piece));
+      loop_old_edges.push_back(std::move(piece_edges));
+    };
+    for (std::size_t k = 0; k < loop.size(); ++k) {
+      const auto seen = std::find_if(stack.begin(), stack.end(), [&](const auto& s) { return s.first == loop[k]; });
+      if (seen != stack.end()) emit(static_cast<std::size_t>(seen - stack.begin()));
+      stack.emplace_back(loop[k], old_edges[k]);
+    }
+    emit(0);
   }
   for (std::size_t c = 0; c < loops.size(); ++c) {
     PlainArrangement::Cell cell;
@@ -414,6 +432,57 @@ PlainArrangement contract_robustly(const PlainArrangement& in, double min_length
     }
   }
   return in;
+}
+
+// Removes the connected parts of the inside cells (connected across edges with inside cells on both
+// sides) whose area is below `min_area`, except the largest part. A self-touching outline ring
+// leaves such specks (a lobe of a few cm2 would become a separate tower). Edges keep their order;
+// an edge that loses one side borders the outside there.
+PlainArrangement drop_small_parts(const PlainArrangement& in, double min_area) {
+  const std::size_t nc = in.cells.size();
+  std::vector<std::size_t> part(nc);
+  std::iota(part.begin(), part.end(), std::size_t{0});
+  auto find = [&](std::size_t i) {
+    while (part[i] != i) i = part[i] = part[part[i]];
+    return i;
+  };
+  for (const auto& e : in.edges)
+    if (e.left >= 0 && e.right >= 0) {
+      const std::size_t a = find(static_cast<std::size_t>(e.left)), b = find(static_cast<std::size_t>(e.right));
+      if (a != b) part[std::max(a, b)] = std::min(a, b);
+    }
+  std::vector<double> area(nc, 0.0);
+  for (std::size_t c = 0; c < nc; ++c) area[find(c)] += in.cells[c].area;
+  std::size_t largest = 0;
+  for (std::size_t c = 0; c < nc; ++c)
+    if (area[c] > area[largest]) largest = c;
+  std::vector<int> new_cell(nc, -1);
+  PlainArrangement out;
+  out.vertices = in.vertices;
+  bool any = false;
+  for (std::size_t c = 0; c < nc; ++c) {
+    const std::size_t r = find(c);
+    if (r != largest && area[r] < min_area) {
+      any = true;
+      continue;
+    }
+    new_cell[c] = static_cast<int>(out.cells.size());
+    out.cells.push_back(in.cells[c]);
+  }
+  if (!any) return in;
+  std::vector<std::uint32_t> new_edge(in.edges.size(), std::numeric_limits<std::uint32_t>::max());
+  for (std::size_t e = 0; e < in.edges.size(); ++e) {
+    auto edge = in.edges[e];
+    edge.left = edge.left >= 0 ? new_cell[static_cast<std::size_t>(edge.left)] : -1;
+    edge.right = edge.right >= 0 ? new_cell[static_cast<std::size_t>(edge.right)] : -1;
+    if (edge.left < 0 && edge.right < 0) continue;
+    new_edge[e] = static_cast<std::uint32_t>(out.edges.size());
+    out.edges.push_back(edge);
+  }
+  for (auto& cell : out.cells)
+    for (auto& entry : cell.loop) entry.first = new_edge[entry.first];
+  log_debug("hypothesis: dropped " + std::to_string(nc - out.cells.size()) + " cells of small detached parts");
+  return out;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -482,6 +551,11 @@ double centroid_z(const std::vector<Point3>& poly) {
 }
 
 // ---------------------------------------------------------------------------------------------
+double roof_height(const PlanarSegment& roof, double x, double y) {
+  const Plane3& p = roof.plane;
+  return -(p.a * x + p.b * y + p.d) / p.c;
+}
+
 // Levels (roof planes 0..R-1 and the floor R) and the vertices at one xy position.
 
 struct Levels {
@@ -490,8 +564,7 @@ struct Levels {
   int floor() const { return static_cast<int>(roofs->size()); }
   double height(int level, double x, double y) const {
     if (level == floor()) return ground_z;
-    const Plane3& p = (*roofs)[static_cast<std::size_t>(level)].plane;
-    return -(p.a * x + p.b * y + p.d) / p.c;
+    return roof_height((*roofs)[static_cast<std::size_t>(level)], x, y);
   }
 };
 
@@ -617,8 +690,6 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
         throw ReconstructionError("hypothesis: roof segment refers to point " + std::to_string(i) + " of " +
                                   std::to_string(points.size()));
   const std::size_t R = roofs.size();
-  const Levels lv{&roofs, ground_z};
-  const int F = lv.floor();
 
   // 1. Curves of the arrangement.
   std::vector<InputCurve> curves;
@@ -679,11 +750,17 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
   }
 
   extend_dangling_ends(curves, footprint_local, 2.0 * margin);
-  const PlainArrangement arr = contract_robustly(build_arrangement(curves), params.min_edge_length);
+  const PlainArrangement arr =
+      drop_small_parts(contract_robustly(build_arrangement(curves), params.min_edge_length), params.min_part_area);
   if (arr.cells.empty()) throw ReconstructionError("hypothesis: the footprint has no inside cell");
   const std::size_t cell_count = arr.cells.size();
 
   // 2. Candidate roof planes per cell.
+  struct PlaneRank {
+    std::size_t inside, near;
+    int plane;
+  };
+  std::vector<std::vector<PlaneRank>> ranked(cell_count);
   std::vector<std::vector<int>> cell_planes(cell_count);
   for (std::size_t c = 0; c < cell_count; ++c) {
     const auto& poly = arr.cells[c].polygon;
@@ -693,14 +770,28 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
     for (std::size_t r = 0; r < R; ++r) {
       const std::size_t need = std::min<std::size_t>(static_cast<std::size_t>(params.min_support_points),
                                                      roofs[r].points.size());
-      std::size_t count = 0;
+      std::size_t count = 0, inside = 0;
       for (std::uint32_t k : roofs[r].points) {
         const Point3& pt = points[k];
         if (pt.x < box.min.x - cm || pt.x > box.max.x + cm || pt.y < box.min.y - cm || pt.y > box.max.y + cm) continue;
-        if (distance_to_polygon(poly, pt.x, pt.y) <= cm && ++count >= need) break;
+        const double d = distance_to_polygon(poly, pt.x, pt.y);
+        if (d <= cm) ++count;
+        if (d <= 0.0) ++inside;
       }
-      if (need > 0 && count >= need) cell_planes[c].push_back(static_cast<int>(r));
+      if (need > 0 && count >= need) ranked[c].push_back({inside, count, static_cast<int>(r)});
     }
+    // Best-supported first (points inside the cell, then points near it, then plane index); keep
+    // at most max_planes_per_cell.
+    auto& list = ranked[c];
+    std::sort(list.begin(), list.end(), [](const PlaneRank& x, const PlaneRank& y) {
+      if (x.inside != y.inside) return x.inside > y.inside;
+      if (x.near != y.near) return x.near > y.near;
+      return x.plane < y.plane;
+    });
+    if (list.size() > static_cast<std::size_t>(params.max_planes_per_cell))
+      list.resize(static_cast<std::size_t>(params.max_planes_per_cell));
+    for (const auto& pr : list) cell_planes[c].push_back(pr.plane);
+    std::sort(cell_planes[c].begin(), cell_planes[c].end());
     if (cell_planes[c].empty()) {
       // No plane has points near this cell: take the plane(s) whose points come nearest.
       std::vector<double> nearest(R, std::numeric_limits<double>::infinity());
@@ -712,6 +803,29 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
         if (nearest[r] <= best + cm) cell_planes[c].push_back(static_cast<int>(r));
     }
   }
+
+  // 2b. The floor lies below every roof face: a plane that dips below ground_z + floor_clearance
+  // over a cell is dropped there when another candidate of the cell stays above; the floor is then
+  // lowered (never raised) to floor_clearance below the lowest remaining roof vertex.
+  const double clearance = params.floor_clearance;
+  auto lowest_over = [&](std::size_t c, int r) {
+    double low = std::numeric_limits<double>::infinity();
+    for (const auto& p : arr.cells[c].polygon) low = std::min(low, roof_height(roofs[static_cast<std::size_t>(r)], p.x, p.y));
+    return low;
+  };
+  double floor_z = ground_z;
+  for (std::size_t c = 0; c < cell_count; ++c) {
+    auto& list = cell_planes[c];
+    std::vector<int> above;
+    for (int r : list)
+      if (lowest_over(c, r) >= ground_z + clearance) above.push_back(r);
+    if (!above.empty()) list = std::move(above);
+    for (int r : list) floor_z = std::min(floor_z, lowest_over(c, r) - clearance);
+  }
+  if (floor_z < ground_z)
+    log_debug("hypothesis: floor lowered by " + std::to_string(ground_z - floor_z) + " m below the roofs");
+  const Levels lv{&roofs, floor_z};
+  const int F = lv.floor();
 
   // 3. Levels per edge and per vertex; stations where levels cross inside an edge.
   const double tol = params.vertex_merge_tolerance;
@@ -984,7 +1098,7 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
         if (segment_of[k] == f.source && std::abs(pl.signed_distance(points[k])) <= eps) support += 1.0;
     } else if (f.kind == FaceKind::floor) {
       for (auto k : cell_points[f.cell_or_edge])
-        if (std::abs(points[k].z - ground_z) <= eps) support += 1.0;
+        if (std::abs(points[k].z - floor_z) <= eps) support += 1.0;
     } else {
       const auto& edge = arr.edges[f.cell_or_edge];
       const Point2 a = arr.vertices[edge.u], b = arr.vertices[edge.w];

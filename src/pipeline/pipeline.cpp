@@ -9,6 +9,9 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <functional>
+#include <map>
+#include <numeric>
 #include <mutex>
 #include <sstream>
 #include <thread>
@@ -117,6 +120,9 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("hypothesis.vertex_merge_tolerance", p.hypothesis.vertex_merge_tolerance);
   put("hypothesis.parallel_tolerance", p.hypothesis.parallel_tolerance);
   put("hypothesis.min_edge_length", p.hypothesis.min_edge_length);
+  put("hypothesis.max_planes_per_cell", p.hypothesis.max_planes_per_cell);
+  put("hypothesis.floor_clearance", p.hypothesis.floor_clearance);
+  put("hypothesis.min_part_area", p.hypothesis.min_part_area);
   put("selection.lambda_data", p.selection.lambda_data);
   put("selection.lambda_complexity", p.selection.lambda_complexity);
   put("selection.lambda_roof", p.selection.lambda_roof);
@@ -381,6 +387,13 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
   r.ground_z = input.ground_z + input.origin.z;
   r.ground_method = input.ground_method;
   r.note = input.footprint.note;
+  if (!input.points.empty()) {
+    try {
+      r.roof_z = lod1_heights(input, params.lod1).roof_z + input.origin.z;
+    } catch (const Error&) {
+      // Reported by the LoD1 rung if it comes to that.
+    }
+  }
   if (input.footprint.polygons.empty()) {
     r.status = BuildingStatus::skipped;
     r.stage = "crop";
@@ -411,9 +424,16 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
                                   ? lod1_rung(input, params, r)
                                   : lod2_rung(input, params, rung.footprint_walls_only, deadline, r);
         // Closed, 2-manifold, outward, planar faces, no self-intersection: anything less is a bug
-        // of a rung, never a result.
-        const MeshValidity validity = check_validity(model.mesh);
-        if (!validity.valid()) throw ReconstructionError("model: not a valid solid: " + validity.problem);
+        // of a rung, never a result. The LoD1 block is the last resort: there only the topology is
+        // required, because a repaired multipolygon can have parts that touch at a point (separate
+        // shells, each valid, that the self-intersection test reports as touching).
+        if (rung.level == ModelLevel::lod12) {
+          const MeshCheck check = check_mesh(model.mesh);
+          if (!check.valid()) throw ReconstructionError("model: LoD1 block is not a valid solid");
+        } else {
+          const MeshValidity validity = check_validity(model.mesh);
+          if (!validity.valid()) throw ReconstructionError("model: not a valid solid: " + validity.problem);
+        }
         r.level = rung.level;
         r.status = rung.level == requested ? BuildingStatus::ok : BuildingStatus::fallback;
         r.faces = model.mesh.faces.size();
@@ -598,6 +618,53 @@ void print_progress(std::size_t done, std::size_t total, Clock::time_point start
 
 }  // namespace
 
+namespace {
+
+// Footprints grouped into square blocks of `extent` metres by their bounding-box centres, blocks in
+// row-major order, footprints in input order within a block. extent <= 0: one block.
+std::vector<std::vector<std::size_t>> spatial_blocks(const std::vector<Footprint>& footprints, double extent) {
+  std::map<std::pair<long long, long long>, std::vector<std::size_t>> cells;
+  for (std::size_t i = 0; i < footprints.size(); ++i) {
+    Box2 box;
+    for (const Polygon2& p : footprints[i].polygons)
+      for (const Point2& v : p.outer) box.add(v);
+    std::pair<long long, long long> key{0, 0};
+    if (extent > 0 && !box.empty())
+      key = {static_cast<long long>(std::floor((box.min.y + box.max.y) / 2 / extent)),
+             static_cast<long long>(std::floor((box.min.x + box.max.x) / 2 / extent))};
+    cells[key].push_back(i);
+  }
+  std::vector<std::vector<std::size_t>> blocks;
+  for (auto& [key, indices] : cells) blocks.push_back(std::move(indices));
+  return blocks;
+}
+
+// The footprints a block must crop with: its own, and every other footprint that can reach into
+// their ground buffers (ground points inside any footprint never count as ground), so that a
+// building's input does not depend on how footprints are blocked.
+std::vector<std::size_t> with_neighbours(const std::vector<Footprint>& footprints, const std::vector<std::size_t>& block,
+                                         double reach) {
+  Box2 extent;
+  for (std::size_t i : block)
+    for (const Polygon2& p : footprints[i].polygons)
+      for (const Point2& v : p.outer) extent.add(v);
+  extent.min = {extent.min.x - reach, extent.min.y - reach};
+  extent.max = {extent.max.x + reach, extent.max.y + reach};
+  std::vector<bool> in_block(footprints.size(), false);
+  for (std::size_t i : block) in_block[i] = true;
+  std::vector<std::size_t> result = block;
+  for (std::size_t i = 0; i < footprints.size(); ++i) {
+    if (in_block[i]) continue;
+    Box2 box;
+    for (const Polygon2& p : footprints[i].polygons)
+      for (const Point2& v : p.outer) box.add(v);
+    if (!box.empty() && box.intersects(extent)) result.push_back(i);
+  }
+  return result;
+}
+
+}  // namespace
+
 BatchSummary run_batch(const BatchOptions& options) {
   const auto start = Clock::now();
   options.reconstruction.validate();
@@ -609,12 +676,14 @@ BatchSummary run_batch(const BatchOptions& options) {
   detail::Journal journal((fs::path(options.output_dir) / "resume.journal").string(),
                           detail::batch_fingerprint(options, files), options.resume);
 
-  // Inputs: footprints cropped from the tiles, or one building per single-building cloud.
-  std::vector<BuildingInput> inputs;
+  // What to reconstruct: the footprints (cropped from the tiles block by block), or one building
+  // per single-building cloud (read when its turn comes).
+  FootprintSet set;
   std::vector<BuildingReport> skipped_rows;
   std::string crs;
+  Box2 extent;
   if (!options.footprints.empty()) {
-    FootprintSet set = read_footprints(options.footprints, options.footprint);
+    set = read_footprints(options.footprints, options.footprint);
     crs = set.srs.rfind("EPSG:", 0) == 0 ? set.srs : "";
     for (const SkippedFootprint& s : set.skipped) {
       BuildingReport row;
@@ -624,78 +693,91 @@ BatchSummary run_batch(const BatchOptions& options) {
       row.reason = s.reason;
       skipped_rows.push_back(row);
     }
-    const bool all_done = std::all_of(set.footprints.begin(), set.footprints.end(),
-                                      [&](const Footprint& f) { return journal.find(f.id) != nullptr; });
-    if (all_done) {
-      // Everything was finished by an earlier run: no need to read a single point.
-      for (const Footprint& f : set.footprints) {
-        BuildingInput in;
-        in.id = f.id;
-        inputs.push_back(std::move(in));
-      }
-    } else {
-      Cropper cropper(set.footprints, options.crop);
-      crop_tiles(files, set.footprints, options.crop, cropper);
-      inputs = cropper.finish();
-    }
-  } else {
-    for (const std::string& file : files) {
-      const std::string id = fs::path(file).stem().string();
-      if (journal.find(id)) {
-        BuildingInput in;
-        in.id = id;
-        inputs.push_back(std::move(in));
-      } else {
-        inputs.push_back(building_from_cloud(id, read_all_points(file), options.ground_z));
-      }
-    }
+    for (const Footprint& f : set.footprints)
+      for (const Polygon2& p : f.polygons)
+        for (const Point2& v : p.outer) extent.add(v);
   }
-
-  // Reconstruct in parallel; write in input order.
+  const std::size_t total = options.footprints.empty() ? files.size() : set.footprints.size();
+  // The CityJSONSeq transform must be known before the first building: the footprints' corner, or
+  // for clouds their first header's corner.
   Point3 translate{0, 0, 0};
-  {
-    Box2 box;
-    for (const BuildingInput& in : inputs) box.add({in.origin.x, in.origin.y});
-    if (!box.empty()) translate = {std::floor(box.min.x), std::floor(box.min.y), 0.0};
+  if (options.footprints.empty() && !files.empty()) {
+    const PointCloudInfo info = read_point_cloud_info(files.front());
+    if (!info.bounds.empty()) extent.add({info.bounds.min.x, info.bounds.min.y});
   }
-  OrderedWriter writer(options, inputs.size(), translate, crs);
-  std::atomic<std::size_t> next{0}, done{0};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
-  auto worker = [&]() {
-    for (;;) {
-      const std::size_t i = next++;
-      if (i >= inputs.size()) return;
-      {
-        std::lock_guard<std::mutex> lock(failure_mutex);
-        if (failure) return;
-      }
-      try {
-        BuildingResult result;
-        if (const BuildingResult* done = journal.find(inputs[i].id)) {
-          result = *done;
-        } else {
-          result = reconstruct_building(inputs[i], options.reconstruction);
-          journal.append(result);
+  if (!extent.empty()) translate = {std::floor(extent.min.x), std::floor(extent.min.y), 0.0};
+  OrderedWriter writer(options, total, translate, crs);
+
+  // Reconstructs buildings `indices` (global, input order) in parallel; make_input(k) gives the
+  // input of indices[k] and is called by the worker that reconstructs it.
+  std::atomic<std::size_t> done{0};
+  auto reconstruct_all = [&](const std::vector<std::size_t>& indices,
+                             const std::function<BuildingInput(std::size_t)>& make_input) {
+    std::atomic<std::size_t> next{0};
+    std::exception_ptr failure;
+    std::mutex failure_mutex;
+    auto worker = [&]() {
+      for (;;) {
+        const std::size_t k = next++;
+        if (k >= indices.size()) return;
+        {
+          std::lock_guard<std::mutex> lock(failure_mutex);
+          if (failure) return;
         }
-        // The points are not needed any more: free them early.
-        std::vector<Point3>().swap(inputs[i].points);
-        writer.submit(i, std::move(result));
-      } catch (...) {
-        // Only output errors reach here (reconstruct_building never throws for a bad building).
-        std::lock_guard<std::mutex> lock(failure_mutex);
-        if (!failure) failure = std::current_exception();
-        return;
+        try {
+          BuildingResult result;
+          const BuildingId& id = options.footprints.empty() ? fs::path(files[indices[k]]).stem().string()
+                                                            : set.footprints[indices[k]].id;
+          if (const BuildingResult* finished = journal.find(id)) {
+            result = *finished;
+          } else {
+            result = reconstruct_building(make_input(k), options.reconstruction);
+            journal.append(result);
+          }
+          writer.submit(indices[k], std::move(result));
+        } catch (...) {
+          // Only input and output errors reach here (reconstruct_building never throws for a bad
+          // building): the run cannot go on.
+          std::lock_guard<std::mutex> lock(failure_mutex);
+          if (!failure) failure = std::current_exception();
+          return;
+        }
+        const std::size_t d = ++done;
+        if (options.progress) print_progress(d, total, start);
       }
-      const std::size_t d = ++done;
-      if (options.progress) print_progress(d, inputs.size(), start);
-    }
+    };
+    std::vector<std::thread> pool;
+    for (int t = 1; t < options.threads; ++t) pool.emplace_back(worker);
+    worker();
+    for (std::thread& t : pool) t.join();
+    if (failure) std::rethrow_exception(failure);
   };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < options.threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& t : pool) t.join();
-  if (failure) std::rethrow_exception(failure);
+
+  if (options.footprints.empty()) {
+    std::vector<std::size_t> indices(files.size());
+    std::iota(indices.begin(), indices.end(), 0);
+    reconstruct_all(indices, [&](std::size_t k) {
+      return building_from_cloud(fs::path(files[k]).stem().string(), read_all_points(files[k]), options.ground_z);
+    });
+  } else {
+    const double reach = options.crop.ground_buffer * options.crop.wide_buffer_factor + 1.0;
+    for (const std::vector<std::size_t>& block : spatial_blocks(set.footprints, options.block_size)) {
+      const bool all_done = std::all_of(block.begin(), block.end(),
+                                        [&](std::size_t i) { return journal.find(set.footprints[i].id) != nullptr; });
+      std::vector<BuildingInput> inputs;
+      if (!all_done) {
+        // Crop with the neighbours too; keep the block's own inputs (the first block.size()).
+        const std::vector<std::size_t> members = with_neighbours(set.footprints, block, reach);
+        std::vector<Footprint> footprints;
+        for (std::size_t i : members) footprints.push_back(set.footprints[i]);
+        Cropper cropper(footprints, options.crop);
+        crop_tiles(files, footprints, options.crop, cropper);
+        inputs = cropper.finish();
+        inputs.resize(block.size());
+      }
+      reconstruct_all(block, [&](std::size_t k) { return std::move(inputs[k]); });
+    }
+  }
   writer.finish(crs);
 
   std::vector<BuildingReport> rows = writer.reports();
