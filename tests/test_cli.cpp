@@ -23,8 +23,9 @@ struct Result {
   std::string output;  // stdout and stderr together
 };
 
-Result run(const std::string& arguments) {
-  const std::string command = std::string(CITY3D_EXE) + " " + arguments + " 2>&1";
+// Runs a shell command, capturing stdout and stderr together.
+Result run_shell(const std::string& command_line) {
+  const std::string command = command_line + " 2>&1";
   Result r;
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) return r;
@@ -35,6 +36,8 @@ Result run(const std::string& arguments) {
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
 }
+
+Result run(const std::string& arguments) { return run_shell(std::string(CITY3D_EXE) + " " + arguments); }
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
@@ -212,15 +215,8 @@ Result validate_cityjson(const fs::path& file, bool feature) {
                         (feature ? "/cityjsonfeature.schema.json" : "/cityjson.schema.json");
   for (const char* r : {"appearance", "cityobjects", "geomprimitives", "geomtemplates", "metadata"})
     command += " -r " + s + "/" + r + ".schema.json";
-  command += " -d " + file.string() + " 2>&1";
-  Result r;
-  FILE* pipe = popen(command.c_str(), "r");
-  std::array<char, 4096> buf;
-  std::size_t n;
-  while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  command += " -d " + file.string();
+  return run_shell(command);
 }
 
 class Reconstruct : public ::testing::Test {
