@@ -19,6 +19,7 @@ struct FootprintReadOptions {
   std::string attribute_filter;  ///< OGR SQL WHERE clause, e.g. "bouwjaar > 1900"; empty = all
   std::optional<Box2> bbox;      ///< keep only footprints intersecting this box (OGR spatial filter)
   bool repair = true;            ///< repair invalid polygons with MakeValid; false = skip them
+  std::string ground_field;      ///< numeric attribute with the floor height (world z); empty = none
 };
 
 /// A footprint that was not kept, and why.

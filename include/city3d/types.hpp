@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -76,6 +77,7 @@ struct Footprint {
   std::int64_t fid = -1;            ///< OGR feature id, -1 when the source has none
   std::vector<Polygon2> polygons;   ///< world coordinates (the source's CRS), metres
   std::string note;                 ///< what the reader changed, e.g. "repaired with MakeValid: ..."; else empty
+  std::optional<double> ground_z;   ///< floor height (world z) from the footprint source, when it has one
 };
 
 /// A polygonal surface mesh: faces are vertex-index loops (not triangulated), counter-clockwise seen

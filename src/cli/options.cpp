@@ -97,6 +97,8 @@ const std::vector<OptionSpec>& option_table() {
        [](O& o, V v) { o.batch.footprint.attribute_filter = v; }},
       {"--bbox", nullptr, "XMIN,YMIN,XMAX,YMAX", "keep only footprints intersecting this box (footprint CRS)", nullptr,
        [](O& o, V v) { o.batch.footprint.bbox = parse_bbox("--bbox", v); }},
+      {"--ground-field", nullptr, "NAME", "footprint attribute with the floor height (world z); overrides the ground "
+       "points where set", nullptr, [](O& o, V v) { o.batch.footprint.ground_field = v; }},
       {"--no-repair", nullptr, nullptr, "skip invalid footprints instead of repairing them with MakeValid", nullptr,
        [](O& o, V) { o.batch.footprint.repair = false; }},
       // Cropping and heights.

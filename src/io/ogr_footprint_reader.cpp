@@ -10,6 +10,7 @@
 #include <ogrsf_frmts.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cctype>
 #include <cstdint>
 #include <memory>
@@ -317,6 +318,18 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
   }
   set.id_field = use_fid ? "FID" : options.id_field;
 
+  // The optional ground-height field: a numeric attribute that overrides the floor height.
+  int ground_index = -1;
+  if (!options.ground_field.empty()) {
+    ground_index = definition->GetFieldIndex(options.ground_field.c_str());
+    if (ground_index < 0) {
+      std::vector<std::string> fields;
+      for (int i = 0; i < definition->GetFieldCount(); ++i) fields.emplace_back(definition->GetFieldDefn(i)->GetNameRef());
+      throw IoError(kModule + std::string("no field '") + options.ground_field + "' in " + where + " (fields: " +
+                    join(fields) + ")");
+    }
+  }
+
   if (!options.attribute_filter.empty()) {
     CPLErrorReset();
     // Some drivers (GeoPackage, SQLite) accept any filter here and only fail when the SQL is
@@ -414,6 +427,10 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
     footprint.id = std::move(id);
     footprint.fid = fid;
     footprint.polygons = std::move(outcome.polygons);
+    if (ground_index >= 0 && feature->IsFieldSetAndNotNull(ground_index)) {
+      const double z = feature->GetFieldAsDouble(ground_index);
+      if (std::isfinite(z)) footprint.ground_z = z;
+    }
     if (!outcome.repair_note.empty()) footprint.note = "footprint repaired with MakeValid: " + outcome.repair_note;
     const bool has_hole = std::any_of(footprint.polygons.begin(), footprint.polygons.end(),
                                       [](const Polygon2& p) { return !p.holes.empty(); });

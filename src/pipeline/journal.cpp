@@ -159,7 +159,7 @@ std::string batch_fingerprint(const BatchOptions& o, const std::vector<std::stri
   for (const std::string& f : files) s << file_stamp(f) << '\n';
   if (!o.footprints.empty()) s << file_stamp(o.footprints) << '\n';
   s << o.footprint.layer << '|' << o.footprint.id_field << '|' << o.footprint.attribute_filter << '|'
-    << o.footprint.repair << '|';
+    << o.footprint.repair << '|' << o.footprint.ground_field << '|';
   if (o.footprint.bbox)
     s << num(o.footprint.bbox->min.x) << ',' << num(o.footprint.bbox->min.y) << ',' << num(o.footprint.bbox->max.x)
       << ',' << num(o.footprint.bbox->max.y);

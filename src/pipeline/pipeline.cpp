@@ -774,6 +774,12 @@ BatchSummary run_batch(const BatchOptions& options) {
         crop_tiles(files, footprints, options.crop, cropper);
         inputs = cropper.finish();
         inputs.resize(block.size());
+        for (BuildingInput& in : inputs)
+          if (in.footprint.ground_z) {
+            // The footprint source knows the floor: it overrides the ground points.
+            in.ground_z = *in.footprint.ground_z - in.origin.z;
+            in.ground_method = "footprint attribute";
+          }
       }
       reconstruct_all(block, [&](std::size_t k) { return std::move(inputs[k]); });
     }
