@@ -1,6 +1,9 @@
 // Decode speed of the LAZ decoder: decodes every record of one LAZ file, several times, on one
 // core, and prints points per second (thread CPU time and wall time) per run and the median.
-// Usage: bench_laz_decode FILE.laz [repeats=11]
+// With a list of thread counts it instead reads the file through the LAS reader
+// (open_point_cloud(path, kFieldXyz, threads): decoding plus conversion to xyz), each thread count
+// once per run in turn, and prints the median wall-clock rate of each side by side.
+// Usage: bench_laz_decode FILE.laz [repeats=11] [THREADS,THREADS,...]
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
@@ -14,6 +17,7 @@
 #include <vector>
 
 #include "city3d/error.hpp"
+#include "city3d/point_cloud_io.hpp"
 #include "laz/laz_decoder.hpp"
 
 namespace {
@@ -77,16 +81,68 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+/// Reads `path` through the LAS reader once per run for each thread count, interleaved so that
+/// every count sees the same machine load, and prints wall-clock rates and their medians.
+int compare_threads(const std::string& path, int repeats, const std::vector<unsigned>& thread_counts) {
+  std::vector<std::vector<double>> rates(thread_counts.size());
+  std::uint64_t expected = 0;
+  for (int run = 0; run < repeats; ++run) {
+    std::printf("run %2d:", run + 1);
+    for (std::size_t t = 0; t < thread_counts.size(); ++t) {
+      const auto wall0 = std::chrono::steady_clock::now();
+      auto reader = city3d::open_point_cloud(path, city3d::kFieldXyz, thread_counts[t]);
+      city3d::PointCloud cloud;
+      std::uint64_t points = 0;
+      while (const std::size_t n = reader->read(cloud, 1u << 20)) {
+        points += n;
+        cloud.clear();  // time decoding and conversion, not the growth of one huge cloud
+      }
+      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+      if (expected == 0) expected = points;
+      if (points != expected || points != reader->info().point_count) {
+        std::fprintf(stderr, "bench: read %llu points with %u threads, expected %llu\n",
+                     static_cast<unsigned long long>(points), thread_counts[t],
+                     static_cast<unsigned long long>(reader->info().point_count));
+        return 1;
+      }
+      rates[t].push_back(static_cast<double>(points) / wall / 1e6);
+      std::printf("  %u thread%s %.2f Mpts/s", thread_counts[t], thread_counts[t] == 1 ? "" : "s",
+                  rates[t].back());
+    }
+    std::printf("\n");
+  }
+  std::printf("%s: median wall over %d runs (LAS reader, xyz):", path.c_str(), repeats);
+  for (std::size_t t = 0; t < thread_counts.size(); ++t)
+    std::printf("  %u thread%s %.2f Mpts/s (x%.2f)", thread_counts[t], thread_counts[t] == 1 ? "" : "s",
+                median(rates[t]), median(rates[t]) / median(rates[0]));
+  std::printf("\n");
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: %s FILE.laz [repeats=11]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s FILE.laz [repeats=11] [THREADS,THREADS,...]\n", argv[0]);
     return 2;
   }
   const std::string path = argv[1];
   const int repeats = argc > 2 ? std::max(1, std::atoi(argv[2])) : 11;
   try {
+    if (argc > 3) {
+      std::vector<unsigned> thread_counts;
+      for (const char* p = argv[3]; *p != '\0';) {
+        char* end = nullptr;
+        const unsigned long n = std::strtoul(p, &end, 10);
+        if (end == p || n == 0 || n > 256) {
+          std::fprintf(stderr, "bench: bad thread list '%s' (e.g. 1,2)\n", argv[3]);
+          return 2;
+        }
+        thread_counts.push_back(static_cast<unsigned>(n));
+        p = *end == ',' ? end + 1 : end;
+      }
+      return compare_threads(path, repeats, thread_counts);
+    }
     LaszipVlr vlr;
     LazLayout layout;
     read_layout(path, vlr, layout);

@@ -10,10 +10,12 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <memory>
 #include <optional>
 #include <regex>
 #include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "city3d/error.hpp"
@@ -88,8 +90,13 @@ std::optional<LaszipVlr> find_laszip_vlr(const std::vector<std::uint8_t>& bytes,
   return std::nullopt;
 }
 
-/// Decodes every record of a LAZ file, `batch` records per call.
-std::vector<std::uint8_t> decode_laz(const std::string& path, std::size_t batch = 1u << 30) {
+/// A decoder over a LAZ file, with the header it was made from.
+struct OpenedLaz {
+  LasHeader header;
+  std::unique_ptr<LazDecoder> decoder;
+};
+
+OpenedLaz open_laz(const std::string& path) {
   const auto bytes = read_file(path);
   const LasHeader h = read_header(bytes);
   const auto vlr = find_laszip_vlr(bytes, h, path);
@@ -102,7 +109,14 @@ std::vector<std::uint8_t> decode_laz(const std::string& path, std::size_t batch 
   layout.record_length = h.record_length;
   layout.point_format = h.point_format_byte & 0x3F;
   layout.file_size = bytes.size();
-  LazDecoder decoder(*vlr, layout);
+  return {h, std::make_unique<LazDecoder>(*vlr, layout)};
+}
+
+/// Decodes every record of a LAZ file, `batch` records per call.
+std::vector<std::uint8_t> decode_laz(const std::string& path, std::size_t batch = 1u << 30) {
+  const OpenedLaz laz = open_laz(path);
+  const LasHeader& h = laz.header;
+  LazDecoder& decoder = *laz.decoder;
   std::vector<std::uint8_t> out;
   std::vector<std::uint8_t> buffer(std::min<std::uint64_t>(batch, h.point_count + 1) * h.record_length);
   const std::size_t max_calls = h.point_count / std::max<std::size_t>(batch, 1) + 3;  // never loop forever
@@ -212,6 +226,105 @@ TEST(LazStreaming, decoding_one_record_per_call_crosses_chunk_boundaries) {
   EXPECT_EQ(decode_laz(laz, 1), las_point_block(kLazDir + "/cases/las14_pf6_varchunk.las"));
 }
 
+/// Decodes a LAZ file with decode_chunk() on `threads` threads at once, each taking every
+/// threads-th chunk from the last to the first, so chunks finish in no particular order.
+std::vector<std::uint8_t> decode_laz_by_chunks(const std::string& path, unsigned threads) {
+  const OpenedLaz laz = open_laz(path);
+  const LazDecoder& decoder = *laz.decoder;
+  const std::size_t record = laz.header.record_length;
+  std::vector<std::size_t> first_record(decoder.chunk_count() + 1, 0);
+  for (std::size_t i = 0; i < decoder.chunk_count(); ++i)
+    first_record[i + 1] = first_record[i] + decoder.chunk_points(i);
+  std::vector<std::uint8_t> out(first_record.back() * record);
+  std::vector<std::string> errors(threads);
+  std::vector<std::thread> workers;
+  for (unsigned t = 0; t < threads; ++t) {
+    workers.emplace_back([&, t] {
+      try {
+        for (std::size_t i = decoder.chunk_count(); i-- > 0;)
+          if (i % threads == t) decoder.decode_chunk(i, out.data() + first_record[i] * record);
+      } catch (const IoError& e) {
+        errors[t] = e.what();
+      }
+    });
+  }
+  for (auto& w : workers) w.join();
+  for (const auto& e : errors)
+    if (!e.empty()) throw IoError(e);
+  return out;
+}
+
+TEST(LazChunks, every_case_decodes_byte_identically_chunk_by_chunk_on_1_2_and_4_threads) {
+  for (const auto& name : manifest_case_names()) {
+    const std::string laz = kLazDir + "/cases/" + name + ".laz";
+    const auto expected = las_point_block(kLazDir + "/cases/" + name + ".las");
+    for (const unsigned threads : {1u, 2u, 4u})
+      EXPECT_TRUE(decode_laz_by_chunks(laz, threads) == expected) << name << " on " << threads << " threads";
+  }
+}
+
+TEST(LazChunks, both_ahn3_tiles_decode_byte_identically_chunk_by_chunk_on_1_2_and_4_threads) {
+  for (const std::string tile : {"ahn3_cropped_1", "ahn3_cropped_2"}) {
+    const auto expected = las_point_block(kAhnDir + "/" + tile + ".las");
+    for (const unsigned threads : {1u, 2u, 4u}) {
+      EXPECT_TRUE(decode_laz_by_chunks(kAhnDir + "/" + tile + ".laz", threads) == expected)
+          << tile << " on " << threads << " threads";
+    }
+  }
+}
+
+TEST(LazChunks, chunk_points_add_up_to_the_header_count) {
+  const OpenedLaz tile = open_laz(kAhnDir + "/ahn3_cropped_1.laz");
+  ASSERT_EQ(tile.decoder->chunk_count(), 13u);  // 640510 points in chunks of 50000
+  std::uint64_t total = 0;
+  for (std::size_t i = 0; i < tile.decoder->chunk_count(); ++i) total += tile.decoder->chunk_points(i);
+  EXPECT_EQ(total, 640510u);
+  EXPECT_EQ(tile.decoder->chunk_points(12), 40510u);
+  EXPECT_EQ(open_laz(kLazDir + "/cases/las12_pf3_simple_compressor1_v1.laz").decoder->chunk_count(), 1u);
+  EXPECT_EQ(open_laz(kLazDir + "/cases/las14_pf7_zero_points.laz").decoder->chunk_count(), 0u);
+}
+
+/// Copies a LAZ case to a temporary file with one byte flipped in the middle of chunk `chunk`.
+std::string corrupt_copy(const std::string& name, std::size_t chunk) {
+  const std::string source = kLazDir + "/cases/" + name + ".laz";
+  auto bytes = read_file(source);
+  const OpenedLaz laz = open_laz(source);
+  std::vector<std::uint8_t> intact(laz.decoder->chunk_points(chunk) * laz.header.record_length);
+  laz.decoder->decode_chunk(chunk, intact.data());  // the chunk decodes before the damage
+  const fs::path dir = fs::temp_directory_path() / ("city3d_laz_chunks_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string path = (dir / (name + "_chunk" + std::to_string(chunk) + ".laz")).string();
+  // equal chunks of similar size: the middle of chunk k lies near (k + 0.5) / count of the data
+  // (the test below checks that the error names the chunk)
+  const std::size_t data_start = laz.header.point_data_offset + 8;
+  const std::size_t data_end = bytes.size() - 64;
+  const std::size_t at =
+      data_start + (data_end - data_start) * (2 * chunk + 1) / (2 * laz.decoder->chunk_count());
+  for (std::size_t i = 0; i < 16; ++i) bytes[at + i] ^= 0x5A;
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  return path;
+}
+
+TEST(LazChunks, a_corrupt_chunk_gives_the_same_error_chunk_by_chunk_as_streaming) {
+  const std::string path = corrupt_copy("las14_pf6_rand_20k_chunk5000", 2);
+  std::string streaming, chunked;
+  try {
+    decode_laz(path, 1000);
+  } catch (const IoError& e) {
+    streaming = e.what();
+  }
+  try {
+    decode_laz_by_chunks(path, 4);
+  } catch (const IoError& e) {
+    chunked = e.what();
+  }
+  fs::remove_all(fs::path(path).parent_path());
+  EXPECT_NE(streaming.find("chunk 2 of 4"), std::string::npos) << streaming;
+  EXPECT_NE(streaming.find("las14_pf6_rand_20k_chunk5000_chunk2.laz"), std::string::npos) << streaming;
+  EXPECT_EQ(chunked, streaming);
+}
+
 /// Decoding `file` must end in an IoError naming the file and containing every word of `words`.
 void expect_rejected(const std::string& file, const std::vector<std::string>& words) {
   const std::string path = kLazDir + "/broken/" + file;
@@ -223,6 +336,13 @@ void expect_rejected(const std::string& file, const std::vector<std::string>& wo
     EXPECT_NE(message.find(file), std::string::npos) << message;
     for (const auto& word : words)
       EXPECT_NE(message.find(word), std::string::npos) << "'" << word << "' not in: " << message;
+    // chunk by chunk on four threads: the same error
+    try {
+      decode_laz_by_chunks(path, 4);
+      ADD_FAILURE() << file << " was decoded chunk by chunk without an error";
+    } catch (const IoError& chunked) {
+      EXPECT_EQ(std::string(chunked.what()), message);
+    }
   }
 }
 

@@ -6,11 +6,14 @@
 #include <cstring>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <initializer_list>
 #include <map>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "city3d/error.hpp"
@@ -322,9 +325,8 @@ TEST(LasReader, warns_but_reads_when_the_evlr_pointer_is_past_the_end) {
 // ---------------------------------------------------------------------------------------------
 // LAZ: recognised, refused for reading, described by info
 
-// Every field of every point of a LAZ file equals its LAS twin's.
-void expect_same_points(const std::string& laz, const std::string& las) {
-  const PointCloud a = read_point_cloud(laz), b = read_point_cloud(las);
+// Every field of every point of `a` equals the one of `b`.
+void expect_same_points(const PointCloud& a, const PointCloud& b) {
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t i = 0; i < a.size(); ++i) {
     ASSERT_EQ(a.points[i].x, b.points[i].x) << i;
@@ -339,6 +341,20 @@ void expect_same_points(const std::string& laz, const std::string& las) {
   ASSERT_EQ(a.gps_time.size(), b.gps_time.size());
   EXPECT_EQ(std::memcmp(a.gps_time.data(), b.gps_time.data(), a.gps_time.size() * sizeof(double)), 0);
   EXPECT_EQ(a.rgb, b.rgb);
+}
+
+// Every field of every point of a LAZ file equals its LAS twin's.
+void expect_same_points(const std::string& laz, const std::string& las) {
+  expect_same_points(read_point_cloud(laz), read_point_cloud(las));
+}
+
+/// Reads a file `batch` points per read() call, decoding LAZ on `threads` threads.
+PointCloud read_in_batches(const std::string& path, unsigned threads, std::size_t batch) {
+  auto reader = open_point_cloud(path, kFieldAll, threads);
+  PointCloud cloud;
+  while (reader->read(cloud, batch) > 0) {
+  }
+  return cloud;
 }
 
 TEST(LasReader, reads_ahn3_laz_to_exactly_the_points_of_its_las_twin) {
@@ -364,6 +380,84 @@ TEST(LasReader, reads_every_laz_case_to_exactly_the_points_of_its_las_twin) {
     EXPECT_EQ(info.record_length, k.record_length);
     expect_same_points(path, kCases + k.name + ".las");
   }
+}
+
+TEST(LasReader, reads_every_laz_case_and_both_ahn3_tiles_identically_on_1_2_and_4_decode_threads) {
+  std::vector<std::pair<std::string, std::string>> pairs;
+  for (const LasCase& k : kLasCases) pairs.emplace_back(kCases + k.name + ".laz", kCases + k.name + ".las");
+  for (const char* tile : {"ahn3_cropped_1", "ahn3_cropped_2"}) {
+    const std::string base = std::string(CITY3D_SHARED_DATA) + "/ahn3_delft/" + tile;
+    pairs.emplace_back(base + ".laz", base + ".las");
+  }
+  for (const auto& [laz, las] : pairs) {
+    const PointCloud expected = read_point_cloud(las);
+    for (const unsigned threads : {1u, 2u, 4u}) {
+      SCOPED_TRACE(laz + " on " + std::to_string(threads) + " threads");
+      expect_same_points(read_point_cloud(laz, kFieldAll, threads), expected);
+      // small reads: records of one decoded chunk are handed out over many calls
+      expect_same_points(read_in_batches(laz, threads, 7777), expected);
+    }
+  }
+}
+
+/// Copies a LAZ case to a temporary file with 16 bytes flipped in the middle of its data.
+std::string corrupt_laz_copy(const std::string& name, double where) {
+  std::ifstream in(kCases + name + ".laz", std::ios::binary);
+  std::vector<char> bytes((std::istreambuf_iterator<char>(in)), {});
+  const auto at = static_cast<std::size_t>(static_cast<double>(bytes.size()) * where);
+  for (std::size_t i = 0; i < 16; ++i) bytes[at + i] = static_cast<char>(bytes[at + i] ^ 0x5A);
+  const std::string path = ::testing::TempDir() + "city3d_" + name + "_corrupt.laz";
+  std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  return path;
+}
+
+/// Reads `path` 1000 points per call on `threads` threads; returns the error and how many points
+/// were handed out before it.
+std::pair<std::string, std::size_t> error_and_points_before(const std::string& path, unsigned threads) {
+  auto reader = open_point_cloud(path, kFieldAll, threads);
+  PointCloud cloud;
+  const std::string error = io_error_of([&] {
+    while (reader->read(cloud, 1000) > 0) {
+    }
+  });
+  // and every later call throws the same error
+  EXPECT_EQ(io_error_of([&] { reader->read(cloud, 1000); }), error);
+  return {error, cloud.size()};
+}
+
+TEST(LasReader, a_corrupt_laz_chunk_raises_the_same_error_on_4_threads_when_its_records_are_due) {
+  // 20000 points in 4 chunks of 5000: the flipped bytes at 60% of the file lie in chunk 2
+  const std::string path = corrupt_laz_copy("las14_pf6_rand_20k_chunk5000", 0.6);
+  const auto [error1, before1] = error_and_points_before(path, 1);
+  const auto [error4, before4] = error_and_points_before(path, 4);
+  std::remove(path.c_str());
+  expect_contains(error1, {"las14_pf6_rand_20k_chunk5000_corrupt.laz", "chunk 2 of 4"});
+  EXPECT_EQ(error4, error1);
+  // four threads hand out chunks 0 and 1 and stop exactly where chunk 2 starts; one thread decodes
+  // 2 MB blocks of records (the whole file here) and reports none of a block that fails
+  EXPECT_EQ(before4, 10000u);
+  EXPECT_EQ(before1, 0u);
+}
+
+TEST(LasReader, destroying_a_laz_reader_mid_file_with_4_decode_threads_stops_its_workers) {
+  for (const std::size_t read_first : {0u, 1u, 50000u, 300000u}) {
+    auto reader = open_point_cloud(kAhn3Laz, kFieldXyz, 4);
+    PointCloud cloud;
+    if (read_first > 0) ASSERT_EQ(reader->read(cloud, read_first), read_first);
+    EXPECT_EQ(cloud.size(), read_first);
+    reader.reset();  // joins the workers (a hang here fails the test by timeout)
+  }
+  // a reader left after its error is destroyed cleanly too
+  const std::string path = corrupt_laz_copy("las14_pf6_rand_20k_chunk5000", 0.35);
+  {
+    auto reader = open_point_cloud(path, kFieldAll, 4);
+    PointCloud cloud;
+    EXPECT_FALSE(io_error_of([&] {
+                   while (reader->read(cloud, 1000) > 0) {
+                   }
+                 }).empty());
+  }
+  std::remove(path.c_str());
 }
 
 TEST(LasReader, rejects_compression_bit_without_laszip_vlr) {

@@ -85,6 +85,16 @@ std::unique_ptr<PointCloudReader> open_point_cloud(const std::string& path,
 /// Reads a whole file into memory. Throws IoError as open_point_cloud() and read() do.
 PointCloud read_point_cloud(const std::string& path, PointFields fields = kFieldAll);
 
+/// As open_point_cloud(path, fields), with a LAZ file of several chunks decoded on `decode_threads`
+/// threads (the chunks after the one being read are decoded ahead, at most `decode_threads` of them
+/// held in memory). The points, their order and the errors are the same as with one thread; 0 and 1
+/// both mean "decode in the calling thread". LAS and PLY files ignore it.
+std::unique_ptr<PointCloudReader> open_point_cloud(const std::string& path, PointFields fields,
+                                                   unsigned decode_threads);
+
+/// As read_point_cloud(path, fields), decoding LAZ on `decode_threads` threads (see above).
+PointCloud read_point_cloud(const std::string& path, PointFields fields, unsigned decode_threads);
+
 /// Reads only the header of a file. Throws IoError as open_point_cloud() does.
 PointCloudInfo read_point_cloud_info(const std::string& path);
 

@@ -6,10 +6,14 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <condition_variable>
 #include <cstdint>
 #include <cstring>
+#include <exception>
+#include <mutex>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "city3d/error.hpp"
@@ -390,21 +394,160 @@ class FileRecordSource final : public RecordSource {
 /// LAZ: the LASzip decoder hands out the same raw records, chunk by chunk.
 class LazRecordSource final : public RecordSource {
  public:
-  LazRecordSource(const detail::LaszipVlr& vlr, const detail::LazLayout& layout) : decoder_(vlr, layout) {}
+  explicit LazRecordSource(std::unique_ptr<detail::LazDecoder> decoder) : decoder_(std::move(decoder)) {}
   std::size_t read_records(std::uint8_t* out, std::size_t max_records) override {
-    return decoder_.decode(out, max_records);
+    return decoder_->decode(out, max_records);
   }
 
  private:
-  detail::LazDecoder decoder_;
+  std::unique_ptr<detail::LazDecoder> decoder_;
 };
 
-/// Picks the record source for a validated header: the file itself, or the LAZ decoder.
-std::unique_ptr<RecordSource> make_record_source(InputFile file, const LasHeader& h) {
+/// LAZ on several threads: workers decode the chunks after the one being handed out, and the
+/// records still leave in file order, so the output is the same bytes as with one thread. Chunk c
+/// goes to slot c % slots; a slot is refilled only after all its records have been handed out, so
+/// at most `threads` decoded chunks are held. An error in a chunk is kept in its slot and thrown
+/// when that chunk's records are due (the records before it are handed out first). The destructor
+/// stops the workers and joins them; a worker in the middle of a chunk finishes that chunk first.
+class ParallelLazRecordSource final : public RecordSource {
+ public:
+  ParallelLazRecordSource(std::unique_ptr<detail::LazDecoder> decoder, std::size_t record_length,
+                          unsigned threads)
+      : decoder_(std::move(decoder)),
+        record_length_(record_length),
+        chunk_count_(decoder_->chunk_count()),
+        slots_(threads) {
+    try {
+      for (unsigned i = 0; i < threads; ++i) workers_.emplace_back([this] { work(); });
+    } catch (...) {  // a thread could not be started: stop the ones that were
+      stop();
+      throw;
+    }
+  }
+  ~ParallelLazRecordSource() override { stop(); }
+  ParallelLazRecordSource(const ParallelLazRecordSource&) = delete;
+  ParallelLazRecordSource& operator=(const ParallelLazRecordSource&) = delete;
+
+  std::size_t read_records(std::uint8_t* out, std::size_t max_records) override {
+    if (error_) std::rethrow_exception(error_);  // every call after an error throws it again
+    std::size_t produced = 0;
+    while (produced < max_records && next_chunk_ < chunk_count_) {
+      Slot& slot = slots_[next_chunk_ % slots_.size()];
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        decoded_.wait(lock, [&] { return slot.state == Slot::kDecoded; });
+      }
+      if (slot.error) {
+        if (produced > 0) return produced;  // the records before the broken chunk first
+        error_ = slot.error;
+        std::rethrow_exception(error_);
+      }
+      const std::uint64_t chunk_points = decoder_->chunk_points(next_chunk_);
+      const auto n = static_cast<std::size_t>(
+          std::min<std::uint64_t>(max_records - produced, chunk_points - handed_out_));
+      std::memcpy(out + produced * record_length_, slot.records.data() + handed_out_ * record_length_,
+                  n * record_length_);
+      produced += n;
+      handed_out_ += n;
+      if (handed_out_ == chunk_points) {
+        {
+          std::lock_guard<std::mutex> lock(mutex_);
+          slot.state = Slot::kFree;
+        }
+        free_.notify_all();
+        ++next_chunk_;
+        handed_out_ = 0;
+      }
+    }
+    return produced;
+  }
+
+ private:
+  /// One decoded chunk. `records` and `error` belong to the worker while kDecoding and to the
+  /// reader while kDecoded; `state` changes under the mutex.
+  struct Slot {
+    enum State { kFree, kDecoding, kDecoded };
+    State state = kFree;
+    std::vector<std::uint8_t> records;
+    std::exception_ptr error;
+  };
+
+  /// Worker loop: claim the next chunk in file order as soon as its slot is free, decode it
+  /// outside the lock, publish it.
+  void work() {
+    for (;;) {
+      std::size_t chunk = 0;
+      Slot* slot = nullptr;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        // chunks are claimed in order and at most slots_.size() are ahead of the reader, so the
+        // slot of the next chunk is the one the reader frees next
+        free_.wait(lock, [&] {
+          return stopping_ || next_to_decode_ == chunk_count_ ||
+                 slots_[next_to_decode_ % slots_.size()].state == Slot::kFree;
+        });
+        if (stopping_ || next_to_decode_ == chunk_count_) return;
+        chunk = next_to_decode_++;
+        slot = &slots_[chunk % slots_.size()];
+        slot->state = Slot::kDecoding;
+      }
+      slot->error = nullptr;
+      try {
+        slot->records.resize(static_cast<std::size_t>(decoder_->chunk_points(chunk)) * record_length_);
+        decoder_->decode_chunk(chunk, slot->records.data());
+      } catch (...) {
+        slot->error = std::current_exception();
+      }
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        slot->state = Slot::kDecoded;
+      }
+      decoded_.notify_all();
+    }
+  }
+
+  void stop() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stopping_ = true;
+    }
+    free_.notify_all();
+    for (std::thread& worker : workers_) worker.join();
+    workers_.clear();
+  }
+
+  std::unique_ptr<detail::LazDecoder> decoder_;  // only its const decode_chunk() is used, from every worker
+  std::size_t record_length_;
+  std::size_t chunk_count_;
+  std::vector<Slot> slots_;
+
+  std::mutex mutex_;
+  std::condition_variable free_;     ///< a slot became free, or stopping_
+  std::condition_variable decoded_;  ///< a slot became kDecoded
+  std::size_t next_to_decode_ = 0;   ///< next chunk a worker claims (guarded by mutex_)
+  bool stopping_ = false;            ///< guarded by mutex_
+
+  // reader side (the thread calling read_records)
+  std::size_t next_chunk_ = 0;    ///< chunk whose records are handed out next
+  std::uint64_t handed_out_ = 0;  ///< records of next_chunk_ already handed out
+  std::exception_ptr error_;      ///< the error of a broken chunk, once it was due
+
+  std::vector<std::thread> workers_;  // last: started after everything they use exists
+};
+
+/// Decoded chunks larger than this are decoded by the streaming path even when threads are asked
+/// for: the parallel path holds `threads` whole chunks (a file may have one chunk of 100M points).
+constexpr std::uint64_t kMaxParallelChunkBytes = 256u << 20;
+
+/// Picks the record source for a validated header: the file itself, or the LAZ decoder, on
+/// `decode_threads` threads when the file has several chunks (0 counts as 1).
+std::unique_ptr<RecordSource> make_record_source(InputFile file, const LasHeader& h,
+                                                 unsigned decode_threads) {
   if (!h.compressed) return std::make_unique<FileRecordSource>(std::move(file), h);
   detail::check_laszip_vlr_present(!h.laszip_vlr.empty(), static_cast<std::uint8_t>(h.point_format | 0x80),
                                    file.path());
-  const detail::LaszipVlr vlr = detail::parse_laszip_vlr(h.laszip_vlr.data(), h.laszip_vlr.size(), file.path());
+  const detail::LaszipVlr vlr =
+      detail::parse_laszip_vlr(h.laszip_vlr.data(), h.laszip_vlr.size(), file.path());
   detail::LazLayout layout;
   layout.path = file.path();
   layout.point_data_offset = h.offset_to_point_data;
@@ -412,7 +555,14 @@ std::unique_ptr<RecordSource> make_record_source(InputFile file, const LasHeader
   layout.record_length = h.record_length;
   layout.point_format = static_cast<std::uint8_t>(h.point_format);
   layout.file_size = file.size();
-  return std::make_unique<LazRecordSource>(vlr, layout);
+  auto decoder = std::make_unique<detail::LazDecoder>(vlr, layout);
+  const std::size_t chunks = decoder->chunk_count();
+  std::uint64_t largest = 0;
+  for (std::size_t i = 0; i < chunks; ++i) largest = std::max(largest, decoder->chunk_points(i));
+  const auto threads = static_cast<unsigned>(std::min<std::size_t>(std::max(decode_threads, 1u), chunks));
+  if (threads <= 1 || largest * h.record_length > kMaxParallelChunkBytes)
+    return std::make_unique<LazRecordSource>(std::move(decoder));
+  return std::make_unique<ParallelLazRecordSource>(std::move(decoder), h.record_length, threads);
 }
 
 /// Grows a vector geometrically, so that many small appends stay linear.
@@ -558,11 +708,12 @@ class LasReader final : public PointCloudReader {
 
 }  // namespace
 
-std::unique_ptr<PointCloudReader> open_las(const std::string& path, PointFields fields) {
+std::unique_ptr<PointCloudReader> open_las(const std::string& path, PointFields fields,
+                                          unsigned decode_threads) {
   InputFile file(path, "las");
   PointCloudInfo info;
   const LasHeader h = read_header(file, info);
-  auto source = make_record_source(std::move(file), h);
+  auto source = make_record_source(std::move(file), h, decode_threads);
   return std::make_unique<LasReader>(std::move(info), h, std::move(source), fields);
 }
 

@@ -9,9 +9,11 @@
 
 namespace city3d::detail {
 
-/// Opens a LAS file whose signature has been checked by the caller. Throws IoError on any header
-/// problem (all of them in one message), and for LAZ files (not readable yet).
-std::unique_ptr<PointCloudReader> open_las(const std::string& path, PointFields fields);
+/// Opens a LAS or LAZ file whose signature has been checked by the caller. Throws IoError on any
+/// header problem (all of them in one message) and on an unusable LASzip VLR or chunk table. A LAZ
+/// file with several chunks is decoded on `decode_threads` threads (1: in the calling thread).
+std::unique_ptr<PointCloudReader> open_las(const std::string& path, PointFields fields,
+                                           unsigned decode_threads = 1);
 
 /// Header facts of a LAS or LAZ file (LAZ works: compressed = true, format "LAZ").
 PointCloudInfo read_las_info(const std::string& path);

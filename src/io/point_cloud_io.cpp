@@ -48,11 +48,21 @@ FileKind sniff(const std::string& path) {
 }  // namespace
 
 std::unique_ptr<PointCloudReader> open_point_cloud(const std::string& path, PointFields fields) {
-  return sniff(path) == FileKind::las ? detail::open_las(path, fields) : detail::open_ply(path, fields);
+  return open_point_cloud(path, fields, 1);
+}
+
+std::unique_ptr<PointCloudReader> open_point_cloud(const std::string& path, PointFields fields,
+                                                   unsigned decode_threads) {
+  return sniff(path) == FileKind::las ? detail::open_las(path, fields, decode_threads)
+                                      : detail::open_ply(path, fields);
 }
 
 PointCloud read_point_cloud(const std::string& path, PointFields fields) {
-  auto reader = open_point_cloud(path, fields);
+  return read_point_cloud(path, fields, 1);
+}
+
+PointCloud read_point_cloud(const std::string& path, PointFields fields, unsigned decode_threads) {
+  auto reader = open_point_cloud(path, fields, decode_threads);
   PointCloud cloud;
   while (reader->read(cloud, kReadChunk) > 0) {
   }

@@ -3,9 +3,12 @@
 // the old compressor 1 (pointwise, one stream without chunks).
 #include "laz/laz_decoder.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cassert>
 #include <cerrno>
-#include <cstdio>
 #include <cstring>
 
 #include "city3d/error.hpp"
@@ -186,15 +189,16 @@ struct Chunk {
   std::uint64_t points = 0;
 };
 
-/// Reads from a file with every length checked against the file size.
+/// Reads from a file with every length checked against the file size. pread() keeps no file
+/// position, so one File serves any number of threads at once.
 class File {
  public:
   File(const std::string& path, std::uint64_t size) : path_(path), size_(size) {
-    file_ = std::fopen(path.c_str(), "rb");
-    if (!file_) fail(path, std::string("cannot open: ") + std::strerror(errno));
+    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd_ < 0) fail(path, std::string("cannot open: ") + std::strerror(errno));
   }
   ~File() {
-    if (file_) std::fclose(file_);
+    if (fd_ >= 0) ::close(fd_);
   }
   File(const File&) = delete;
   File& operator=(const File&) = delete;
@@ -202,39 +206,116 @@ class File {
   std::uint64_t size() const { return size_; }
 
   /// Reads `n` bytes at `offset`; `what` names the structure in the error message.
-  void read(std::uint64_t offset, std::uint8_t* out, std::size_t n, const char* what) {
+  void read(std::uint64_t offset, std::uint8_t* out, std::size_t n, const std::string& what) const {
     if (offset > size_ || n > size_ - offset) {
-      fail(path_, std::string("truncated file: ") + what + " at byte " + std::to_string(offset) + " (" +
+      fail(path_, "truncated file: " + what + " at byte " + std::to_string(offset) + " (" +
                       std::to_string(n) + " bytes) runs past the end of the file (" + std::to_string(size_) +
                       " bytes)");
     }
-    if (n == 0) return;
-    if (fseeko(file_, static_cast<off_t>(offset), SEEK_SET) != 0 || std::fread(out, 1, n, file_) != n) {
-      fail(path_, std::string("cannot read ") + what + " at byte " + std::to_string(offset));
+    std::size_t done = 0;
+    while (done < n) {
+      const ssize_t got = ::pread(fd_, out + done, n - done, static_cast<off_t>(offset + done));
+      if (got < 0 && errno == EINTR) continue;
+      if (got <= 0) fail(path_, "cannot read " + what + " at byte " + std::to_string(offset + done));
+      done += static_cast<std::size_t>(got);
     }
   }
 
  private:
   std::string path_;
   std::uint64_t size_;
-  std::FILE* file_ = nullptr;
+  int fd_ = -1;
+};
+
+/// Everything that decoding one chunk mutates: its compressed bytes and the item decoders reading
+/// them. The streaming decode() keeps one for the whole file; each decode_chunk() call makes its
+/// own, which is what lets chunks be decoded on several threads at once. Not movable: the v1/v2
+/// item decoders hold a reference to `dec`.
+struct ChunkState {
+  ChunkState(const std::vector<ItemSlot>& items, std::size_t layer_count) : layers(layer_count) {
+    for (const ItemSlot& it : items) {
+      switch (it.kind) {
+        case ItemKind::kPoint10V1:
+          point10_v1 = std::make_unique<laz::Point10DecoderV1>(dec);
+          break;
+        case ItemKind::kGpsTimeV1:
+          gps_time_v1 = std::make_unique<laz::GpsTimeDecoderV1>(dec);
+          break;
+        case ItemKind::kRgb12V1:
+          rgb12_v1 = std::make_unique<laz::RgbDecoderV1>(dec);
+          break;
+        case ItemKind::kByteV1:
+          byte_v1 = std::make_unique<laz::ByteDecoderV1>(dec, it.size);
+          break;
+        case ItemKind::kPoint10:
+          point10 = std::make_unique<laz::Point10DecoderV2>(dec);
+          break;
+        case ItemKind::kGpsTime:
+          gps_time = std::make_unique<laz::GpsTimeDecoderV2>(dec);
+          break;
+        case ItemKind::kRgb12:
+          rgb12 = std::make_unique<laz::RgbDecoderV2>(dec);
+          break;
+        case ItemKind::kByte:
+          byte = std::make_unique<laz::ByteDecoderV2>(dec, it.size);
+          break;
+        case ItemKind::kPoint14:
+          point14 = std::make_unique<laz::Point14DecoderV3>();
+          break;
+        case ItemKind::kRgb14:
+        case ItemKind::kRgbNir14:
+          rgb14 = std::make_unique<laz::RgbNirDecoderV3>(it.kind == ItemKind::kRgbNir14);
+          break;
+        case ItemKind::kByte14:
+          byte14 = std::make_unique<laz::ByteDecoderV3>(it.size);
+          break;
+      }
+    }
+  }
+  ChunkState(const ChunkState&) = delete;
+  ChunkState& operator=(const ChunkState&) = delete;
+
+  std::vector<std::uint8_t> bytes;
+  std::uint64_t points_left = 0;
+  bool first_point = false;
+
+  // v1 and v2: one decoder for all items
+  laz::ArithmeticDecoder dec;
+  std::unique_ptr<laz::Point10DecoderV1> point10_v1;
+  std::unique_ptr<laz::GpsTimeDecoderV1> gps_time_v1;
+  std::unique_ptr<laz::RgbDecoderV1> rgb12_v1;
+  std::unique_ptr<laz::ByteDecoderV1> byte_v1;
+  std::unique_ptr<laz::Point10DecoderV2> point10;
+  std::unique_ptr<laz::GpsTimeDecoderV2> gps_time;
+  std::unique_ptr<laz::RgbDecoderV2> rgb12;
+  std::unique_ptr<laz::ByteDecoderV2> byte;
+
+  // v3: one decoder per layer
+  std::vector<laz::Layer> layers;
+  std::unique_ptr<laz::Point14DecoderV3> point14;
+  std::unique_ptr<laz::RgbNirDecoderV3> rgb14;
+  std::unique_ptr<laz::ByteDecoderV3> byte14;
 };
 
 }  // namespace
 
+/// The file's layout (items, chunk table) is fixed after construction and shared by every decode;
+/// only the streaming members below `stream_` change.
 struct LazDecoder::Impl {
   Impl(const LaszipVlr& vlr_in, const LazLayout& layout_in);
 
   std::size_t decode(std::uint8_t* out, std::size_t max_points);
+  void decode_chunk(std::size_t index, std::uint8_t* out) const;
 
   void check_items();
   void read_chunk_table();
-  void load_chunk();
-  void finish_chunk();
-  void decode_points_v2(std::uint8_t* out, std::size_t n);
-  void decode_points_v3(std::uint8_t* out, std::size_t n);
-  std::string chunk_label() const {
-    return "chunk " + std::to_string(chunk_index_) + " of " + std::to_string(chunks_.size());
+  void load_chunk(ChunkState& state, std::size_t index) const;
+  void finish_chunk(const ChunkState& state) const;
+  void decode_points(ChunkState& state, std::uint8_t* out, std::size_t n) const;
+  void decode_points_v2(ChunkState& state, std::uint8_t* out, std::size_t n) const;
+  void decode_points_v3(ChunkState& state, std::uint8_t* out, std::size_t n) const;
+  std::string chunk_label(std::size_t index) const {
+    return "chunk " + std::to_string(index) + " of " + std::to_string(chunks_.size());
   }
 
   LaszipVlr vlr_;
@@ -243,40 +324,22 @@ struct LazDecoder::Impl {
   bool layered_ = false;
   bool pointwise_ = false;  ///< compressor 1: one stream from the start of the point data, no chunk table
   std::vector<ItemSlot> items_;
+  std::size_t layer_count_ = 0;  ///< v3: layers of all items together
   std::vector<Chunk> chunks_;
 
   // streaming state: only the current chunk is held
+  std::unique_ptr<ChunkState> stream_;
   std::size_t chunk_index_ = 0;  ///< index of the chunk being decoded (== chunks_.size() before the first)
-  std::uint64_t chunk_points_left_ = 0;
-  bool chunk_first_point_ = false;
   std::uint64_t points_emitted_ = 0;
   bool failed_ = false;
   std::string failure_;
-  std::vector<std::uint8_t> chunk_bytes_;
-  std::size_t first_layer_offset_ = 0;  ///< v3: where the layers start in chunk_bytes_
-
-  // v1 and v2: one decoder for all items
-  laz::ArithmeticDecoder dec_;
-  std::unique_ptr<laz::Point10DecoderV1> point10_v1_;
-  std::unique_ptr<laz::GpsTimeDecoderV1> gps_time_v1_;
-  std::unique_ptr<laz::RgbDecoderV1> rgb12_v1_;
-  std::unique_ptr<laz::ByteDecoderV1> byte_v1_;
-  std::unique_ptr<laz::Point10DecoderV2> point10_;
-  std::unique_ptr<laz::GpsTimeDecoderV2> gps_time_;
-  std::unique_ptr<laz::RgbDecoderV2> rgb12_;
-  std::unique_ptr<laz::ByteDecoderV2> byte_;
-
-  // v3: one decoder per layer
-  std::vector<laz::Layer> layers_;
-  std::unique_ptr<laz::Point14DecoderV3> point14_;
-  std::unique_ptr<laz::RgbNirDecoderV3> rgb14_;
-  std::unique_ptr<laz::ByteDecoderV3> byte14_;
 };
 
 LazDecoder::Impl::Impl(const LaszipVlr& vlr_in, const LazLayout& layout_in)
     : vlr_(vlr_in), layout_(layout_in), file_(layout_in.path, layout_in.file_size) {
   check_items();
   read_chunk_table();
+  stream_ = std::make_unique<ChunkState>(items_, layer_count_);
   chunk_index_ = chunks_.size();  // "before the first chunk"
 }
 
@@ -332,69 +395,54 @@ void LazDecoder::Impl::check_items() {
     slot.offset = offset;
     slot.size = item.size;
     slot.first_layer = layer;
-    bool duplicate = false;
     switch (item.type) {
       case kPoint10:
-        duplicate = point10_ || point10_v1_;
         slot.kind = v1 ? ItemKind::kPoint10V1 : ItemKind::kPoint10;
-        if (v1)
-          point10_v1_ = std::make_unique<laz::Point10DecoderV1>(dec_);
-        else
-          point10_ = std::make_unique<laz::Point10DecoderV2>(dec_);
         break;
       case kGpsTime11:
-        duplicate = gps_time_ || gps_time_v1_;
         slot.kind = v1 ? ItemKind::kGpsTimeV1 : ItemKind::kGpsTime;
-        if (v1)
-          gps_time_v1_ = std::make_unique<laz::GpsTimeDecoderV1>(dec_);
-        else
-          gps_time_ = std::make_unique<laz::GpsTimeDecoderV2>(dec_);
         break;
       case kRgb12:
-        duplicate = rgb12_ || rgb12_v1_;
         slot.kind = v1 ? ItemKind::kRgb12V1 : ItemKind::kRgb12;
-        if (v1)
-          rgb12_v1_ = std::make_unique<laz::RgbDecoderV1>(dec_);
-        else
-          rgb12_ = std::make_unique<laz::RgbDecoderV2>(dec_);
         break;
       case kByte:
-        duplicate = byte_ || byte_v1_;
         slot.kind = v1 ? ItemKind::kByteV1 : ItemKind::kByte;
-        if (v1)
-          byte_v1_ = std::make_unique<laz::ByteDecoderV1>(dec_, item.size);
-        else
-          byte_ = std::make_unique<laz::ByteDecoderV2>(dec_, item.size);
         break;
       case kPoint14:
         if (i != 0)
           fail(path, "POINT14 must be the first item in the LASzip VLR (it selects the scanner channel)");
         slot.kind = ItemKind::kPoint14;
-        point14_ = std::make_unique<laz::Point14DecoderV3>();
         layer += laz::Point14DecoderV3::layer_count();
         break;
       case kRgb14:
       case kRgbNir14:
         slot.kind = item.type == kRgb14 ? ItemKind::kRgb14 : ItemKind::kRgbNir14;
-        duplicate = rgb14_ != nullptr;
-        rgb14_ = std::make_unique<laz::RgbNirDecoderV3>(item.type == kRgbNir14);
-        layer += rgb14_->layer_count();
+        layer += laz::RgbNirDecoderV3(item.type == kRgbNir14).layer_count();
         break;
       case kByte14:
         slot.kind = ItemKind::kByte14;
-        duplicate = byte14_ != nullptr;
-        byte14_ = std::make_unique<laz::ByteDecoderV3>(item.size);
-        layer += byte14_->layer_count();
+        layer += laz::ByteDecoderV3(item.size).layer_count();
         break;
       default:
         break;
     }
+    // one decoder per item type, whatever its version; RGB14 and RGBNIR14 share one
+    auto decoder_of = [](std::uint16_t type) -> std::uint16_t {
+      return type == kRgbNir14 ? std::uint16_t{kRgb14} : type;
+    };
+    const bool duplicate = std::any_of(
+        vlr_.items.begin(), vlr_.items.begin() + static_cast<std::ptrdiff_t>(i),
+        [&](const LaszipVlr::Item& seen) { return decoder_of(seen.type) == decoder_of(item.type); });
     if (duplicate) fail(path, "item " + label + " appears twice in the LASzip VLR");
     items_.push_back(slot);
     offset += item.size;
   }
-  if (!layered_ && !point10_ && !point10_v1_) fail(path, "LASzip VLR has no POINT10 item");
-  if (layered_ && !point14_) fail(path, "LASzip VLR has no POINT14 item");
+  if (!layered_ && std::none_of(items_.begin(), items_.end(), [](const ItemSlot& s) {
+        return s.kind == ItemKind::kPoint10 || s.kind == ItemKind::kPoint10V1;
+      }))
+    fail(path, "LASzip VLR has no POINT10 item");
+  if (layered_ && (items_.empty() || items_[0].kind != ItemKind::kPoint14))
+    fail(path, "LASzip VLR has no POINT14 item");
   // the non-byte items must be exactly the fields of the point format; extra bytes come on top
   static constexpr std::size_t kPointFormatSize[] = {20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67};
   std::size_t fixed_fields = 0;
@@ -411,7 +459,7 @@ void LazDecoder::Impl::check_items() {
     fail(path, "LASzip VLR item sizes sum to " + std::to_string(offset) + " bytes but the record length is " +
                    std::to_string(layout_.record_length));
   }
-  layers_ = std::vector<laz::Layer>(layer);  // fixed from here on: decoders keep pointers into it
+  layer_count_ = layer;
 }
 
 void LazDecoder::Impl::read_chunk_table() {
@@ -517,56 +565,54 @@ void LazDecoder::Impl::read_chunk_table() {
   }
 }
 
-void LazDecoder::Impl::load_chunk() {
-  chunk_index_ = chunk_index_ == chunks_.size() ? 0 : chunk_index_ + 1;
-  if (chunk_index_ >= chunks_.size())
-    fail(layout_.path, "no chunk left for point " + std::to_string(points_emitted_));
-  const Chunk& chunk = chunks_[chunk_index_];
-  chunk_bytes_.resize(chunk.bytes);
-  file_.read(chunk.offset, chunk_bytes_.data(), chunk_bytes_.size(), ("data of " + chunk_label()).c_str());
+void LazDecoder::Impl::load_chunk(ChunkState& state, std::size_t index) const {
+  const Chunk& chunk = chunks_[index];
+  std::vector<std::uint8_t>& bytes = state.bytes;
+  bytes.resize(chunk.bytes);
+  file_.read(chunk.offset, bytes.data(), bytes.size(), "data of " + chunk_label(index));
   const std::size_t record = layout_.record_length;
-  if (chunk_bytes_.size() < record) {
+  if (bytes.size() < record) {
     laz::throw_corrupt("chunk is shorter than its uncompressed first point");
   }
   if (layered_) {
     // first point raw, uint32 point count, one uint32 size per layer, then the layers
-    const std::size_t header = record + 4 + 4 * layers_.size();
-    if (chunk_bytes_.size() < header) laz::throw_corrupt("chunk is shorter than its layer table");
-    const std::uint32_t count = load<std::uint32_t>(chunk_bytes_.data() + record);
+    std::vector<laz::Layer>& layers = state.layers;
+    const std::size_t header = record + 4 + 4 * layers.size();
+    if (bytes.size() < header) laz::throw_corrupt("chunk is shorter than its layer table");
+    const std::uint32_t count = load<std::uint32_t>(bytes.data() + record);
     if (count != chunk.points) {
       laz::throw_corrupt(("chunk header says " + std::to_string(count) + " points, the chunk table says " +
                           std::to_string(chunk.points))
                              .c_str());
     }
     std::uint64_t at = header;
-    for (std::size_t i = 0; i < layers_.size(); ++i) {
-      layers_[i].size = load<std::uint32_t>(chunk_bytes_.data() + record + 4 + 4 * i);
-      if (layers_[i].size > chunk_bytes_.size() - at) {
-        laz::throw_corrupt(("layer " + std::to_string(i) + " (" + std::to_string(layers_[i].size) +
+    for (std::size_t i = 0; i < layers.size(); ++i) {
+      layers[i].size = load<std::uint32_t>(bytes.data() + record + 4 + 4 * i);
+      if (layers[i].size > bytes.size() - at) {
+        laz::throw_corrupt(("layer " + std::to_string(i) + " (" + std::to_string(layers[i].size) +
                             " bytes) runs past the end of the chunk")
                                .c_str());
       }
-      layers_[i].data = chunk_bytes_.data() + at;
-      at += layers_[i].size;
+      layers[i].data = bytes.data() + at;
+      at += layers[i].size;
     }
   }
-  chunk_points_left_ = chunk.points;
-  chunk_first_point_ = true;
+  state.points_left = chunk.points;
+  state.first_point = true;
 }
 
-void LazDecoder::Impl::finish_chunk() {
+void LazDecoder::Impl::finish_chunk(const ChunkState& state) const {
   // a well-formed stream ends exactly where its bytes end; anything else means corrupt data
   if (pointwise_) return;  // the stream's end is unknown (EVLRs may follow it)
   if (!layered_) {
-    if (dec_.consumed() != dec_.size()) {
-      laz::throw_corrupt(("decoder stopped at byte " + std::to_string(dec_.consumed()) + " of " +
-                          std::to_string(dec_.size()) + " (corrupt data)")
+    if (state.dec.consumed() != state.dec.size()) {
+      laz::throw_corrupt(("decoder stopped at byte " + std::to_string(state.dec.consumed()) + " of " +
+                          std::to_string(state.dec.size()) + " (corrupt data)")
                              .c_str());
     }
     return;
   }
-  for (std::size_t i = 0; i < layers_.size(); ++i) {
-    const laz::Layer& l = layers_[i];
+  for (const laz::Layer& l : state.layers) {
     if (l.size != 0 && l.dec.consumed() != l.size) {
       laz::throw_corrupt((std::string(l.dec.label()) + " decoder stopped at byte " +
                           std::to_string(l.dec.consumed()) + " of " + std::to_string(l.size) +
@@ -576,72 +622,81 @@ void LazDecoder::Impl::finish_chunk() {
   }
 }
 
-void LazDecoder::Impl::decode_points_v2(std::uint8_t* out, std::size_t n) {
+void LazDecoder::Impl::decode_points(ChunkState& state, std::uint8_t* out, std::size_t n) const {
+  assert(n <= state.points_left);
+  if (layered_)
+    decode_points_v3(state, out, n);
+  else
+    decode_points_v2(state, out, n);
+  state.points_left -= n;
+}
+
+void LazDecoder::Impl::decode_points_v2(ChunkState& s, std::uint8_t* out, std::size_t n) const {
   const std::size_t record = layout_.record_length;
   for (std::size_t p = 0; p < n; ++p, out += record) {
-    if (chunk_first_point_) {
-      std::memcpy(out, chunk_bytes_.data(), record);
+    if (s.first_point) {
+      std::memcpy(out, s.bytes.data(), record);
       for (const ItemSlot& it : items_) {
         const std::uint8_t* raw = out + it.offset;
         switch (it.kind) {
           case ItemKind::kPoint10:
-            point10_->init(raw);
+            s.point10->init(raw);
             break;
           case ItemKind::kGpsTime:
-            gps_time_->init(raw);
+            s.gps_time->init(raw);
             break;
           case ItemKind::kRgb12:
-            rgb12_->init(raw);
+            s.rgb12->init(raw);
             break;
           case ItemKind::kByte:
-            byte_->init(raw);
+            s.byte->init(raw);
             break;
           case ItemKind::kPoint10V1:
-            point10_v1_->init(raw);
+            s.point10_v1->init(raw);
             break;
           case ItemKind::kGpsTimeV1:
-            gps_time_v1_->init(raw);
+            s.gps_time_v1->init(raw);
             break;
           case ItemKind::kRgb12V1:
-            rgb12_v1_->init(raw);
+            s.rgb12_v1->init(raw);
             break;
           case ItemKind::kByteV1:
-            byte_v1_->init(raw);
+            s.byte_v1->init(raw);
             break;
           default:
             break;
         }
       }
-      dec_.start(chunk_bytes_.data() + record, chunk_bytes_.data() + chunk_bytes_.size());
-      chunk_first_point_ = false;
+      s.dec.start(s.bytes.data() + record, s.bytes.data() + s.bytes.size());
+      s.first_point = false;
       continue;
     }
     for (const ItemSlot& it : items_) {
       std::uint8_t* field = out + it.offset;
       switch (it.kind) {
         case ItemKind::kPoint10:
-          point10_->decode(field);
+          s.point10->decode(field);
           break;
         case ItemKind::kGpsTime:
-          gps_time_->decode(field);
+          s.gps_time->decode(field);
           break;
         case ItemKind::kRgb12:
-          rgb12_->decode(field);
+          s.rgb12->decode(field);
           break;
         case ItemKind::kByte:
-          byte_->decode(field);
+          s.byte->decode(field);
           break;
         case ItemKind::kPoint10V1:
-          point10_v1_->decode(field);
+          s.point10_v1->decode(field);
           break;
         case ItemKind::kGpsTimeV1:
-          gps_time_v1_->decode(field);
+          s.gps_time_v1->decode(field);
           break;
         case ItemKind::kRgb12V1:
-          rgb12_v1_->decode(field);
+          s.rgb12_v1->decode(field);
           break;
         case ItemKind::kByteV1:
-          byte_v1_->decode(field);
+          s.byte_v1->decode(field);
           break;
         default:
           break;
@@ -650,40 +705,40 @@ void LazDecoder::Impl::decode_points_v2(std::uint8_t* out, std::size_t n) {
   }
 }
 
-void LazDecoder::Impl::decode_points_v3(std::uint8_t* out, std::size_t n) {
+void LazDecoder::Impl::decode_points_v3(ChunkState& s, std::uint8_t* out, std::size_t n) const {
   const std::size_t record = layout_.record_length;
   for (std::size_t p = 0; p < n; ++p, out += record) {
-    if (chunk_first_point_) {
-      std::memcpy(out, chunk_bytes_.data(), record);
+    if (s.first_point) {
+      std::memcpy(out, s.bytes.data(), record);
       std::uint32_t context = 0;
       for (const ItemSlot& it : items_) {
         const std::uint8_t* raw = out + it.offset;
-        laz::Layer* layers = layers_.data() + it.first_layer;
+        laz::Layer* layers = s.layers.data() + it.first_layer;
         switch (it.kind) {
           case ItemKind::kPoint14:
-            context = point14_->init(raw, layers);
+            context = s.point14->init(raw, layers);
             break;
           case ItemKind::kRgb14:
           case ItemKind::kRgbNir14:
-            rgb14_->init(raw, layers, context);
+            s.rgb14->init(raw, layers, context);
             break;
           case ItemKind::kByte14:
-            byte14_->init(raw, layers, context);
+            s.byte14->init(raw, layers, context);
             break;
           default:
             break;
         }
       }
-      chunk_first_point_ = false;
+      s.first_point = false;
       continue;
     }
-    const std::uint32_t context = point14_->decode(out);
+    const std::uint32_t context = s.point14->decode(out);
     for (std::size_t i = 1; i < items_.size(); ++i) {
       const ItemSlot& it = items_[i];
       if (it.kind == ItemKind::kByte14)
-        byte14_->decode(out + it.offset, context);
+        s.byte14->decode(out + it.offset, context);
       else
-        rgb14_->decode(out + it.offset, context);
+        s.rgb14->decode(out + it.offset, context);
     }
   }
 }
@@ -691,24 +746,25 @@ void LazDecoder::Impl::decode_points_v3(std::uint8_t* out, std::size_t n) {
 std::size_t LazDecoder::Impl::decode(std::uint8_t* out, std::size_t max_points) {
   if (failed_) throw IoError(failure_);
   std::size_t produced = 0;
+  ChunkState& state = *stream_;
   try {
     while (produced < max_points && points_emitted_ < layout_.point_count) {
-      if (chunk_points_left_ == 0) load_chunk();
+      if (state.points_left == 0) {
+        chunk_index_ = chunk_index_ == chunks_.size() ? 0 : chunk_index_ + 1;
+        if (chunk_index_ >= chunks_.size())
+          fail(layout_.path, "no chunk left for point " + std::to_string(points_emitted_));
+        load_chunk(state, chunk_index_);
+      }
       const auto n =
-          static_cast<std::size_t>(std::min<std::uint64_t>(max_points - produced, chunk_points_left_));
-      std::uint8_t* dst = out + produced * layout_.record_length;
-      if (layered_)
-        decode_points_v3(dst, n);
-      else
-        decode_points_v2(dst, n);
+          static_cast<std::size_t>(std::min<std::uint64_t>(max_points - produced, state.points_left));
+      decode_points(state, out + produced * layout_.record_length, n);
       produced += n;
       points_emitted_ += n;
-      chunk_points_left_ -= n;
-      if (chunk_points_left_ == 0) finish_chunk();
+      if (state.points_left == 0) finish_chunk(state);
     }
   } catch (const laz::CorruptData& e) {
     failed_ = true;
-    failure_ = "laz: " + layout_.path + ": " + chunk_label() + ": " + e.what();
+    failure_ = "laz: " + layout_.path + ": " + chunk_label(chunk_index_) + ": " + e.what();
     throw IoError(failure_);
   } catch (const IoError& e) {
     failed_ = true;
@@ -716,6 +772,18 @@ std::size_t LazDecoder::Impl::decode(std::uint8_t* out, std::size_t max_points) 
     throw;
   }
   return produced;
+}
+
+void LazDecoder::Impl::decode_chunk(std::size_t index, std::uint8_t* out) const {
+  assert(index < chunks_.size());
+  ChunkState state(items_, layer_count_);  // private to this call: no state shared with other threads
+  try {
+    load_chunk(state, index);
+    decode_points(state, out, static_cast<std::size_t>(chunks_[index].points));
+    finish_chunk(state);
+  } catch (const laz::CorruptData& e) {
+    throw IoError("laz: " + layout_.path + ": " + chunk_label(index) + ": " + e.what());
+  }
 }
 
 LazDecoder::LazDecoder(const LaszipVlr& vlr, const LazLayout& layout)
@@ -726,5 +794,14 @@ LazDecoder::~LazDecoder() = default;
 std::size_t LazDecoder::decode(std::uint8_t* out, std::size_t max_points) {
   return impl_->decode(out, max_points);
 }
+
+std::size_t LazDecoder::chunk_count() const { return impl_->chunks_.size(); }
+
+std::uint64_t LazDecoder::chunk_points(std::size_t index) const {
+  assert(index < impl_->chunks_.size());
+  return impl_->chunks_[index].points;
+}
+
+void LazDecoder::decode_chunk(std::size_t index, std::uint8_t* out) const { impl_->decode_chunk(index, out); }
 
 }  // namespace city3d::detail

@@ -60,6 +60,11 @@ struct LazLayout {
 /// unsupported items). decode() throws IoError naming the file and the chunk when data is truncated
 /// or corrupt (a stream that runs past its chunk or layer, or does not end exactly there); after
 /// an error every further decode() call throws the same error.
+///
+/// Chunks are independent, so they can also be decoded one by one, in any order and on any number
+/// of threads at once, with decode_chunk(): it is const and keeps all its state (bytes read with
+/// pread(), item decoders) to itself. Compressor 1 counts as one chunk. decode() and decode_chunk()
+/// may be used on the same decoder, but decode() itself is for one thread.
 class LazDecoder {
  public:
   LazDecoder(const LaszipVlr& vlr, const LazLayout& layout);
@@ -71,6 +76,17 @@ class LazDecoder {
   /// it wrote, 0 once all point_count records have been produced. Records of a call that fails
   /// are not reported as written.
   std::size_t decode(std::uint8_t* out, std::size_t max_points);
+
+  /// Number of chunks (0 for a file without points; 1 for compressor 1).
+  std::size_t chunk_count() const;
+
+  /// Points in chunk `index` (< chunk_count()); they sum to the header's point count.
+  std::uint64_t chunk_points(std::size_t index) const;
+
+  /// Decodes chunk `index` (< chunk_count()) into `out`, which must hold chunk_points(index) records
+  /// (record_length bytes each). Thread-safe. Throws IoError naming the file and the chunk
+  /// ("chunk 3 of 13") when the chunk is truncated or corrupt; `out` is then partly written.
+  void decode_chunk(std::size_t index, std::uint8_t* out) const;
 
  private:
   struct Impl;

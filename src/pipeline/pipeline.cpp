@@ -495,7 +495,7 @@ std::vector<Point3> read_all_points(const std::string& path) {
 
 // Streams every tile that overlaps the footprints into the cropper.
 void crop_tiles(const std::vector<std::string>& files, const std::vector<Footprint>& footprints,
-                const CropParams& params, Cropper& cropper) {
+                const CropParams& params, unsigned threads, Cropper& cropper) {
   Box2 extent;
   for (const Footprint& f : footprints)
     for (const Polygon2& p : f.polygons)
@@ -505,7 +505,8 @@ void crop_tiles(const std::vector<std::string>& files, const std::vector<Footpri
   extent.min = {extent.min.x - margin, extent.min.y - margin};
   extent.max = {extent.max.x + margin, extent.max.y + margin};
   for (const std::string& file : files) {
-    auto reader = open_point_cloud(file, kFieldClassification);
+    // Cropping runs between reconstructions, so every thread can decode LAZ chunks meanwhile.
+    auto reader = open_point_cloud(file, kFieldClassification, threads);
     const PointCloudInfo& info = reader->info();
     if (!info.bounds.empty()) {
       Box2 tile;
@@ -771,7 +772,7 @@ BatchSummary run_batch(const BatchOptions& options) {
         std::vector<Footprint> footprints;
         for (std::size_t i : members) footprints.push_back(set.footprints[i]);
         Cropper cropper(footprints, options.crop);
-        crop_tiles(files, footprints, options.crop, cropper);
+        crop_tiles(files, footprints, options.crop, static_cast<unsigned>(options.threads), cropper);
         inputs = cropper.finish();
         inputs.resize(block.size());
         for (BuildingInput& in : inputs)
