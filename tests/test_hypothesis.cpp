@@ -421,6 +421,22 @@ TEST(Hypothesis, rejects_invalid_parameters_listing_each) {
   }
 }
 
+TEST(Hypothesis, rejects_invalid_size_bounds_listing_each) {
+  HypothesisParams params;
+  params.min_cell_width = -0.1;
+  params.max_planes_per_large_cell = 0;
+  params.line_merge_distance = -1.0;
+  try {
+    params.validate();
+    FAIL() << "no exception";
+  } catch (const ConfigError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("min_cell_width"), std::string::npos) << m;
+    EXPECT_NE(m.find("max_planes_per_large_cell"), std::string::npos) << m;
+    EXPECT_NE(m.find("line_merge_distance"), std::string::npos) << m;
+  }
+}
+
 // ------------------------------------------------------------------------------------------------
 // End to end: candidates -> reference selection -> assembled model.
 
@@ -505,6 +521,42 @@ TEST(Hypothesis, nearly_concurrent_lines_leave_no_cell_without_area) {
   const auto r = reconstruct(b);
   expect_valid_solid(r, 720.0);
   EXPECT_EQ(r.mesh.faces.size(), 6u);  // a box: the inner walls are not selected
+}
+
+TEST(Hypothesis, thin_strip_between_nearly_coincident_walls_is_merged_into_a_neighbour) {
+  // Two inner walls 4 cm apart cut a 12 m x 4 cm strip (area < 0.05 x perimeter): it is merged into
+  // a neighbour, leaving two cells, and the model stays a valid box.
+  Synthetic b = make_building({rectangle(0, 0, 12, 12)}, {{{{0, 0}, {12, 0}, {12, 12}, {0, 12}}, 0.0, 0.0, 5.0}},
+                              720.0);
+  for (double x : {6.0, 6.04}) {
+    VerticalPlane w;
+    w.a = {x, 0};
+    w.b = {x, 12};
+    w.outer = false;
+    b.walls.push_back(w);
+  }
+  const auto c = candidates_of(b);
+  expect_well_formed(c);
+  EXPECT_EQ(c.cell_count, 2u);
+  const auto r = reconstruct(b);
+  expect_valid_solid(r, 720.0);
+  EXPECT_EQ(r.mesh.faces.size(), 6u);
+}
+
+TEST(Hypothesis, thin_cells_are_kept_when_merging_is_off) {
+  Synthetic b = make_building({rectangle(0, 0, 12, 12)}, {{{{0, 0}, {12, 0}, {12, 12}, {0, 12}}, 0.0, 0.0, 5.0}},
+                              720.0);
+  for (double x : {6.0, 6.04}) {
+    VerticalPlane w;
+    w.a = {x, 0};
+    w.b = {x, 12};
+    w.outer = false;
+    b.walls.push_back(w);
+  }
+  HypothesisParams params;
+  params.min_cell_width = 0.0;
+  const auto c = generate_candidates(b.points, b.roofs, b.walls, b.footprint, b.ground_z, params);
+  EXPECT_EQ(c.cell_count, 3u);
 }
 
 TEST(Model, rejects_an_open_selection_naming_the_edge) {

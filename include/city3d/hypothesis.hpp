@@ -12,8 +12,18 @@
 //           change to PolyFit), each clipped to where both planes have points nearby: the points of a
 //           plane within line_support_margin (xy) of the line are projected onto it, the two
 //           intervals are intersected, and the result is extended by line_support_margin at both
-//           ends. A pair with no such overlap gives no line. Without this rule every pair of planes
-//           would cut the whole footprint and the arrangement would explode.
+//           ends. A pair with no such overlap, or an overlap shorter than min_line_overlap, gives
+//           no line. Without this rule every pair of planes would cut the whole footprint and the
+//           arrangement would explode. Nearly coincident lines (both ends of one within
+//           line_merge_distance of a longer one's line, overlapping it) are merged: the longer one
+//           is extended over both (longest first, ties in pair order).
+//     Thin cells (area < min_cell_width / 2 x perimeter) are merged into the inside neighbour that
+//     shares their longest boundary (the shared edges are removed), when the union stays a simple
+//     polygon (the shared edges form one chain and the cells touch nowhere else); one merge at a
+//     time, in arrangement order, until no thin cell can be merged; this runs before holes are
+//     bridged (below), so a union that still encloses something is split like any cell with a hole.
+//     Nearly coincident lines otherwise leave strips whose faces are degenerate and inflate the
+//     problem.
 //     Edges shorter than min_edge_length are contracted (nearly concurrent lines otherwise make
 //     cells without area). Dangling edges (an end that reaches no other line) are removed, because a cell with an
 //     "antenna" is not a simple polygon. A cell with a hole is split by a horizontal line across
@@ -28,7 +38,8 @@
 //     are dropped, never the largest part: a self-touching outline leaves lobes of a few cm2.
 //  2. Roof faces: every bounded cell inside the footprint, lifted onto the roof planes that have at
 //     least min_support_points of their points within cell_support_margin (xy) of the cell (when no
-//     plane qualifies, the plane(s) whose points come nearest), at most max_planes_per_cell of them:
+//     plane qualifies, the plane(s) whose points come nearest), at most max_planes_per_cell of them
+//     (at most max_planes_per_large_cell when there are more than large_cell_count cells):
 //     the ones with most points inside the cell, then most points within the margin, then the lower
 //     plane index. Vertically overlapping roof faces are exactly the faces over the same cell.
 //     The floor lies below every roof face: over a cell, a plane that comes lower than
@@ -79,12 +90,23 @@ struct HypothesisParams {
   double parallel_tolerance = 1e-3;  ///< |n_i x n_j| below this: roof planes treated as parallel (no line), > 0
   int max_planes_per_cell = 4;        ///< roof planes lifted onto one cell: the best-supported ones (most of
                                      ///< their points inside the cell, then near it), >= 1
+  int large_cell_count = 64;         ///< an arrangement with more inside cells than this is "large", >= 0
+  int max_planes_per_large_cell = 2; ///< max_planes_per_cell of a large arrangement (the smaller of the two
+                                     ///< applies): keeps the integer program of big buildings solvable, >= 1
   double floor_clearance = 0.1;      ///< least height of a roof vertex above the floor; the floor is lowered
                                      ///< (never raised) to keep it, > 0
   double min_part_area = 1.0;        ///< m2; detached parts of the inside cells smaller than this are dropped
                                      ///< (never the largest part), >= 0
   double min_edge_length = 0.01;     ///< arrangement edges shorter than this are contracted (their end
                                      ///< vertices snap together; sliver cells vanish), >= 0
+  double min_cell_width = 0.1;       ///< a cell with area < min_cell_width / 2 x perimeter (a strip narrower
+                                     ///< than this, a sliver) is merged into a neighbour; 0 = never, >= 0
+  double min_line_overlap = 0.0;     ///< roof intersection lines whose supported overlap (before the
+                                     ///< extension by line_support_margin) is shorter are skipped, >= 0.
+                                     ///< Off by default: a skipped line lets other lines' dangling ends
+                                     ///< run on to the next line, which made more cells, not fewer.
+  double line_merge_distance = 0.1;  ///< a roof line with both ends within this xy distance of a longer
+                                     ///< one, overlapping it, is merged into it; 0 = never, >= 0
 
   /// Throws ConfigError listing every invalid field.
   void validate() const;

@@ -41,6 +41,11 @@ void HypothesisParams::validate() const {
   need(floor_clearance > 0.0, "floor_clearance must be > 0");
   need(min_part_area >= 0.0, "min_part_area must be >= 0");
   need(min_edge_length >= 0.0, "min_edge_length must be >= 0");
+  need(min_cell_width >= 0.0, "min_cell_width must be >= 0");
+  need(min_line_overlap >= 0.0, "min_line_overlap must be >= 0");
+  need(line_merge_distance >= 0.0, "line_merge_distance must be >= 0");
+  need(large_cell_count >= 0, "large_cell_count must be >= 0");
+  need(max_planes_per_large_cell >= 1, "max_planes_per_large_cell must be >= 1");
   if (problems.empty()) return;
   std::string message = "hypothesis: invalid parameters: ";
   for (std::size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];
@@ -153,7 +158,84 @@ bool bridge_holes(Arrangement& arr, std::vector<InputCurve>& curves, std::vector
   return !bridges.empty();
 }
 
-PlainArrangement build_arrangement(std::vector<InputCurve> curves) {
+// Merges every thin inside cell (area below min_width / 2 x perimeter: a strip narrower than about
+// min_width, or a sliver triangle) into the inside neighbour with which it shares the longest
+// boundary, by removing the shared edges. Nearly coincident lines otherwise make cells whose faces
+// are degenerate (zero area in double) and inflate the selection problem. A merge is done only when
+// it keeps the cell a simple polygon: the shared edges form one chain, and no other vertex of the thin
+// cell lies on the neighbour. Cells are visited in arrangement order, one merge at a time
+// (deterministic). Runs before bridge_holes(). Returns the number of merges.
+std::size_t merge_thin_cells(Arrangement& arr, double min_width) {
+  if (min_width <= 0.0) return 0;
+  std::size_t merges = 0;
+  auto point_of = [](Arrangement::Vertex_const_handle v) {
+    return Point2{CGAL::to_double(v->point().x()), CGAL::to_double(v->point().y())};
+  };
+  auto usable = [](Arrangement::Face_const_handle f) {
+    return !f->is_unbounded() && f->data() == 1 && f->number_of_inner_ccbs() == 0;
+  };
+  for (;;) {
+    bool merged = false;
+    for (auto f = arr.faces_begin(); f != arr.faces_end() && !merged; ++f) {
+      if (!usable(f)) continue;
+      double twice_area = 0.0, perimeter = 0.0;
+      auto he = f->outer_ccb(), first = he;
+      do {
+        const Point2 a = point_of(he->source()), b = point_of(he->target());
+        twice_area += a.x * b.y - b.x * a.y;
+        perimeter += std::hypot(b.x - a.x, b.y - a.y);
+      } while (++he != first);
+      if (std::abs(twice_area) >= min_width * perimeter) continue;
+      // The neighbour with the longest shared boundary (first in boundary order on ties).
+      std::vector<std::pair<Arrangement::Face_handle, double>> shared;
+      do {
+        auto other = he->twin()->face();
+        if (!usable(other) || other == f) continue;
+        const Point2 a = point_of(he->source()), b = point_of(he->target());
+        auto it = std::find_if(shared.begin(), shared.end(), [&](const auto& s) { return s.first == other; });
+        if (it == shared.end()) shared.emplace_back(other, 0.0), it = std::prev(shared.end());
+        it->second += std::hypot(b.x - a.x, b.y - a.y);
+      } while (++he != first);
+      if (shared.empty()) continue;
+      auto best = shared.front();
+      for (const auto& s : shared)
+        if (s.second > best.second) best = s;
+      const auto neighbour = best.first;
+      // One chain: the boundary switches between shared and not shared exactly twice.
+      std::vector<Arrangement::Halfedge_handle> chain;
+      std::vector<Arrangement::Vertex_handle> chain_vertices, other_vertices;
+      int switches = 0;
+      do {
+        const bool on = he->twin()->face() == neighbour;
+        const bool next_on = he->next()->twin()->face() == neighbour;
+        if (on != next_on) ++switches;
+        if (on) {
+          chain.push_back(he);
+          chain_vertices.push_back(he->source());
+          chain_vertices.push_back(he->target());
+        } else {
+          other_vertices.push_back(he->target());
+        }
+      } while (++he != first);
+      if (switches != 2) continue;
+      bool pinched = false;
+      auto nh = neighbour->outer_ccb(), nfirst = nh;
+      do {
+        const auto v = nh->target();
+        if (std::find(chain_vertices.begin(), chain_vertices.end(), v) == chain_vertices.end() &&
+            std::find(other_vertices.begin(), other_vertices.end(), v) != other_vertices.end())
+          pinched = true;
+      } while (++nh != nfirst && !pinched);
+      if (pinched) continue;
+      for (auto e : chain) arr.remove_edge(e);
+      ++merges;
+      merged = true;
+    }
+    if (!merged) return merges;
+  }
+}
+
+PlainArrangement build_arrangement(std::vector<InputCurve> curves, double min_cell_width) {
   std::vector<Traits::Curve_2> input;
   double x_min = std::numeric_limits<double>::infinity(), x_max = -x_min;
   for (unsigned i = 0; i < curves.size(); ++i) {
@@ -168,6 +250,12 @@ PlainArrangement build_arrangement(std::vector<InputCurve> curves) {
   CGAL::insert(arr, input.begin(), input.end());
   remove_antennas(arr);
   classify_faces(arr, curves);
+  // Thin cells are merged before holes are bridged: should a union still enclose something, the
+  // bridging below splits it like any cell with a hole.
+  if (const std::size_t merges = merge_thin_cells(arr, min_cell_width)) {
+    log_debug("hypothesis: merged " + std::to_string(merges) + " thin cells into their neighbours");
+    remove_antennas(arr);
+  }
   std::vector<Traits::Curve_2> bridges;
   for (int round = 0; round < 8 && bridge_holes(arr, curves, bridges, x_min - 1.0, x_max + 1.0); ++round) {
     for (const auto& c : bridges) {
@@ -486,6 +574,49 @@ PlainArrangement drop_small_parts(const PlainArrangement& in, double min_area) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// A uniform xy grid over a set of points (the support and plane-ranking loops ask for the points in
+// a box; without an index they scanned every point for every cell and wall face). Each entry is a
+// payload index; queries return every entry whose bin meets the box (callers test exactly).
+class PointGrid {
+ public:
+  // `xy(i)` gives the position of entry i, for i in 0..count-1.
+  template <typename XY>
+  PointGrid(std::size_t count, XY xy) {
+    Box2 box;
+    for (std::size_t i = 0; i < count; ++i) box.add(xy(i));
+    if (box.empty()) return;
+    origin_ = box.min;
+    const double w = box.max.x - box.min.x, h = box.max.y - box.min.y;
+    // About four entries per bin, at most ~1M bins, never below 10 cm.
+    size_ = std::max(0.1, std::sqrt(std::max(w * h, 1e-6) * 4.0 / static_cast<double>(count)));
+    while ((w / size_ + 1.0) * (h / size_ + 1.0) > 1e6) size_ *= 2.0;
+    nx_ = static_cast<long>(w / size_) + 1;
+    ny_ = static_cast<long>(h / size_) + 1;
+    bins_.assign(static_cast<std::size_t>(nx_ * ny_), {});
+    for (std::size_t i = 0; i < count; ++i) {
+      const Point2 p = xy(i);
+      bins_[static_cast<std::size_t>(bin_y(p.y) * nx_ + bin_x(p.x))].push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+  template <typename Visit>
+  void for_each_in(double x0, double y0, double x1, double y1, Visit visit) const {
+    if (bins_.empty() || x1 < x0 || y1 < y0) return;
+    const long i0 = bin_x(x0), i1 = bin_x(x1), j0 = bin_y(y0), j1 = bin_y(y1);
+    for (long j = j0; j <= j1; ++j)
+      for (long i = i0; i <= i1; ++i)
+        for (std::uint32_t k : bins_[static_cast<std::size_t>(j * nx_ + i)]) visit(k);
+  }
+
+ private:
+  long bin_x(double x) const { return std::clamp(static_cast<long>(std::floor((x - origin_.x) / size_)), 0L, nx_ - 1); }
+  long bin_y(double y) const { return std::clamp(static_cast<long>(std::floor((y - origin_.y) / size_)), 0L, ny_ - 1); }
+  Point2 origin_{0.0, 0.0};
+  double size_ = 1.0;
+  long nx_ = 0, ny_ = 0;
+  std::vector<std::vector<std::uint32_t>> bins_;
+};
+
+// ---------------------------------------------------------------------------------------------
 // Plain geometry helpers.
 
 bool inside_polygon(const std::vector<Point2>& poly, double x, double y) {
@@ -713,7 +844,7 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
                       CurveKind::inner_wall,
                       static_cast<int>(i)});
   }
-  std::size_t line_count = 0;
+  std::vector<InputCurve> roof_lines;
   for (std::size_t i = 0; i < R; ++i) {
     for (std::size_t j = i + 1; j < R; ++j) {
       // z_i(x, y) == z_j(x, y)  <=>  A x + B y + C == 0.
@@ -740,18 +871,51 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
       const auto a = interval(roofs[i]);
       const auto b = interval(roofs[j]);
       const double lo = std::max(a.first, b.first), hi = std::min(a.second, b.second);
-      if (!(lo <= hi)) continue;
-      curves.push_back({{origin.x + (lo - margin) * dir.x, origin.y + (lo - margin) * dir.y},
-                        {origin.x + (hi + margin) * dir.x, origin.y + (hi + margin) * dir.y},
-                        CurveKind::roof_line,
-                        -1});
-      ++line_count;
+      if (!(lo <= hi) || hi - lo < params.min_line_overlap) continue;
+      roof_lines.push_back({{origin.x + (lo - margin) * dir.x, origin.y + (lo - margin) * dir.y},
+                            {origin.x + (hi + margin) * dir.x, origin.y + (hi + margin) * dir.y},
+                            CurveKind::roof_line,
+                            -1});
     }
   }
+  // Nearly coincident roof lines (both ends of one within line_merge_distance of the other's line,
+  // overlapping along it) become one: the longer line, extended over both. Longest first, ties in
+  // input order (deterministic).
+  if (params.line_merge_distance > 0.0) {
+    std::vector<std::size_t> order(roof_lines.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    auto length = [&](std::size_t i) { return std::hypot(roof_lines[i].b.x - roof_lines[i].a.x, roof_lines[i].b.y - roof_lines[i].a.y); };
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return length(x) > length(y); });
+    std::vector<InputCurve> kept;
+    for (std::size_t i : order) {
+      const InputCurve& c = roof_lines[i];
+      bool absorbed = false;
+      for (auto& k : kept) {
+        const double len = std::hypot(k.b.x - k.a.x, k.b.y - k.a.y);
+        const Point2 d{(k.b.x - k.a.x) / len, (k.b.y - k.a.y) / len};
+        auto across = [&](const Point2& p) { return std::abs(-(p.x - k.a.x) * d.y + (p.y - k.a.y) * d.x); };
+        auto along = [&](const Point2& p) { return (p.x - k.a.x) * d.x + (p.y - k.a.y) * d.y; };
+        if (across(c.a) > params.line_merge_distance || across(c.b) > params.line_merge_distance) continue;
+        const double t0 = std::min(along(c.a), along(c.b)), t1 = std::max(along(c.a), along(c.b));
+        if (t1 < 0.0 || t0 > len) continue;
+        const Point2 a0 = k.a;
+        if (t0 < 0.0) k.a = {a0.x + t0 * d.x, a0.y + t0 * d.y};
+        if (t1 > len) k.b = {a0.x + t1 * d.x, a0.y + t1 * d.y};
+        absorbed = true;
+        break;
+      }
+      if (!absorbed) kept.push_back(c);
+    }
+    if (kept.size() < roof_lines.size())
+      log_debug("hypothesis: merged " + std::to_string(roof_lines.size() - kept.size()) + " nearly coincident roof lines");
+    roof_lines = std::move(kept);
+  }
+  const std::size_t line_count = roof_lines.size();
+  curves.insert(curves.end(), roof_lines.begin(), roof_lines.end());
 
   extend_dangling_ends(curves, footprint_local, 2.0 * margin);
   const PlainArrangement arr =
-      drop_small_parts(contract_robustly(build_arrangement(curves), params.min_edge_length), params.min_part_area);
+      drop_small_parts(contract_robustly(build_arrangement(curves, params.min_cell_width), params.min_edge_length), params.min_part_area);
   if (arr.cells.empty()) throw ReconstructionError("hypothesis: the footprint has no inside cell");
   const std::size_t cell_count = arr.cells.size();
 
@@ -762,23 +926,40 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
   };
   std::vector<std::vector<PlaneRank>> ranked(cell_count);
   std::vector<std::vector<int>> cell_planes(cell_count);
+  // Every (plane, point) membership, indexed in xy.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> memberships;
+  for (std::size_t r = 0; r < R; ++r)
+    for (std::uint32_t k : roofs[r].points) memberships.emplace_back(static_cast<std::uint32_t>(r), k);
+  const PointGrid membership_grid(memberships.size(), [&](std::size_t i) {
+    const Point3& p = points[memberships[i].second];
+    return Point2{p.x, p.y};
+  });
+  std::vector<std::size_t> near_count(R), inside_count(R);
+  // A large arrangement gets fewer planes per cell: the problem grows with cells x planes.
+  const bool large = cell_count > static_cast<std::size_t>(params.large_cell_count);
+  const auto max_planes = static_cast<std::size_t>(large ? std::min(params.max_planes_per_cell, params.max_planes_per_large_cell)
+                                                         : params.max_planes_per_cell);
+  if (large && max_planes < static_cast<std::size_t>(params.max_planes_per_cell))
+    log_debug("hypothesis: " + std::to_string(cell_count) + " cells, at most " + std::to_string(max_planes) +
+              " roof planes per cell");
   for (std::size_t c = 0; c < cell_count; ++c) {
     const auto& poly = arr.cells[c].polygon;
     Box2 box;
     for (const auto& p : poly) box.add(p);
     const double cm = params.cell_support_margin;
+    std::fill(near_count.begin(), near_count.end(), 0);
+    std::fill(inside_count.begin(), inside_count.end(), 0);
+    membership_grid.for_each_in(box.min.x - cm, box.min.y - cm, box.max.x + cm, box.max.y + cm, [&](std::uint32_t i) {
+      const Point3& pt = points[memberships[i].second];
+      if (pt.x < box.min.x - cm || pt.x > box.max.x + cm || pt.y < box.min.y - cm || pt.y > box.max.y + cm) return;
+      const double d = distance_to_polygon(poly, pt.x, pt.y);
+      if (d <= cm) ++near_count[memberships[i].first];
+      if (d <= 0.0) ++inside_count[memberships[i].first];
+    });
     for (std::size_t r = 0; r < R; ++r) {
       const std::size_t need = std::min<std::size_t>(static_cast<std::size_t>(params.min_support_points),
                                                      roofs[r].points.size());
-      std::size_t count = 0, inside = 0;
-      for (std::uint32_t k : roofs[r].points) {
-        const Point3& pt = points[k];
-        if (pt.x < box.min.x - cm || pt.x > box.max.x + cm || pt.y < box.min.y - cm || pt.y > box.max.y + cm) continue;
-        const double d = distance_to_polygon(poly, pt.x, pt.y);
-        if (d <= cm) ++count;
-        if (d <= 0.0) ++inside;
-      }
-      if (need > 0 && count >= need) ranked[c].push_back({inside, count, static_cast<int>(r)});
+      if (need > 0 && near_count[r] >= need) ranked[c].push_back({inside_count[r], near_count[r], static_cast<int>(r)});
     }
     // Best-supported first (points inside the cell, then points near it, then plane index); keep
     // at most max_planes_per_cell.
@@ -788,8 +969,7 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
       if (x.near != y.near) return x.near > y.near;
       return x.plane < y.plane;
     });
-    if (list.size() > static_cast<std::size_t>(params.max_planes_per_cell))
-      list.resize(static_cast<std::size_t>(params.max_planes_per_cell));
+    if (list.size() > max_planes) list.resize(max_planes);
     for (const auto& pr : list) cell_planes[c].push_back(pr.plane);
     std::sort(cell_planes[c].begin(), cell_planes[c].end());
     if (cell_planes[c].empty()) {
@@ -1076,15 +1256,17 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
     for (auto k : roofs[r].points) segment_of[k] = static_cast<int>(r);
   const double eps = params.support_distance;
   // Roof and floor faces: the points over their cell.
+  const PointGrid point_grid(points.size(), [&](std::size_t k) { return Point2{points[k].x, points[k].y}; });
   std::vector<std::vector<std::uint32_t>> cell_points(cell_count);
   for (std::size_t c = 0; c < cell_count; ++c) {
     Box2 box;
     for (const auto& p : arr.cells[c].polygon) box.add(p);
-    for (std::uint32_t k = 0; k < points.size(); ++k) {
+    point_grid.for_each_in(box.min.x, box.min.y, box.max.x, box.max.y, [&](std::uint32_t k) {
       const auto& p = points[k];
-      if (p.x < box.min.x || p.x > box.max.x || p.y < box.min.y || p.y > box.max.y) continue;
+      if (p.x < box.min.x || p.x > box.max.x || p.y < box.min.y || p.y > box.max.y) return;
       if (inside_polygon(arr.cells[c].polygon, p.x, p.y)) cell_points[c].push_back(k);
-    }
+    });
+    std::sort(cell_points[c].begin(), cell_points[c].end());
   }
   for (std::size_t i = 0; i < nf; ++i) {
     const auto& f = out.faces[i];
@@ -1111,14 +1293,16 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
         zlo = std::min(zlo, p.z);
         zhi = std::max(zhi, p.z);
       }
-      for (const auto& p : points) {
-        if (p.z < zlo || p.z > zhi) continue;
+      point_grid.for_each_in(std::min(a.x, b.x) - eps, std::min(a.y, b.y) - eps, std::max(a.x, b.x) + eps,
+                             std::max(a.y, b.y) + eps, [&](std::uint32_t k) {
+        const auto& p = points[k];
+        if (p.z < zlo || p.z > zhi) return;
         const double across = -(p.x - a.x) * dy + (p.y - a.y) * dx;
-        if (std::abs(across) > eps) continue;
+        if (std::abs(across) > eps) return;
         const double along = (p.x - a.x) * dx + (p.y - a.y) * dy;
-        if (along < 0.0 || along > len) continue;
+        if (along < 0.0 || along > len) return;
         if (inside_polygon(tz, along, p.z)) support += 1.0;
-      }
+      });
     }
     prob.support[i] = support;
   }

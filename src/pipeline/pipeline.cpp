@@ -123,6 +123,11 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("hypothesis.max_planes_per_cell", p.hypothesis.max_planes_per_cell);
   put("hypothesis.floor_clearance", p.hypothesis.floor_clearance);
   put("hypothesis.min_part_area", p.hypothesis.min_part_area);
+  put("hypothesis.min_cell_width", p.hypothesis.min_cell_width);
+  put("hypothesis.line_merge_distance", p.hypothesis.line_merge_distance);
+  put("hypothesis.min_line_overlap", p.hypothesis.min_line_overlap);
+  put("hypothesis.large_cell_count", p.hypothesis.large_cell_count);
+  put("hypothesis.max_planes_per_large_cell", p.hypothesis.max_planes_per_large_cell);
   put("selection.lambda_data", p.selection.lambda_data);
   put("selection.lambda_complexity", p.selection.lambda_complexity);
   put("selection.lambda_roof", p.selection.lambda_roof);
