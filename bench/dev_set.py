@@ -4,7 +4,10 @@ with City3D's own model beside each) and city3d_repo/building_instances (100 clo
 with the same evaluation code (`city3d evaluate`): share of models, validity, LoD2 share, RMSE and
 face counts against City3D's models, per dataset, and time per building.
 
-Usage: bench/dev_set.py [--city3d build/city3d] [--jobs 2] [--runs 1] [--out DIR]
+Usage: bench/dev_set.py [--city3d build/city3d] [--jobs 2] [--runs 1] [--out DIR] [--city3d-floors]
+       [-- extra city3d options]
+--city3d-floors puts our floors where City3D's reference models have theirs (AHN3 z = 0, Vaihingen 265,
+DALES 1.05; ../shared/data/README.md) instead of at each cloud's lowest point.
 Times are the per-building seconds of the report (one building on one core); with --runs N the
 per-building median over N runs is used.
 """
@@ -20,9 +23,12 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 SHARED = os.path.normpath(os.path.join(HERE, "..", "..", "shared", "data"))
 
 
-def reconstruct(city3d, clouds, out, jobs):
+FLOORS = {"AHN3": "0", "Vaihingen": "265", "Dales3d": "1.05"}
+
+
+def reconstruct(city3d, clouds, out, jobs, extra):
     cmd = [city3d, "reconstruct", *clouds, "-j", str(jobs), "--no-progress", "-q", "--no-resume",
-           "--no-cityjson", "-o", out]
+           "--no-cityjson", "-o", out, *extra]
     subprocess.run(cmd, check=True)
     with open(os.path.join(out, "report.csv")) as f:
         return {row["id"]: row for row in csv.DictReader(f)}
@@ -40,6 +46,8 @@ def main():
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--runs", type=int, default=1)
     ap.add_argument("--out", default=None)
+    ap.add_argument("--city3d-floors", action="store_true")
+    ap.add_argument("extra", nargs="*", help="more city3d options, after --")
     args = ap.parse_args()
     out = args.out or tempfile.mkdtemp(prefix="city3d_dev_")
 
@@ -57,7 +65,10 @@ def main():
         seconds = {}
         report = None
         for run in range(args.runs):
-            report = reconstruct(args.city3d, clouds, os.path.join(out, name), args.jobs)
+            extra = list(args.extra)
+            if args.city3d_floors and name in FLOORS:
+                extra += ["--ground-z", FLOORS[name]]
+            report = reconstruct(args.city3d, clouds, os.path.join(out, name), args.jobs, extra)
             for bid, r in report.items():
                 seconds.setdefault(bid, []).append(float(r["seconds"]))
         for cloud in clouds:
