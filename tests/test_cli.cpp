@@ -386,3 +386,18 @@ TEST_F(Reconstruct, footprint_attribute_overrides_the_ground_height) {
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_TRUE(contains(bad.output, "no field 'no_such_field'")) << bad.output;
 }
+
+TEST_F(Reconstruct, debug_option_writes_every_intermediate_result_of_a_building) {
+  const std::string ply = kShared + "/city3d_smoke/AHN3/04160.ply";
+  if (!fs::exists(ply)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  const Result r = run("reconstruct " + ply + " --no-progress --debug " + (dir_ / "debug").string() + " -o " +
+                       (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"planes.ply", "heightmap.png", "edges.png", "polylines.obj", "regularised.obj", "walls.obj",
+                        "candidates.obj"}) {
+    const fs::path file = dir_ / "debug" / "04160" / f;
+    ASSERT_TRUE(fs::exists(file)) << file;
+    EXPECT_GT(fs::file_size(file), 50u) << file;
+  }
+  EXPECT_EQ(read_file(dir_ / "debug" / "04160" / "edges.png").substr(1, 3), "PNG");
+}

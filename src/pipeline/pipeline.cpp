@@ -200,8 +200,9 @@ std::pair<Point2, Point2> wall_line(const PlanarSegment& wall, const std::vector
   return {{cx + (lo - tc) * dx, cy + (lo - tc) * dy}, {cx + (hi - tc) * dx, cy + (hi - tc) * dy}};
 }
 
+// <debug_dir>/<id made file-safe>/<name>, creating the folder.
 std::string debug_path(const ReconstructionParams& params, const BuildingId& id, const std::string& name) {
-  const fs::path dir = fs::path(params.debug_dir) / model_file_name(id, MeshFormat::obj).substr(0, model_file_name(id, MeshFormat::obj).size() - 4);
+  const fs::path dir = fs::path(params.debug_dir) / fs::path(model_file_name(id, MeshFormat::obj)).stem();
   fs::create_directories(dir);
   return (dir / name).string();
 }
@@ -286,7 +287,7 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
     if (debug) {
       write_heightmap_png(heightmap, debug_path(params, input.id, "heightmap.png"));
       write_edges_png(heightmap, edges, debug_path(params, input.id, "edges.png"));
-      write_polylines_obj(debug_path(params, input.id, "polylines.obj"), polylines, heightmap.z.empty() ? 0.0 : input.ground_z);
+      write_polylines_obj(debug_path(params, input.id, "polylines.obj"), polylines, input.ground_z);
       write_segments_obj(debug_path(params, input.id, "regularised.obj"), lines.segments, input.ground_z);
     }
   }
