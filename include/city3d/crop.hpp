@@ -29,6 +29,10 @@ struct BuildingInput {
   double ground_z = 0.0;              ///< floor height, local (= world, since origin.z = 0), metres
   std::string ground_method;          ///< "ground percentile", "ground percentile (wide buffer)",
                                       ///< "lowest building point" or "none"
+  /// true when ground_z is measured (ground points, a footprint attribute, the user's --ground-z);
+  /// false when it is only the lowest building point, an upper bound of the ground (a roof-only
+  /// cloud has its lowest point at the eaves), or unknown.
+  bool ground_measured = false;
 };
 
 /// How points are classified while cropping.

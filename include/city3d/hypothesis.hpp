@@ -42,11 +42,12 @@
 //     (at most max_planes_per_large_cell when there are more than large_cell_count cells):
 //     the ones with most points inside the cell, then most points within the margin, then the lower
 //     plane index. Vertically overlapping roof faces are exactly the faces over the same cell.
-//     The floor lies below every roof face: over a cell, a plane that comes lower than
-//     ground_z + floor_clearance at a cell vertex is dropped when another of the cell's planes stays
-//     above that; the floor is then lowered (never raised) to floor_clearance below the lowest
-//     remaining roof vertex (without ground points ground_z is the lowest point, and a roof plane
-//     extended to the outline can come lower; the roof then crossed the floor).
+//     The floor lies below every roof face: when the ground is measured, over a cell, a plane that
+//     comes lower than ground_z + floor_clearance at a cell vertex is dropped when another of the
+//     cell's planes stays above that. Without ground points ground_z is the lowest building point,
+//     only an upper bound of the ground (a roof-only cloud has it at the eaves, where the roof planes
+//     extended to the outline come lower): then no plane is dropped. Either way the floor is then
+//     lowered (never raised) to floor_clearance below the lowest remaining roof vertex.
 //  3. Vertical faces: over every arrangement edge, the "levels" are the roof planes of the cells on
 //     both sides (plus the floor on the footprint boundary). The vertical strip over the edge is cut
 //     by the level lines; every cell of that 1D line arrangement (between two consecutive levels) is
@@ -151,7 +152,8 @@ struct CandidateFaces {
 /// `points`: all building points, local frame. `roof_planes`: roof segments (kind roof; walls are
 /// ignored), their point indices refer to `points`. `walls`: only inner walls (outer == false) are
 /// used. `footprint_local`: the outline polygons (outer CCW, holes CW, either orientation accepted),
-/// local frame. `ground_z`: floor height.
+/// local frame. `ground_z`: floor height; `ground_measured`: false when ground_z is only the lowest
+/// building point (see the file comment, 2).
 /// The problem's edges each list at least two faces (faces that could never close are pruned), its
 /// floor faces are forced on, its face prior holds the best-supported face of each roof segment that
 /// has support, and vertical_overlaps lists every pair of roof faces over the same cell.
@@ -162,7 +164,7 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
                                    const std::vector<PlanarSegment>& roof_planes,
                                    const std::vector<VerticalPlane>& walls,
                                    const std::vector<Polygon2>& footprint_local, double ground_z,
-                                   const HypothesisParams& params);
+                                   bool ground_measured, const HypothesisParams& params);
 
 /// Writes the candidate faces as an OBJ file (one object per face, named by kind and index), for
 /// inspection. Throws IoError when the file cannot be written.

@@ -358,6 +358,7 @@ std::vector<BuildingInput> Cropper::finish() {
       for (const Point3& p : b.ground_points) heights.push_back(p.z);
       b.ground_z = percentile(heights, params_.ground_percentile);
       b.ground_method = c.wide_ground.empty() ? "ground percentile" : "ground percentile (wide buffer)";
+      b.ground_measured = true;
     } else if (!b.points.empty()) {
       b.ground_z = std::min_element(b.points.begin(), b.points.end(), [](const Point3& a, const Point3& q) {
                      return a.z < q.z;

@@ -805,7 +805,7 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
                                    const std::vector<PlanarSegment>& roof_planes_in,
                                    const std::vector<VerticalPlane>& walls,
                                    const std::vector<Polygon2>& footprint_local, double ground_z,
-                                   const HypothesisParams& params) {
+                                   bool ground_measured, const HypothesisParams& params) {
   using namespace detail;
   params.validate();
 
@@ -984,9 +984,10 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
     }
   }
 
-  // 2b. The floor lies below every roof face: a plane that dips below ground_z + floor_clearance
-  // over a cell is dropped there when another candidate of the cell stays above; the floor is then
-  // lowered (never raised) to floor_clearance below the lowest remaining roof vertex.
+  // 2b. The floor lies below every roof face: over measured ground, a plane that dips below
+  // ground_z + floor_clearance over a cell is dropped there when another candidate of the cell stays
+  // above (an unmeasured ground_z is only an upper bound of the ground: no plane is dropped for it);
+  // the floor is then lowered (never raised) to floor_clearance below the lowest remaining roof vertex.
   const double clearance = params.floor_clearance;
   auto lowest_over = [&](std::size_t c, int r) {
     double low = std::numeric_limits<double>::infinity();
@@ -999,7 +1000,7 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
     std::vector<int> above;
     for (int r : list)
       if (lowest_over(c, r) >= ground_z + clearance) above.push_back(r);
-    if (!above.empty()) list = std::move(above);
+    if (ground_measured && !above.empty()) list = std::move(above);
     for (int r : list) floor_z = std::min(floor_z, lowest_over(c, r) - clearance);
   }
   if (floor_z < ground_z)

@@ -302,7 +302,7 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
 
   // Face hypothesis and selection (paper section 3.3).
   const CandidateFaces candidates =
-      generate_candidates(points, roofs, walls, outline, input.ground_z, params.hypothesis);
+      generate_candidates(points, roofs, walls, outline, input.ground_z, input.ground_measured, params.hypothesis);
   report.candidate_faces = candidates.faces.size();
   check_time(deadline, "hypothesis");
   if (debug) write_candidates_obj(debug_path(params, input.id, "candidates.obj"), candidates);
@@ -376,6 +376,7 @@ BuildingInput building_from_cloud(const BuildingId& id, const std::vector<Point3
   if (ground_z) {
     input.ground_z = *ground_z;
     input.ground_method = "given";
+    input.ground_measured = true;
   } else {
     input.ground_z = box.min.z;
     input.ground_method = "lowest building point";
@@ -786,6 +787,7 @@ BatchSummary run_batch(const BatchOptions& options) {
             // The footprint source knows the floor: it overrides the ground points.
             in.ground_z = *in.footprint.ground_z - in.origin.z;
             in.ground_method = "footprint attribute";
+            in.ground_measured = true;
           }
       }
       reconstruct_all(block, [&](std::size_t k) { return std::move(inputs[k]); });
