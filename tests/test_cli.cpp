@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -189,6 +190,44 @@ TEST(Executable, info_on_truncated_las_names_the_file_and_exits_with_input_error
   EXPECT_TRUE(contains(r.output, "truncated.las")) << r.output;
   EXPECT_TRUE(contains(r.output, "truncated")) << r.output;
   fs::remove_all(dir);
+}
+
+TEST(Executable, evaluate_prints_rmse_and_validity_and_writes_every_points_residual) {
+  const std::string smoke = kShared + "/city3d_smoke/AHN3/00295";
+  if (!fs::exists(smoke + ".ply")) GTEST_SKIP() << "../shared/data is not beside the repository";
+  const fs::path csv = fs::temp_directory_path() / "city3d_cli_residuals.csv";
+  fs::remove(csv);
+  const Result r = run("evaluate " + smoke + ".obj " + smoke + ".ply --residuals " + csv.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "faces: ")) << r.output;
+  const std::size_t at = r.output.find("rmse: ");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  const double printed = std::stod(r.output.substr(at + 6));
+  const std::size_t pts = r.output.find("(", r.output.find("points: "));
+  const std::size_t count = std::stoul(r.output.substr(pts + 1));
+  // The CSV: a header, then x,y,z,distance per point, in the cloud's order; its RMSE is the printed one.
+  std::ifstream in(csv);
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line));
+  EXPECT_EQ(line, "x,y,z,distance");
+  std::size_t rows = 0;
+  double sum = 0.0;
+  while (std::getline(in, line)) {
+    ++rows;
+    const double d = std::stod(line.substr(line.rfind(',') + 1));
+    EXPECT_GE(d, 0.0);
+    sum += d * d;
+  }
+  EXPECT_EQ(rows, count);
+  ASSERT_GT(rows, 0u);
+  EXPECT_NEAR(std::sqrt(sum / static_cast<double>(rows)), printed, 1e-3);
+  fs::remove(csv);
+}
+
+TEST(Executable, residuals_option_belongs_to_evaluate) {
+  const Result r = run("info x.las --residuals out.csv");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(contains(r.output, "--residuals")) << r.output;
 }
 
 namespace {

@@ -422,6 +422,80 @@ TEST(InferOutline, l_shape_outline_has_six_corners_near_the_truth_and_its_area) 
 
 TEST(InferOutline, empty_heightmap_gives_no_outline) { EXPECT_TRUE(infer_outline(Heightmap{}, {}).empty()); }
 
+// A 10 x 6 house: roof points on a jittered 0.35 m grid (about AHN3's density) over x in [0, 10],
+// y in [0, 6]; facade points on the east wall x = 10 from the ground to the eaves.
+std::vector<Point3> house_with_east_facade() {
+  std::vector<Point3> points;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> jitter(-0.1, 0.1);
+  for (double y = 0.2; y < 6.0; y += 0.35)
+    for (double x = 0.2; x < 9.85; x += 0.35) points.push_back({x + jitter(rng), y + jitter(rng), 5.0});
+  for (double y = 0.3; y < 6.0; y += 0.5)
+    for (double z = 0.5; z < 5.0; z += 0.5) points.push_back({10.0 + 0.3 * jitter(rng), y, z});
+  return points;
+}
+
+TEST(FitOutline, walls_go_through_facade_points_and_roof_edges_to_the_last_points) {
+  const std::vector<Point3> points = house_with_east_facade();
+  // An inferred outline 0.4 m too wide on every side, counter-clockwise.
+  const city3d::Polygon2 loose{{{-0.4, -0.4}, {10.4, -0.4}, {10.4, 6.4}, {-0.4, 6.4}}, {}};
+  const city3d::Polygon2 fitted = city3d::fit_outline_to_points(loose, points);
+  ASSERT_EQ(fitted.outer.size(), 4u);
+  double west = 1e9, east = -1e9, south = 1e9, north = -1e9;
+  double roof_west = 1e9, roof_south = 1e9, roof_north = -1e9;
+  for (const auto& p : points) {
+    if (p.z < 5.0) continue;
+    roof_west = std::min(roof_west, p.x);
+    roof_south = std::min(roof_south, p.y);
+    roof_north = std::max(roof_north, p.y);
+  }
+  for (const auto& c : fitted.outer) {
+    west = std::min(west, c.x);
+    east = std::max(east, c.x);
+    south = std::min(south, c.y);
+    north = std::max(north, c.y);
+  }
+  EXPECT_NEAR(east, 10.0, 0.03) << "the east wall runs through the facade points";
+  // Roof-only edges end at (a robust maximum of) the outermost roof points.
+  EXPECT_NEAR(west, roof_west, 0.1);
+  EXPECT_NEAR(south, roof_south, 0.1);
+  EXPECT_NEAR(north, roof_north, 0.1);
+  // Still a rectangle: edge directions are kept.
+  for (std::size_t i = 0; i < 4; ++i) {
+    const auto& a = fitted.outer[i];
+    const auto& b = fitted.outer[(i + 1) % 4];
+    EXPECT_TRUE(std::abs(a.x - b.x) < 1e-9 || std::abs(a.y - b.y) < 1e-9);
+  }
+}
+
+TEST(FitOutline, a_stray_point_does_not_pull_a_wall_out_and_an_empty_edge_stays) {
+  std::vector<Point3> points = house_with_east_facade();
+  points.push_back({10.8, 3.0, 2.0});  // one stray point 0.8 m beyond the east facade
+  // Drop every point near the north edge: that edge has nothing to fit to.
+  points.erase(std::remove_if(points.begin(), points.end(), [](const Point3& p) { return p.y > 5.0; }),
+               points.end());
+  const city3d::Polygon2 loose{{{-0.4, -0.4}, {10.4, -0.4}, {10.4, 6.4}, {-0.4, 6.4}}, {}};
+  const city3d::Polygon2 fitted = city3d::fit_outline_to_points(loose, points, 1.0);
+  double east = -1e9, north = -1e9;
+  for (const auto& c : fitted.outer) {
+    east = std::max(east, c.x);
+    north = std::max(north, c.y);
+  }
+  EXPECT_NEAR(east, 10.0, 0.03);
+  EXPECT_DOUBLE_EQ(north, 6.4) << "no point within the band: the edge keeps its place";
+}
+
+TEST(FitOutline, a_fit_that_would_move_a_corner_too_far_returns_the_input) {
+  const std::vector<Point3> points = house_with_east_facade();
+  const city3d::Polygon2 loose{{{-0.4, -0.4}, {10.4, -0.4}, {10.4, 6.4}, {-0.4, 6.4}}, {}};
+  const city3d::Polygon2 same = city3d::fit_outline_to_points(loose, points, 1.0, 0.5, 5, /*max_shift=*/0.1);
+  ASSERT_EQ(same.outer.size(), loose.outer.size());
+  for (std::size_t i = 0; i < same.outer.size(); ++i) {
+    EXPECT_DOUBLE_EQ(same.outer[i].x, loose.outer[i].x);
+    EXPECT_DOUBLE_EQ(same.outer[i].y, loose.outer[i].y);
+  }
+}
+
 TEST(Heightmap, rejects_fewer_than_three_distinct_positions) {
   const std::vector<Point3> points{{0, 0, 1}, {0, 0, 2}, {1, 1, 1}};
   EXPECT_THROW(rasterise_tin(points, HeightmapParams{}), city3d::ReconstructionError);

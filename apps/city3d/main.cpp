@@ -61,7 +61,7 @@ int main(int argc, char** argv) {
     if (options.command == "info") return run_info(options);
     if (options.command == "reconstruct") return run_reconstruct(options);
     if (options.command == "evaluate") {
-      std::cout << city3d::evaluate_model(options.inputs[0], options.inputs[1]);
+      std::cout << city3d::evaluate_model(options.inputs[0], options.inputs[1], options.residuals);
       return city3d::kExitOk;
     }
   } catch (const city3d::ConfigError& e) {

@@ -19,6 +19,10 @@ namespace city3d {
 /// Throws ReconstructionError when `points` is empty or the mesh has no face with area.
 double rmse(const PolygonMesh& mesh, const std::vector<Point3>& points);
 
+/// The distance from each point to the nearest point of the model surface, metres, in the order
+/// of `points` (what rmse() squares and averages). Same frame rules and errors as rmse().
+std::vector<double> point_distances(const PolygonMesh& mesh, const std::vector<Point3>& points);
+
 /// Triangulates every face of `mesh` by ear clipping in the plane of the face (Newell normal);
 /// non-convex faces are handled, and each triangle keeps the face's orientation. A face of n
 /// vertices gives n - 2 triangles. Faces with out-of-range indices or fewer than three vertices

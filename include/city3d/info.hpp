@@ -34,7 +34,10 @@ std::string describe_footprints(const FootprintSet& footprints);
 /// The text `city3d evaluate` prints: a model (OBJ or one of ours) against a point cloud: faces,
 /// RMSE of the points to the model surface, and validity (closed, 2-manifold, outward, planar faces,
 /// no self-intersection). Both are moved to the model's bounding-box centre before any geometry.
-/// Throws IoError when either file cannot be read.
-std::string evaluate_model(const std::string& model_path, const std::string& points_path);
+/// When `residuals_path` is not empty, every point's distance to the model surface is written there
+/// as CSV (`x,y,z,distance`, world coordinates, in the cloud's order), to see where a model misses.
+/// Throws IoError when a file cannot be read or the residuals cannot be written.
+std::string evaluate_model(const std::string& model_path, const std::string& points_path,
+                           const std::string& residuals_path = "");
 
 }  // namespace city3d

@@ -29,6 +29,7 @@ struct RunOptions {
   bool strict = false;               ///< exit non-zero when any building failed
   int progress = -1;                 ///< -1 automatic (on when stderr is a terminal), 0 off, 1 on
   int verbosity = 1;                 ///< 0 quiet, 1 warnings, 2 info, 3 debug
+  std::string residuals;             ///< evaluate: CSV of each point's distance to the model, or empty
 };
 
 /// Parses argv. Throws ConfigError naming the offending argument (unknown option, missing or bad

@@ -73,6 +73,19 @@ RegularisationResult regularise(const std::vector<Polyline2>& polylines,
 /// corner by more than `max_shift` metres, change the area by more than 10%, or self-intersect.
 Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold = 20.0, double max_shift = 1.5);
 
+/// Moves each edge of an inferred outline, along its normal (its direction is kept), onto the
+/// outermost points beside it, so that walls pass through the facade points a cloud has and roofs
+/// end at their last points otherwise. For each edge, the points whose projection lies on the edge
+/// (`end_margin` metres in from each end, at most a quarter of its length) and within `band` metres
+/// of its line count; the line goes to the k-th largest of their outward offsets, k = the larger of
+/// 2 and 2% of them (a robust maximum: a stray point does not pull the wall out). Edges with fewer
+/// than `min_points` such points stay. The corners become the intersections of consecutive lines;
+/// returns the input unchanged when that would move a corner by more than `max_shift`, make the ring
+/// non-simple, or change its area by more than 25%. `points` in the outline's (local) frame; the
+/// outline counter-clockwise (as infer_outline() and regularise_outline() give it).
+Polygon2 fit_outline_to_points(const Polygon2& outline, const std::vector<Point3>& points, double band = 1.0,
+                               double end_margin = 0.5, int min_points = 5, double max_shift = 1.5);
+
 /// Writes segments as an OBJ file (`v` lines at height z, one `l i j` per segment), for inspection.
 /// Throws IoError when the file cannot be written.
 void write_segments_obj(const std::string& path, const std::vector<Segment2>& segments, double z = 0.0);

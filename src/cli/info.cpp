@@ -147,7 +147,8 @@ std::string describe_footprints(const FootprintSet& f) {
   return out.str();
 }
 
-std::string evaluate_model(const std::string& model_path, const std::string& points_path) {
+std::string evaluate_model(const std::string& model_path, const std::string& points_path,
+                           const std::string& residuals_path) {
   BuildingModel model = read_obj_model(model_path);
   PointCloud cloud = read_point_cloud(points_path, kFieldXyz);
   Box3 box;
@@ -163,7 +164,10 @@ std::string evaluate_model(const std::string& model_path, const std::string& poi
   out << "points: " << points_path << " (" << cloud.size() << ")\n";
   out << "faces: " << model.mesh.faces.size() << "\n";
   out << "vertices: " << model.mesh.vertices.size() << "\n";
-  out << "rmse: " << fixed(rmse(model.mesh, cloud.points), 4) << "\n";
+  const std::vector<double> distances = point_distances(model.mesh, cloud.points);
+  double sum = 0.0;
+  for (const double d : distances) sum += d * d;
+  out << "rmse: " << fixed(std::sqrt(sum / static_cast<double>(distances.size())), 4) << "\n";
   out << "closed: " << yes(v.closed) << "\n";
   out << "manifold: " << yes(v.manifold) << "\n";
   out << "outward: " << yes(v.outward) << "\n";
@@ -172,6 +176,18 @@ std::string evaluate_model(const std::string& model_path, const std::string& poi
   out << "volume: " << fixed(v.volume, 3) << "\n";
   out << "valid: " << yes(v.valid()) << "\n";
   if (!v.problem.empty()) out << "problems: " << v.problem << "\n";
+  if (!residuals_path.empty()) {
+    std::ofstream csv(residuals_path);
+    csv << "x,y,z,distance\n";
+    for (std::size_t i = 0; i < distances.size(); ++i) {
+      const Point3& p = cloud.points[i];
+      csv << fixed(p.x + centre.x, 3) << ',' << fixed(p.y + centre.y, 3) << ',' << fixed(p.z + centre.z, 3) << ','
+          << fixed(distances[i], 4) << '\n';
+    }
+    csv.close();
+    if (!csv) throw IoError(residuals_path + ": cannot write the residuals");
+    out << "residuals: " << residuals_path << "\n";
+  }
   return out.str();
 }
 

@@ -226,6 +226,8 @@ const std::vector<OptionSpec>& option_table() {
        [](O& o, V v) { o.batch.block_size = parse_double("--block-size", v); }},
       {"--strict", nullptr, nullptr, "exit with code 4 when any building failed", nullptr,
        [](O& o, V) { o.strict = true; }},
+      {"--residuals", nullptr, "PATH", "evaluate: also write every point's distance to the model as CSV (x,y,z,distance)",
+       nullptr, [](O& o, V v) { o.residuals = v; }},
       {"--progress", nullptr, nullptr, "progress on stderr even when it is not a terminal", nullptr,
        [](O& o, V) { o.progress = 1; }},
       {"--no-progress", nullptr, nullptr, "no progress line", nullptr, [](O& o, V) { o.progress = 0; }},
@@ -305,6 +307,8 @@ RunOptions parse_command_line(int argc, const char* const* argv) {
     if (options.command == "info" && options.inputs.empty()) problems.push_back("info: no file given");
     if (options.command == "evaluate" && options.inputs.size() != 2)
       problems.push_back("evaluate: give a model (OBJ) and a point cloud");
+    if (!options.residuals.empty() && options.command != "evaluate")
+      problems.push_back("option --residuals belongs to the evaluate command");
     if (options.command == "reconstruct" && options.inputs.empty())
       problems.push_back("reconstruct: no point-cloud file or folder given");
   }

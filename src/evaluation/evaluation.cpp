@@ -141,7 +141,7 @@ std::vector<Triangle> triangulate(const PolygonMesh& mesh) {
   return triangles;
 }
 
-double rmse(const PolygonMesh& mesh, const std::vector<Point3>& points) {
+std::vector<double> point_distances(const PolygonMesh& mesh, const std::vector<Point3>& points) {
   using Tri = Kernel::Triangle_3;
   using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<Tri>::const_iterator>;
   using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
@@ -156,8 +156,15 @@ double rmse(const PolygonMesh& mesh, const std::vector<Point3>& points) {
                               std::to_string(mesh.faces.size()) + " faces)");
   Tree tree(triangles.begin(), triangles.end());
   tree.accelerate_distance_queries();
+  std::vector<double> distances;
+  distances.reserve(points.size());
+  for (const auto& p : points) distances.push_back(std::sqrt(CGAL::to_double(tree.squared_distance(to_cgal(p)))));
+  return distances;
+}
+
+double rmse(const PolygonMesh& mesh, const std::vector<Point3>& points) {
   double sum = 0.0;
-  for (const auto& p : points) sum += tree.squared_distance(to_cgal(p));
+  for (const double d : point_distances(mesh, points)) sum += d * d;
   return std::sqrt(sum / static_cast<double>(points.size()));
 }
 

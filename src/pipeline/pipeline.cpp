@@ -275,7 +275,7 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
   if (!input.footprint_given) {
     outline.clear();
     for (const Polygon2& p : infer_outline(heightmap, points, params.polylines.max_hausdorff))
-      outline.push_back(regularise_outline(p, params.regularise.angle_threshold));
+      outline.push_back(fit_outline_to_points(regularise_outline(p, params.regularise.angle_threshold), points));
     if (outline.empty()) throw ReconstructionError("walls: no outline could be inferred from the points");
     outline.resize(1);  // the main part; small detached parts are left to the LoD1 rung
   }

@@ -423,4 +423,65 @@ void write_segments_obj(const std::string& path, const std::vector<Segment2>& se
   if (!out) throw IoError("regularise: write failed for " + path);
 }
 
+Polygon2 fit_outline_to_points(const Polygon2& outline, const std::vector<Point3>& points, double band,
+                               double end_margin, int min_points, double max_shift) {
+  const Ring2& ring = outline.outer;
+  const std::size_t n = ring.size();
+  if (n < 3 || points.empty()) return outline;
+  // Each edge as a line: unit direction d, outward normal u = (d.y, -d.x) (right of a CCW ring),
+  // offset c = u . p of its points.
+  struct Line {
+    Point2 d, u;
+    double offset;
+  };
+  std::vector<Line> lines(n);
+  std::vector<double> offsets;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Point2& a = ring[i];
+    const Point2& b = ring[(i + 1) % n];
+    const double len = std::hypot(b.x - a.x, b.y - a.y);
+    if (!(len > 0)) return outline;
+    Line& l = lines[i];
+    l.d = {(b.x - a.x) / len, (b.y - a.y) / len};
+    l.u = {l.d.y, -l.d.x};
+    l.offset = l.u.x * a.x + l.u.y * a.y;
+    const double margin = std::min(end_margin, len / 4);
+    offsets.clear();
+    for (const Point3& p : points) {
+      const double t = l.d.x * (p.x - a.x) + l.d.y * (p.y - a.y);
+      if (t < margin || t > len - margin) continue;
+      const double o = l.u.x * p.x + l.u.y * p.y - l.offset;
+      if (std::abs(o) <= band) offsets.push_back(o);
+    }
+    if (static_cast<int>(offsets.size()) < std::max(min_points, 1)) continue;
+    const std::size_t k = std::max<std::size_t>(2, offsets.size() / 50);
+    const std::size_t index = offsets.size() - std::min(k, offsets.size());
+    std::nth_element(offsets.begin(), offsets.begin() + static_cast<std::ptrdiff_t>(index), offsets.end());
+    l.offset += offsets[index];
+  }
+  Polygon2 result;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Line& p = lines[(i + n - 1) % n];
+    const Line& q = lines[i];
+    // Corner i: u_p . x = c_p and u_q . x = c_q.
+    const double det = p.u.x * q.u.y - q.u.x * p.u.y;
+    if (std::abs(det) < 1e-3) {
+      // Nearly parallel neighbours (a step in a straight wall): keep the corner on q's line.
+      const Point2& v = ring[i];
+      const double o = q.u.x * v.x + q.u.y * v.y - q.offset;
+      result.outer.push_back({v.x - o * q.u.x, v.y - o * q.u.y});
+      continue;
+    }
+    result.outer.push_back(
+        {(p.offset * q.u.y - q.offset * p.u.y) / det, (p.u.x * q.offset - q.u.x * p.offset) / det});
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (std::hypot(result.outer[i].x - ring[i].x, result.outer[i].y - ring[i].y) > max_shift) return outline;
+  const double before = ring_area(ring), after = ring_area(result.outer);
+  if (!(after > 0) || std::abs(after - before) > 0.25 * std::abs(before) || !ring_is_simple(result.outer))
+    return outline;
+  result.holes = outline.holes;
+  return result;
+}
+
 }  // namespace city3d
