@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -388,6 +389,22 @@ TEST(Hypothesis, inner_wall_splits_the_footprint_and_is_the_source_of_its_faces)
   EXPECT_EQ(on_inner, 1u);  // one face between the two flat roofs over x = 6
 }
 
+TEST(Hypothesis, start_assignment_is_a_closed_selection_for_every_synthetic_building) {
+  SelectionParams no_prior;
+  no_prior.use_face_prior = false;
+  for (const auto& b : {box_building(), gable_building(), l_building(), step_building(), courtyard_building()}) {
+    const auto c = candidates_of(b);
+    ASSERT_EQ(c.problem.start.size(), c.faces.size());
+    EXPECT_TRUE(satisfies_constraints(c.problem, c.problem.start, no_prior));
+    EXPECT_TRUE(satisfies_constraints(c.problem, c.problem.start, SelectionParams{}));  // priors agree here
+    std::size_t roofs = 0;
+    for (std::size_t i = 0; i < c.faces.size(); ++i) roofs += c.problem.start[i] && c.faces[i].kind == FaceKind::roof;
+    EXPECT_EQ(roofs, c.cell_count);  // one roof per cell
+    const auto mesh = assemble_model(c, c.problem.start, AssembleParams{});
+    EXPECT_TRUE(check_mesh(mesh).valid());
+  }
+}
+
 TEST(Hypothesis, generation_is_deterministic) {
   const auto a = candidates_of(gable_building());
   const auto b = candidates_of(gable_building());
@@ -488,6 +505,68 @@ TEST(Model, courtyard_building_keeps_faces_with_holes_as_simple_pieces) {
   EXPECT_EQ(count_surface(r.surfaces, SurfaceType::wall), 8u);
   EXPECT_EQ(count_surface(r.surfaces, SurfaceType::roof), 2u);
   EXPECT_EQ(count_surface(r.surfaces, SurfaceType::ground), 2u);
+}
+
+TEST(Model, merged_faces_that_would_touch_themselves_stay_simple_pieces) {
+  // Built by hand: a 16 x 16 block, a 2 m ring at 7 m around a 12 x 12 part at 5 m, in which a
+  // triangle at 3 m touches the ring at P = (2, 8). The 5 m part comes in two pieces split along
+  // y = 8; merged, its boundary would come back to P (not a simple polygon), so the pieces stay.
+  CandidateFaces c;
+  std::map<std::array<double, 3>, std::uint32_t> index;
+  const auto vertex = [&](Point2 p, double z) {
+    const auto [it, fresh] = index.insert({{p.x, p.y, z}, static_cast<std::uint32_t>(c.vertices.size())});
+    if (fresh) c.vertices.push_back({p.x, p.y, z});
+    return it->second;
+  };
+  const auto add = [&](FaceKind kind, std::uint32_t plane, std::vector<std::uint32_t> loop) {
+    CandidateFace f;
+    f.kind = kind;
+    f.plane_id = plane;
+    f.vertices = std::move(loop);
+    c.faces.push_back(f);
+  };
+  const auto flat = [&](FaceKind kind, std::uint32_t plane, const Ring2& ring, double z) {
+    std::vector<std::uint32_t> loop;
+    for (const auto& p : ring) loop.push_back(vertex(p, z));
+    add(kind, plane, loop);
+  };
+  const auto wall = [&](std::uint32_t plane, Point2 a, Point2 b, double z0, double z1) {
+    add(FaceKind::wall, plane, {vertex(a, z0), vertex(b, z0), vertex(b, z1), vertex(a, z1)});
+  };
+  const Point2 P{2, 8}, Q{6, 8}, R{14, 8};
+  flat(FaceKind::roof, 0, {Q, R, {14, 14}, {2, 14}, P, {6, 10}}, 5.0);
+  flat(FaceKind::roof, 0, {{2, 2}, {14, 2}, R, Q, {6, 6}, P}, 5.0);
+  flat(FaceKind::roof, 1, {P, {6, 6}, Q, {6, 10}}, 3.0);
+  flat(FaceKind::roof, 2, {{0, 0}, {16, 0}, {14, 2}, {2, 2}}, 7.0);
+  flat(FaceKind::roof, 2, {{16, 0}, {16, 16}, {14, 14}, R, {14, 2}}, 7.0);
+  flat(FaceKind::roof, 2, {{16, 16}, {0, 16}, {2, 14}, {14, 14}}, 7.0);
+  flat(FaceKind::roof, 2, {{0, 16}, {0, 0}, {2, 2}, P, {2, 14}}, 7.0);
+  flat(FaceKind::floor, 3, {{0, 0}, {0, 16}, {16, 16}, {16, 0}}, 0.0);
+  const Ring2 outline{{0, 0}, {16, 0}, {16, 16}, {0, 16}};
+  for (std::size_t k = 0; k < 4; ++k) wall(4 + static_cast<std::uint32_t>(k), outline[k], outline[(k + 1) % 4], 0.0, 7.0);
+  const Ring2 inner{{2, 2}, {14, 2}, R, {14, 14}, {2, 14}, P};
+  const std::uint32_t inner_line[] = {8, 9, 9, 10, 11, 11};
+  for (std::size_t k = 0; k < inner.size(); ++k) wall(inner_line[k], inner[k], inner[(k + 1) % inner.size()], 5.0, 7.0);
+  const Ring2 notch{P, {6, 6}, Q, {6, 10}};
+  const std::uint32_t notch_line[] = {12, 13, 13, 14};
+  for (std::size_t k = 0; k < notch.size(); ++k) wall(notch_line[k], notch[k], notch[(k + 1) % notch.size()], 3.0, 5.0);
+  for (const auto& f : c.faces) {
+    std::vector<Point3> polygon;
+    for (auto v : f.vertices) polygon.push_back(c.vertices[v]);
+    c.polygons.push_back(polygon);
+  }
+
+  std::vector<SurfaceType> surfaces;
+  const auto mesh = assemble_model(c, std::vector<bool>(c.faces.size(), true), AssembleParams{}, &surfaces);
+  const auto check = check_mesh(mesh);
+  EXPECT_TRUE(check.valid());
+  EXPECT_EQ(check.degenerate_faces, 0u);
+  EXPECT_NEAR(check.signed_volume, 112.0 * 7.0 + 136.0 * 5.0 + 8.0 * 3.0, 1e-9);
+  for (const auto& face : mesh.faces) {
+    std::vector<std::uint32_t> sorted(face);
+    std::sort(sorted.begin(), sorted.end());
+    EXPECT_EQ(std::adjacent_find(sorted.begin(), sorted.end()), sorted.end()) << "a face visits a vertex twice";
+  }
 }
 
 TEST(Model, inner_wall_ending_short_of_the_outline_is_extended_to_it) {

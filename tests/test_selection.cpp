@@ -367,6 +367,54 @@ TEST(Selection, node_and_time_limited_solves_return_promptly_with_a_valid_status
   }
 }
 
+TEST(Selection, start_is_kept_when_a_limit_stops_the_search_before_any_solution) {
+  SelectionProblem p = cut_box();
+  const auto whole_box = faces(11, {B, T, L0, L0 + 1, L0 + 2, L0 + 3, U0, U0 + 1, U0 + 2, U0 + 3});
+  for (const std::string solver : {"glpk", "cbc", "auto"}) {
+    SCOPED_TRACE(solver);
+    SelectionParams params = box_params(solver);
+    params.time_limit = 1e-12;  // used up before the first component
+    p.start.clear();
+    EXPECT_EQ(solve_selection(p, params).status, SelectionStatus::no_solution);
+    p.start = whole_box;
+    const auto r = solve_selection(p, params);
+    ASSERT_EQ(r.status, SelectionStatus::feasible) << r.message;
+    EXPECT_EQ(r.selected, whole_box);
+    EXPECT_NEAR(r.objective, selection_energy(p, whole_box, params), 1e-12);
+    EXPECT_NE(r.message.find("start"), std::string::npos) << r.message;
+  }
+}
+
+TEST(Selection, start_that_breaks_a_constraint_is_ignored) {
+  SelectionProblem p = cut_box();
+  p.start = faces(11, {B, L0});  // edges of B and L0 are left with one face
+  SelectionParams params = box_params();
+  params.time_limit = 1e-12;
+  EXPECT_EQ(solve_selection(p, params).status, SelectionStatus::no_solution);
+  p.start.resize(5);
+  EXPECT_THROW(solve_selection(p, box_params()), ReconstructionError);
+}
+
+TEST(Selection, solvers_started_from_a_feasible_point_still_reach_the_optimum) {
+  SelectionProblem p = cut_box();
+  p.start = faces(11, {B, T, L0, L0 + 1, L0 + 2, L0 + 3, U0, U0 + 1, U0 + 2, U0 + 3});
+  const auto lower_half = faces(11, {B, M, L0, L0 + 1, L0 + 2, L0 + 3});
+  for (const std::string solver : {"glpk", "cbc"}) {
+    SCOPED_TRACE(solver);
+    const auto r = solve_selection(p, box_params(solver));
+    ASSERT_EQ(r.status, SelectionStatus::optimal) << r.message;
+    EXPECT_EQ(r.selected, lower_half);
+  }
+  // A building-like program with a start from its own optimum: CBC confirms it.
+  auto q = bench::building_problem({8, 6, 3, 4, false}, 3);
+  const auto plain = solve_selection(q, with_solver("cbc"));
+  ASSERT_EQ(plain.status, SelectionStatus::optimal) << plain.message;
+  q.start = plain.selected;
+  const auto started = solve_selection(q, with_solver("cbc"));
+  ASSERT_EQ(started.status, SelectionStatus::optimal) << started.message;
+  EXPECT_NEAR(started.objective, plain.objective, 1e-9);
+}
+
 TEST(Selection, glpk_node_limit_stops_the_search_deterministically) {
   // This program needs branching in GLPK (measured: no incumbent after the root node).
   const auto p = bench::building_problem({7, 5, 4, 3, true}, 3);

@@ -54,6 +54,12 @@
 //     a candidate. Where two levels cross inside an edge, the crossing becomes a vertex (a station)
 //     of every face along the edge, so no face is a bow-tie and edges weld exactly.
 //  4. Floor faces: every inside cell at the floor height (ground_z, or lower, see 2), forced on.
+//  5. A start for the solvers (SelectionProblem::start): one roof face per cell (its segment's face
+//     prior, else its best-supported face), the floors, and over every edge the wall faces between
+//     the roofs chosen on its two sides. A checkerboard of high and low cells around a vertex puts
+//     four walls on one vertical edge; a local search changes one cell's roof at a time until every
+//     edge has 0 or 2 faces (or leaves the start empty when no change helps). Large programs whose
+//     solver finds no feasible point within the limits then still give a full LoD2 model.
 //
 // Vertex identity: a vertex is (arrangement vertex or station on an edge, height cluster). The xy
 // part comes from the exact arrangement; at one xy position the heights of the levels through it
@@ -156,7 +162,8 @@ struct CandidateFaces {
 /// building point (see the file comment, 2).
 /// The problem's edges each list at least two faces (faces that could never close are pruned), its
 /// floor faces are forced on, its face prior holds the best-supported face of each roof segment that
-/// has support, and vertical_overlaps lists every pair of roof faces over the same cell.
+/// has support, vertical_overlaps lists every pair of roof faces over the same cell, and start holds
+/// a closed selection when one was found (see 5 above).
 /// Deterministic: the same input gives the same faces in the same order.
 /// Throws ConfigError (params) and ReconstructionError ("hypothesis: 0 planes, need at least 1 roof
 /// plane", empty footprint, no inside cell).

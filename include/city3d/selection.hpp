@@ -45,6 +45,10 @@ struct SelectionProblem {
   /// Faces fixed to 1 for other reasons (e.g. the floor), and faces fixed to 0.
   std::vector<std::uint32_t> forced_on;
   std::vector<std::uint32_t> forced_off;
+  /// A feasible assignment known in advance (empty when there is none): it satisfies every hard
+  /// constraint except perhaps the face prior. The solvers start from it (CBC) or fall back on it
+  /// when a limit stops them before they find a better one.
+  std::vector<bool> start;
 };
 
 /// Energy weights and solver limits. Defaults are the paper's weights.

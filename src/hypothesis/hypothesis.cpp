@@ -660,9 +660,10 @@ Vec3 newell_normal(const std::vector<Point3>& poly) {
   return {0.5 * n.x, 0.5 * n.y, 0.5 * n.z};
 }
 
-double centroid_z(const std::vector<Point3>& poly) {
+Point3 centroid(const std::vector<Point3>& poly) {
   // Area-weighted centroid of the fan triangles (all coplanar, so the weights have one sign).
-  double total = 0.0, z = 0.0;
+  double total = 0.0;
+  Point3 sum{0.0, 0.0, 0.0};
   for (std::size_t i = 1; i + 1 < poly.size(); ++i) {
     const auto& a = poly[0];
     const auto& b = poly[i];
@@ -671,14 +672,20 @@ double centroid_z(const std::vector<Point3>& poly) {
     const double area = 0.5 * std::sqrt(std::pow(u.y * v.z - u.z * v.y, 2) + std::pow(u.z * v.x - u.x * v.z, 2) +
                                         std::pow(u.x * v.y - u.y * v.x, 2));
     total += area;
-    z += area * (a.z + b.z + c.z) / 3.0;
+    sum.x += area * (a.x + b.x + c.x) / 3.0;
+    sum.y += area * (a.y + b.y + c.y) / 3.0;
+    sum.z += area * (a.z + b.z + c.z) / 3.0;
   }
   if (total <= 0.0) {
-    double s = 0.0;
-    for (const auto& p : poly) s += p.z;
-    return poly.empty() ? 0.0 : s / static_cast<double>(poly.size());
+    sum = {0.0, 0.0, 0.0};
+    for (const auto& p : poly) {
+      sum.x += p.x;
+      sum.y += p.y;
+      sum.z += p.z;
+    }
+    total = static_cast<double>(std::max<std::size_t>(poly.size(), 1));
   }
-  return z / total;
+  return {sum.x / total, sum.y / total, sum.z / total};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -794,6 +801,131 @@ void extend_dangling_ends(std::vector<InputCurve>& curves, const std::vector<Pol
       (end ? c.b : c.a) = moved;
     }
   }
+}
+
+// A feasible start for face selection: one roof face per cell, the floors, and over every edge the
+// wall faces between the roofs chosen on its two sides (or the floor, outside). Each cell first takes
+// its segment's face prior if it holds one, else its best-supported roof face. One roof per cell can
+// still leave an edge with one or four faces (a checkerboard of high and low cells around a vertex
+// puts four walls on one vertical edge), so a local search then changes one cell's roof at a time,
+// taking the change that leaves the fewest such edges (cells holding a face prior only when no other
+// change helps), until none is left or no change helps. Returns an empty vector in that case.
+std::vector<bool> start_assignment(const CandidateFaces& out, const PlainArrangement& arr, const Levels& lv,
+                                   std::size_t cell_count) {
+  const SelectionProblem& prob = out.problem;
+  const std::size_t nf = out.faces.size();
+  const int floor_level = lv.floor();
+  std::vector<bool> is_prior(nf, false);
+  for (auto f : prob.face_prior) is_prior[f] = true;
+  std::vector<std::vector<std::uint32_t>> roofs_of_cell(cell_count), walls_of_edge(arr.edges.size());
+  std::vector<Point3> wall_centroid(nf);
+  std::vector<bool> selected(nf, false);
+  for (std::uint32_t i = 0; i < nf; ++i) {
+    const auto& f = out.faces[i];
+    if (f.kind == FaceKind::roof) roofs_of_cell[f.cell_or_edge].push_back(i);
+    if (f.kind == FaceKind::floor) selected[i] = true;
+    if (f.kind == FaceKind::wall) {
+      walls_of_edge[f.cell_or_edge].push_back(i);
+      wall_centroid[i] = centroid(out.polygons[i]);
+    }
+  }
+  std::vector<std::vector<std::uint32_t>> edges_of_face(nf);
+  for (std::uint32_t e = 0; e < prob.edges.size(); ++e)
+    for (auto f : prob.edges[e].faces) edges_of_face[f].push_back(e);
+
+  // The chosen roof face per cell, and per problem edge how many selected faces it has.
+  std::vector<std::uint32_t> roof_of_cell(cell_count);
+  std::vector<bool> prior_cell(cell_count, false);
+  for (std::size_t c = 0; c < cell_count; ++c) {
+    if (roofs_of_cell[c].empty()) return {};
+    std::uint32_t best = roofs_of_cell[c].front();
+    for (auto i : roofs_of_cell[c]) {
+      if (is_prior[i] != is_prior[best] ? is_prior[i] : prob.support[i] > prob.support[best]) best = i;
+      prior_cell[c] = prior_cell[c] || is_prior[i];
+    }
+    roof_of_cell[c] = best;
+  }
+  std::vector<int> count(prob.edges.size(), 0);
+  std::size_t bad = 0;
+  const auto is_bad = [](int n) { return n != 0 && n != 2; };
+  const auto toggle = [&](std::uint32_t f) {
+    selected[f] = !selected[f];
+    for (auto e : edges_of_face[f]) {
+      bad -= is_bad(count[e]);
+      count[e] += selected[f] ? 1 : -1;
+      bad += is_bad(count[e]);
+    }
+  };
+  const auto level = [&](int cell) {
+    return cell < 0 ? floor_level : out.faces[roof_of_cell[static_cast<std::size_t>(cell)]].source;
+  };
+  const auto wall_on = [&](std::uint32_t f) {
+    const auto& edge = arr.edges[out.faces[f].cell_or_edge];
+    const int a = level(edge.left), b = level(edge.right);
+    if (a == b) return false;
+    const Point3& c = wall_centroid[f];
+    const double ha = lv.height(a, c.x, c.y), hb = lv.height(b, c.x, c.y);
+    return std::min(ha, hb) < c.z && c.z < std::max(ha, hb);
+  };
+  // Puts roof face `roof` on cell c and updates the walls around it.
+  const auto choose = [&](std::size_t c, std::uint32_t roof) {
+    if (selected[roof_of_cell[c]]) toggle(roof_of_cell[c]);
+    roof_of_cell[c] = roof;
+    toggle(roof);
+    for (const auto& [e, forward] : arr.cells[c].loop)
+      for (auto f : walls_of_edge[e])
+        if (selected[f] != wall_on(f)) toggle(f);
+  };
+  for (std::uint32_t f = 0; f < nf; ++f)
+    if (selected[f]) {
+      selected[f] = false;
+      toggle(f);
+    }
+  for (std::size_t c = 0; c < cell_count; ++c) choose(c, roof_of_cell[c]);
+
+  const std::size_t max_steps = 4 * cell_count + 16;
+  for (std::size_t step = 0; bad > 0 && step < max_steps; ++step) {
+    std::size_t e = 0;
+    while (!is_bad(count[e])) ++e;
+    std::vector<std::size_t> cells;
+    for (auto f : prob.edges[e].faces) {
+      const auto& face = out.faces[f];
+      if (face.kind != FaceKind::wall) {
+        cells.push_back(face.cell_or_edge);
+        continue;
+      }
+      for (int side : {arr.edges[face.cell_or_edge].left, arr.edges[face.cell_or_edge].right})
+        if (side >= 0) cells.push_back(static_cast<std::size_t>(side));
+    }
+    std::sort(cells.begin(), cells.end());
+    cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+    std::size_t best_bad = bad, best_cell = 0;
+    std::uint32_t best_roof = 0;
+    for (bool allow_prior : {false, true}) {
+      for (std::size_t c : cells) {
+        if (prior_cell[c] && !allow_prior) continue;
+        const std::uint32_t current = roof_of_cell[c];
+        for (auto roof : roofs_of_cell[c]) {
+          if (roof == current) continue;
+          choose(c, roof);
+          if (bad < best_bad) {
+            best_bad = bad;
+            best_cell = c;
+            best_roof = roof;
+          }
+          choose(c, current);
+        }
+      }
+      if (best_bad < bad) break;
+    }
+    if (best_bad == bad) break;
+    choose(best_cell, best_roof);
+  }
+  if (bad > 0) {
+    log_debug("hypothesis: no start assignment (" + std::to_string(bad) + " edges left with one or more than two faces)");
+    return {};
+  }
+  return selected;
 }
 
 }  // namespace
@@ -1272,7 +1404,7 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
   for (std::size_t i = 0; i < nf; ++i) {
     const auto& f = out.faces[i];
     const auto& poly = out.polygons[i];
-    prob.centroid_z[i] = centroid_z(poly);
+    prob.centroid_z[i] = centroid(poly).z;
     prob.is_roof[i] = f.kind == FaceKind::roof;
     double support = 0.0;
     if (f.kind == FaceKind::roof) {
@@ -1337,6 +1469,9 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
   for (long p : prior)
     if (p >= 0) prob.face_prior.push_back(static_cast<std::uint32_t>(p));
   std::sort(prob.face_prior.begin(), prob.face_prior.end());
+
+  // 7. A start assignment for the solvers (see start_assignment()).
+  prob.start = start_assignment(out, arr, lv, cell_count);
 
   out.cell_count = cell_count;
   out.edge_count = arr.edges.size();

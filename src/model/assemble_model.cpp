@@ -234,7 +234,12 @@ PolygonMesh assemble_model(const CandidateFaces& candidates, const std::vector<b
       for (const auto& [e, c] : count)
         if (!count.count({e.second, e.first})) boundary.push_back(e);
       const auto loops = chain_loops(vs, boundary, normal);
-      if (loops.size() == 1 && loops[0].size() >= 3) {
+      // One simple loop: the merged polygon. A loop that comes back to a vertex (the region touches
+      // itself there, around a hole that reaches its boundary) is not a simple polygon.
+      Loop sorted = loops.empty() ? Loop{} : loops[0];
+      std::sort(sorted.begin(), sorted.end());
+      const bool simple = std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end();
+      if (loops.size() == 1 && loops[0].size() >= 3 && simple) {
         merged.push_back({loops[0], model[group[0]].plane_id, model[group[0]].kind});
       } else {
         for (std::size_t f : group) merged.push_back(model[f]);  // hole or pinch: keep the simple pieces

@@ -243,9 +243,11 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
   };
   if (!has_roof(segments) && points.size() >= kMinPointsForSmallRoof) {
     // A shed or a garage can hold fewer points than min_points in all: rather than a block, try
-    // one more time with a third of its points (at least kMinPointsForSmallRoof) per plane.
+    // one more time with planes of half min_points, or a third of its points when that is fewer
+    // (at least kMinPointsForSmallRoof).
     PlaneParams small = params.planes;
-    small.min_points = std::max<int>(kMinPointsForSmallRoof, static_cast<int>(points.size() / 3));
+    small.min_points = std::max<int>(kMinPointsForSmallRoof,
+                                     std::min<int>(params.planes.min_points / 2, static_cast<int>(points.size() / 3)));
     if (small.min_points < params.planes.min_points) {
       segments = detect_planes(points, small);
       const std::string note = "small building: planes of at least " + std::to_string(small.min_points) + " points";
@@ -276,6 +278,12 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
     outline.clear();
     for (const Polygon2& p : infer_outline(heightmap, points, params.polylines.max_hausdorff))
       outline.push_back(fit_outline_to_points(regularise_outline(p, params.regularise.angle_threshold), points));
+    if (outline.empty() && !input.footprint.polygons.empty()) {
+      // Too small for the heightmap to hold an outline (under infer_outline's 2 m2): the convex
+      // hull of the points (building_from_cloud), regularised like an inferred outline.
+      outline.push_back(regularise_outline(input.footprint.polygons.front(), params.regularise.angle_threshold));
+      report.note += std::string(report.note.empty() ? "" : "; ") + "outline: convex hull of the points";
+    }
     if (outline.empty()) throw ReconstructionError("walls: no outline could be inferred from the points");
     outline.resize(1);  // the main part; small detached parts are left to the LoD1 rung
   }

@@ -63,6 +63,17 @@ MipSolution solve_with_cbc(const MipModel& model, const MipLimits& limits) {
     if (model.columns[j].integer) lp.setInteger(j);
   lp.messageHandler()->setLogLevel(0);
 
+  // The MIP start goes by column name, the only form CbcMain1 maps through its preprocessing.
+  std::vector<std::string> names;
+  if (model.start.size() == static_cast<std::size_t>(n)) {
+    lp.setIntParam(OsiNameDiscipline, 1);
+    names.reserve(n);
+    for (int j = 0; j < n; ++j) {
+      names.push_back("v" + std::to_string(j));
+      lp.setColName(j, names.back());
+    }
+  }
+
   CbcModel cbc(lp);
   cbc.setLogLevel(0);
   cbc.messageHandler()->setLogLevel(0);
@@ -81,6 +92,11 @@ MipSolution solve_with_cbc(const MipModel& model, const MipLimits& limits) {
                                               "-sec",           seconds,    //
                                               "-maxNodes",      nodes,      //
                                               "-solve",         "-quit"};
+  if (!names.empty()) {
+    std::vector<const char*> start_names;
+    for (const auto& name : names) start_names.push_back(name.c_str());
+    cbc.setMIPStart(n, start_names.data(), model.start.data());
+  }
   std::vector<const char*> argv;
   for (const auto& a : arguments) argv.push_back(a.c_str());
   CbcMain1(static_cast<int>(argv.size()), argv.data(), cbc);

@@ -32,6 +32,11 @@
 //    its sharp corner costs lambda_c / |E| on that variable directly);
 //  - faces linked by no constraint chain are independent: each connected component is solved alone.
 //
+// Start: when the problem carries a start assignment (the hypothesis builds one: one roof per cell)
+// that satisfies this call's constraints, it is mapped onto each component's variables, handed to
+// CBC as its MIP start, and kept whenever a limit stops a backend with nothing better, so a
+// building never falls back only because no feasible point was found in time.
+//
 // Limits: node_limit applies to each component's search; time_limit to the whole call (each
 // component gets the time left; backends can overshoot it by their root processing). solver = "auto"
 // uses CBC for components of auto_cbc_variables variables or more, else GLPK with half the time left,
@@ -130,6 +135,8 @@ void check_problem(const SelectionProblem& problem) {
     for (auto f : list)
       if (f >= n) add(std::string(name) + " names face " + std::to_string(f) + " of " + std::to_string(n));
   };
+  if (!problem.start.empty() && problem.start.size() != n)
+    add("start has " + std::to_string(problem.start.size()) + " entries, need 0 or " + std::to_string(n));
   check_list(problem.face_prior, "face_prior");
   check_list(problem.forced_on, "forced_on");
   check_list(problem.forced_off, "forced_off");
@@ -346,6 +353,53 @@ GlobalProgram build_program(const SelectionProblem& problem, const SelectionPara
   return program;
 }
 
+/// The program's variables at the face assignment `start` (classes from their faces, y_e and c_e at
+/// their cheapest values), or empty when it does not fit the program: a class whose faces disagree,
+/// a face that propagation fixed otherwise, or a row it violates.
+std::vector<double> program_start(const SelectionProblem& problem, const GlobalProgram& program,
+                                  const std::vector<std::int8_t>& value, const std::vector<bool>& start) {
+  if (start.size() != problem.face_count) return {};
+  std::vector<double> x(program.columns.size(), 0.0);
+  std::vector<bool> set(program.class_count, false);
+  for (std::size_t f = 0; f < problem.face_count; ++f) {
+    const double v = start[f] ? 1.0 : 0.0;
+    if (value[f] != kFree) {
+      if (value[f] != static_cast<std::int8_t>(start[f])) return {};
+      continue;
+    }
+    const std::size_t k = program.class_of_face[f];
+    if (set[k] && x[k] != v) return {};
+    set[k] = true;
+    x[k] = v;
+  }
+  // Each row holds at most one auxiliary: y_e (integer, in an equality) or c_e (continuous, >=).
+  for (const GlobalRow& row : program.rows) {
+    double rest = 0.0, coef = 0.0;
+    std::size_t aux = SIZE_MAX;
+    for (std::size_t i = 0; i < row.vars.size(); ++i) {
+      if (row.vars[i] >= program.class_count) {
+        aux = row.vars[i];
+        coef = row.coefs[i];
+      } else {
+        rest += row.coefs[i] * x[row.vars[i]];
+      }
+    }
+    if (aux == SIZE_MAX) continue;
+    if (program.columns[aux].integer)
+      x[aux] = -rest / coef;
+    else
+      x[aux] = std::max(x[aux], std::min(1.0, (row.lower - rest) / coef));
+  }
+  for (const GlobalRow& row : program.rows) {
+    double sum = 0.0;
+    for (std::size_t i = 0; i < row.vars.size(); ++i) sum += row.coefs[i] * x[row.vars[i]];
+    if (sum < row.lower - 1e-9 || sum > row.upper + 1e-9) return {};
+  }
+  for (std::size_t v = 0; v < x.size(); ++v)
+    if (program.columns[v].integer && x[v] != 0.0 && x[v] != 1.0) return {};
+  return x;
+}
+
 struct Component {
   std::vector<std::size_t> vars;  // global variable indices, increasing
   std::vector<std::size_t> rows;  // global row indices, increasing
@@ -475,6 +529,11 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
   }
 
   const GlobalProgram program = build_program(problem, params, value);
+  // The hypothesis' start assignment, when it satisfies this call's constraints (with the face prior
+  // it may not).
+  const std::vector<double> start_values = !problem.start.empty() && satisfies_constraints(problem, problem.start, params)
+                                        ? program_start(problem, program, value, problem.start)
+                                        : std::vector<double>{};
   const std::vector<Component> components = split_components(program);
   result.components = components.size();
   std::vector<double> solution(program.columns.size(), 0.0);
@@ -501,6 +560,8 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
       row.upper = global.upper;
       model.rows.push_back(std::move(row));
     }
+    if (!start_values.empty())
+      for (std::size_t v : component.vars) model.start.push_back(start_values[v]);
     result.variables += model.columns.size();
     result.constraints += model.rows.size();
 
@@ -539,6 +600,17 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
       }
     }
 
+    if (!model.start.empty() && (part.status == MipStatus::no_solution || part.status == MipStatus::feasible)) {
+      // A limit stopped the backend: the start is feasible, so keep whichever is better.
+      double start_objective = 0.0;
+      for (std::size_t j = 0; j < model.columns.size(); ++j) start_objective += model.columns[j].cost * model.start[j];
+      if (part.status == MipStatus::no_solution || start_objective < part.objective - 1e-12) {
+        part.status = MipStatus::feasible;
+        part.values = model.start;
+        part.objective = start_objective;
+        part.message += "; the start assignment (one roof per cell) is kept";
+      }
+    }
     const std::string where = "component " + std::to_string(k + 1) + "/" + std::to_string(components.size()) +
                               " (" + std::to_string(model.columns.size()) + " variables)";
     if (part.status == MipStatus::infeasible) {
@@ -579,7 +651,8 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
   std::ostringstream line;
   line << "selection: " << problem.face_count << " faces, " << result.variables << " variables, "
        << result.constraints << " constraints, " << result.components << " components, " << result.solver
-       << ", " << status_name(result.status) << ", " << result.seconds << " s";
+       << ", " << status_name(result.status) << ", " << result.seconds << " s"
+       << (start_values.empty() ? "" : ", from a start") << (result.message.empty() ? "" : ": " + result.message);
   log_debug(line.str());
   return result;
 }

@@ -26,6 +26,8 @@ struct MipModel {
   };
   std::vector<Column> columns;
   std::vector<Row> rows;
+  /// A feasible value per column to start the search from, or empty. Backends may ignore it.
+  std::vector<double> start;
 };
 
 /// Limits of one solve. Both are always applied.
@@ -51,7 +53,8 @@ using MipBackend = MipSolution (*)(const MipModel& model, const MipLimits& limit
 /// per thread). The node limit is emulated with a callback (GLPK has none).
 MipSolution solve_with_glpk(const MipModel& model, const MipLimits& limits);
 
-/// COIN-OR CBC 2.10 through CbcMain1 (preprocessing, cuts, heuristics). Calls are serialised with a
+/// COIN-OR CBC 2.10 through CbcMain1 (preprocessing, cuts, heuristics), from model.start when given
+/// (CBC's MIP start: its incumbent before the search, so every bound prunes from the first node). Calls are serialised with a
 /// process-wide mutex because CbcMain1 in 2.10.8 is not thread-safe.
 MipSolution solve_with_cbc(const MipModel& model, const MipLimits& limits);
 
