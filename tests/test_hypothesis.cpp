@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "city3d/error.hpp"
+#include "city3d/evaluation.hpp"
 #include "city3d/hypothesis.hpp"
 #include "city3d/mesh_check.hpp"
 #include "city3d/model.hpp"
@@ -567,6 +568,37 @@ TEST(Model, merged_faces_that_would_touch_themselves_stay_simple_pieces) {
     std::sort(sorted.begin(), sorted.end());
     EXPECT_EQ(std::adjacent_find(sorted.begin(), sorted.end()), sorted.end()) << "a face visits a vertex twice";
   }
+}
+
+TEST(Model, pieces_of_one_line_that_bend_are_not_merged_into_a_warped_wall) {
+  // A 10 x 10 x 5 box whose front wall (y = 0) comes in two pieces of one arrangement line, but
+  // their shared corner (5, 0) sits 3 cm off it (as contracting a short edge can leave it). Merged,
+  // the wall would be warped; the pieces stay two planar faces.
+  CandidateFaces c;
+  const std::vector<Point2> ring{{0, 0}, {5, -0.03}, {10, 0}, {10, 10}, {0, 10}};
+  const auto n = static_cast<std::uint32_t>(ring.size());
+  for (double z : {0.0, 5.0})
+    for (const auto& p : ring) c.vertices.push_back({p.x, p.y, z});
+  const auto add = [&](FaceKind kind, std::uint32_t plane, std::vector<std::uint32_t> loop) {
+    CandidateFace f;
+    f.kind = kind;
+    f.plane_id = plane;
+    f.vertices = std::move(loop);
+    std::vector<Point3> polygon;
+    for (auto v : f.vertices) polygon.push_back(c.vertices[v]);
+    c.faces.push_back(f);
+    c.polygons.push_back(polygon);
+  };
+  add(FaceKind::roof, 0, {5, 6, 7, 8, 9});
+  add(FaceKind::floor, 1, {4, 3, 2, 1, 0});
+  const std::uint32_t line[] = {2, 2, 3, 4, 5};  // both front pieces on line 2
+  for (std::uint32_t k = 0; k < n; ++k) add(FaceKind::wall, line[k], {k, (k + 1) % n, (k + 1) % n + n, k + n});
+  std::vector<SurfaceType> surfaces;
+  const auto mesh = assemble_model(c, std::vector<bool>(c.faces.size(), true), AssembleParams{}, &surfaces);
+  EXPECT_EQ(count_surface(surfaces, SurfaceType::wall), 5u);
+  const auto validity = check_validity(mesh);
+  EXPECT_TRUE(validity.valid()) << validity.problem;
+  EXPECT_LT(validity.max_planarity_error, 1e-9);
 }
 
 TEST(Model, inner_wall_ending_short_of_the_outline_is_extended_to_it) {

@@ -16,6 +16,10 @@ struct AssembleParams {
   double collinear_tolerance = 1e-3;
   /// Merge adjacent selected faces of the same plane into one polygon (the compact model).
   bool merge_coplanar = true;
+  /// A merged polygon with a vertex farther than this from its plane is left as its pieces: walls
+  /// on one line of the arrangement can bend by the centimetre that contracting a short edge moves
+  /// a vertex. > 0.
+  double planarity_tolerance = 2e-3;
 
   /// Throws ConfigError listing every invalid field.
   void validate() const;

@@ -20,8 +20,13 @@
 namespace city3d {
 
 void AssembleParams::validate() const {
-  if (!(collinear_tolerance > 0.0))
-    throw ConfigError("model: invalid parameters: collinear_tolerance must be > 0");
+  std::string errors;
+  if (!(collinear_tolerance > 0.0)) errors += " collinear_tolerance must be > 0;";
+  if (!(planarity_tolerance > 0.0)) errors += " planarity_tolerance must be > 0;";
+  if (!errors.empty()) {
+    errors.pop_back();
+    throw ConfigError("model: invalid parameters:" + errors);
+  }
 }
 
 namespace {
@@ -51,6 +56,20 @@ Vec3 newell(const std::vector<Point3>& vs, const Loop& loop) {
     n.z += (p.x - q.x) * (p.y + q.y);
   }
   return n;
+}
+
+// Largest distance of a loop's vertices from the plane through their mean with Newell's normal.
+double planarity_error(const std::vector<Point3>& vs, const Loop& loop) {
+  const Vec3 n = newell(vs, loop);
+  const double length = norm(n);
+  if (!(length > 0.0)) return std::numeric_limits<double>::infinity();
+  Vec3 mean{0, 0, 0};
+  for (auto v : loop) mean = {mean.x + vs[v].x, mean.y + vs[v].y, mean.z + vs[v].z};
+  const double k = 1.0 / static_cast<double>(loop.size());
+  const Point3 c{mean.x * k, mean.y * k, mean.z * k};
+  double worst = 0.0;
+  for (auto v : loop) worst = std::max(worst, std::abs(dot(sub(vs[v], c), n)) / length);
+  return worst;
 }
 
 std::size_t find_root(std::vector<std::size_t>& parent, std::size_t i) {
@@ -239,7 +258,8 @@ PolygonMesh assemble_model(const CandidateFaces& candidates, const std::vector<b
       Loop sorted = loops.empty() ? Loop{} : loops[0];
       std::sort(sorted.begin(), sorted.end());
       const bool simple = std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end();
-      if (loops.size() == 1 && loops[0].size() >= 3 && simple) {
+      if (loops.size() == 1 && loops[0].size() >= 3 && simple &&
+          planarity_error(vs, loops[0]) <= params.planarity_tolerance) {
         merged.push_back({loops[0], model[group[0]].plane_id, model[group[0]].kind});
       } else {
         for (std::size_t f : group) merged.push_back(model[f]);  // hole or pinch: keep the simple pieces

@@ -1,6 +1,7 @@
 // The pipeline: one building from points to model (reconstruct_building), and the batch job around
 // it (run_batch): footprints, tiles, cropping, parallel reconstruction, ordered output, report.
 #include "city3d/pipeline.hpp"
+#include "city3d/model_io.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -447,7 +448,16 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
           if (!check.valid()) throw ReconstructionError("model: LoD1 block is not a valid solid");
         } else {
           const MeshValidity validity = check_validity(model.mesh);
-          if (!validity.valid()) throw ReconstructionError("model: not a valid solid: " + validity.problem);
+          if (!validity.valid()) {
+            if (!params.debug_dir.empty()) {
+              ModelWriteOptions local;
+              local.local_coordinates = true;
+              write_model(debug_path(params, input.id, std::string("rejected_") +
+                                                           (rung.footprint_walls_only ? "footprint_walls" : "lod22") + ".obj"),
+                          model, local);
+            }
+            throw ReconstructionError("model: not a valid solid: " + validity.problem);
+          }
         }
         r.level = rung.level;
         r.status = rung.level == requested ? BuildingStatus::ok : BuildingStatus::fallback;
