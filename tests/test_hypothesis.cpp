@@ -393,13 +393,15 @@ TEST(Hypothesis, inner_wall_splits_the_footprint_and_is_the_source_of_its_faces)
 TEST(Hypothesis, start_assignment_is_a_closed_selection_for_every_synthetic_building) {
   SelectionParams no_prior;
   no_prior.use_face_prior = false;
-  for (const auto& b : {box_building(), gable_building(), l_building(), step_building(), courtyard_building()}) {
+  for (const auto& b :
+       {box_building(), gable_building(), l_building(), step_building(), courtyard_building()}) {
     const auto c = candidates_of(b);
     ASSERT_EQ(c.problem.start.size(), c.faces.size());
     EXPECT_TRUE(satisfies_constraints(c.problem, c.problem.start, no_prior));
     EXPECT_TRUE(satisfies_constraints(c.problem, c.problem.start, SelectionParams{}));  // priors agree here
     std::size_t roofs = 0;
-    for (std::size_t i = 0; i < c.faces.size(); ++i) roofs += c.problem.start[i] && c.faces[i].kind == FaceKind::roof;
+    for (std::size_t i = 0; i < c.faces.size(); ++i)
+      roofs += c.problem.start[i] && c.faces[i].kind == FaceKind::roof;
     EXPECT_EQ(roofs, c.cell_count);  // one roof per cell
     const auto mesh = assemble_model(c, c.problem.start, AssembleParams{});
     EXPECT_TRUE(check_mesh(mesh).valid());
@@ -544,13 +546,16 @@ TEST(Model, merged_faces_that_would_touch_themselves_stay_simple_pieces) {
   flat(FaceKind::roof, 2, {{0, 16}, {0, 0}, {2, 2}, P, {2, 14}}, 7.0);
   flat(FaceKind::floor, 3, {{0, 0}, {0, 16}, {16, 16}, {16, 0}}, 0.0);
   const Ring2 outline{{0, 0}, {16, 0}, {16, 16}, {0, 16}};
-  for (std::size_t k = 0; k < 4; ++k) wall(4 + static_cast<std::uint32_t>(k), outline[k], outline[(k + 1) % 4], 0.0, 7.0);
+  for (std::size_t k = 0; k < 4; ++k)
+    wall(4 + static_cast<std::uint32_t>(k), outline[k], outline[(k + 1) % 4], 0.0, 7.0);
   const Ring2 inner{{2, 2}, {14, 2}, R, {14, 14}, {2, 14}, P};
   const std::uint32_t inner_line[] = {8, 9, 9, 10, 11, 11};
-  for (std::size_t k = 0; k < inner.size(); ++k) wall(inner_line[k], inner[k], inner[(k + 1) % inner.size()], 5.0, 7.0);
+  for (std::size_t k = 0; k < inner.size(); ++k)
+    wall(inner_line[k], inner[k], inner[(k + 1) % inner.size()], 5.0, 7.0);
   const Ring2 notch{P, {6, 6}, Q, {6, 10}};
   const std::uint32_t notch_line[] = {12, 13, 13, 14};
-  for (std::size_t k = 0; k < notch.size(); ++k) wall(notch_line[k], notch[k], notch[(k + 1) % notch.size()], 3.0, 5.0);
+  for (std::size_t k = 0; k < notch.size(); ++k)
+    wall(notch_line[k], notch[k], notch[(k + 1) % notch.size()], 3.0, 5.0);
   for (const auto& f : c.faces) {
     std::vector<Point3> polygon;
     for (auto v : f.vertices) polygon.push_back(c.vertices[v]);
@@ -566,7 +571,8 @@ TEST(Model, merged_faces_that_would_touch_themselves_stay_simple_pieces) {
   for (const auto& face : mesh.faces) {
     std::vector<std::uint32_t> sorted(face);
     std::sort(sorted.begin(), sorted.end());
-    EXPECT_EQ(std::adjacent_find(sorted.begin(), sorted.end()), sorted.end()) << "a face visits a vertex twice";
+    EXPECT_EQ(std::adjacent_find(sorted.begin(), sorted.end()), sorted.end())
+        << "a face visits a vertex twice";
   }
 }
 
@@ -592,7 +598,8 @@ TEST(Model, pieces_of_one_line_that_bend_are_not_merged_into_a_warped_wall) {
   add(FaceKind::roof, 0, {5, 6, 7, 8, 9});
   add(FaceKind::floor, 1, {4, 3, 2, 1, 0});
   const std::uint32_t line[] = {2, 2, 3, 4, 5};  // both front pieces on line 2
-  for (std::uint32_t k = 0; k < n; ++k) add(FaceKind::wall, line[k], {k, (k + 1) % n, (k + 1) % n + n, k + n});
+  for (std::uint32_t k = 0; k < n; ++k)
+    add(FaceKind::wall, line[k], {k, (k + 1) % n, (k + 1) % n + n, k + n});
   std::vector<SurfaceType> surfaces;
   const auto mesh = assemble_model(c, std::vector<bool>(c.faces.size(), true), AssembleParams{}, &surfaces);
   EXPECT_EQ(count_surface(surfaces, SurfaceType::wall), 5u);

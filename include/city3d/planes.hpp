@@ -9,10 +9,13 @@
 
 namespace city3d {
 
-/// Parameters of detect_planes(). Defaults are City3D's for AHN3 (region growing min points 40).
+/// Parameters of detect_planes(). City3D grows regions with min 40 points, 0.5 m and 30 degrees in
+/// a 1 m sphere; growing here is stricter (0.2 m, 20 degrees, k nearest neighbours), and with the
+/// stricter growth planes of 20 points gave models closer to the points on all three datasets of
+/// the dev set (docs/BENCHMARKS.md, "min_points"), so 20 is the default.
 struct PlaneParams {
   int k_neighbors = 12;        ///< neighbours for the PCA normals and for growing, >= 3
-  int min_points = 40;         ///< points a plane needs to be reported, >= 3
+  int min_points = 20;         ///< points a plane needs to be reported, >= 3
   double max_distance = 0.2;   ///< point-to-plane distance while growing, metres, > 0
   double max_angle = 20.0;     ///< point normal vs plane normal while growing, degrees, in (0, 90]
   /// A segment is a wall when |n_z| of its unit normal is below this, in [0, 1). The default 0.17

@@ -922,7 +922,8 @@ std::vector<bool> start_assignment(const CandidateFaces& out, const PlainArrange
     choose(best_cell, best_roof);
   }
   if (bad > 0) {
-    log_debug("hypothesis: no start assignment (" + std::to_string(bad) + " edges left with one or more than two faces)");
+    log_debug("hypothesis: no start assignment (" + std::to_string(bad) +
+              " edges left with one or more than two faces)");
     return {};
   }
   return selected;

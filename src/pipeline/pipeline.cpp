@@ -1,7 +1,6 @@
 // The pipeline: one building from points to model (reconstruct_building), and the batch job around
 // it (run_batch): footprints, tiles, cropping, parallel reconstruction, ordered output, report.
 #include "city3d/pipeline.hpp"
-#include "city3d/model_io.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -12,8 +11,8 @@
 #include <filesystem>
 #include <functional>
 #include <map>
-#include <numeric>
 #include <mutex>
+#include <numeric>
 #include <sstream>
 #include <thread>
 
@@ -21,6 +20,7 @@
 #include "city3d/evaluation.hpp"
 #include "city3d/log.hpp"
 #include "city3d/mesh_check.hpp"
+#include "city3d/model_io.hpp"
 #include "city3d/point_cloud_io.hpp"
 #include "pipeline/journal.hpp"
 #include "pipeline/report.hpp"
@@ -247,8 +247,9 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
     // one more time with planes of half min_points, or a third of its points when that is fewer
     // (at least kMinPointsForSmallRoof).
     PlaneParams small = params.planes;
-    small.min_points = std::max<int>(kMinPointsForSmallRoof,
-                                     std::min<int>(params.planes.min_points / 2, static_cast<int>(points.size() / 3)));
+    small.min_points =
+        std::max<int>(kMinPointsForSmallRoof,
+                      std::min<int>(params.planes.min_points / 2, static_cast<int>(points.size() / 3)));
     if (small.min_points < params.planes.min_points) {
       segments = detect_planes(points, small);
       const std::string note = "small building: planes of at least " + std::to_string(small.min_points) + " points";
@@ -282,7 +283,8 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
     if (outline.empty() && !input.footprint.polygons.empty()) {
       // Too small for the heightmap to hold an outline (under infer_outline's 2 m2): the convex
       // hull of the points (building_from_cloud), regularised like an inferred outline.
-      outline.push_back(regularise_outline(input.footprint.polygons.front(), params.regularise.angle_threshold));
+      outline.push_back(
+          regularise_outline(input.footprint.polygons.front(), params.regularise.angle_threshold));
       report.note += std::string(report.note.empty() ? "" : "; ") + "outline: convex hull of the points";
     }
     if (outline.empty()) throw ReconstructionError("walls: no outline could be inferred from the points");
@@ -452,8 +454,9 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
             if (!params.debug_dir.empty()) {
               ModelWriteOptions local;
               local.local_coordinates = true;
-              write_model(debug_path(params, input.id, std::string("rejected_") +
-                                                           (rung.footprint_walls_only ? "footprint_walls" : "lod22") + ".obj"),
+              write_model(debug_path(params, input.id,
+                                     std::string("rejected_") +
+                                         (rung.footprint_walls_only ? "footprint_walls" : "lod22") + ".obj"),
                           model, local);
             }
             throw ReconstructionError("model: not a valid solid: " + validity.problem);

@@ -531,9 +531,10 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
   const GlobalProgram program = build_program(problem, params, value);
   // The hypothesis' start assignment, when it satisfies this call's constraints (with the face prior
   // it may not).
-  const std::vector<double> start_values = !problem.start.empty() && satisfies_constraints(problem, problem.start, params)
-                                        ? program_start(problem, program, value, problem.start)
-                                        : std::vector<double>{};
+  const std::vector<double> start_values =
+      !problem.start.empty() && satisfies_constraints(problem, problem.start, params)
+          ? program_start(problem, program, value, problem.start)
+          : std::vector<double>{};
   const std::vector<Component> components = split_components(program);
   result.components = components.size();
   std::vector<double> solution(program.columns.size(), 0.0);
@@ -600,10 +601,12 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
       }
     }
 
-    if (!model.start.empty() && (part.status == MipStatus::no_solution || part.status == MipStatus::feasible)) {
+    if (!model.start.empty() &&
+        (part.status == MipStatus::no_solution || part.status == MipStatus::feasible)) {
       // A limit stopped the backend: the start is feasible, so keep whichever is better.
       double start_objective = 0.0;
-      for (std::size_t j = 0; j < model.columns.size(); ++j) start_objective += model.columns[j].cost * model.start[j];
+      for (std::size_t j = 0; j < model.columns.size(); ++j)
+        start_objective += model.columns[j].cost * model.start[j];
       if (part.status == MipStatus::no_solution || start_objective < part.objective - 1e-12) {
         part.status = MipStatus::feasible;
         part.values = model.start;
@@ -652,7 +655,8 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
   line << "selection: " << problem.face_count << " faces, " << result.variables << " variables, "
        << result.constraints << " constraints, " << result.components << " components, " << result.solver
        << ", " << status_name(result.status) << ", " << result.seconds << " s"
-       << (start_values.empty() ? "" : ", from a start") << (result.message.empty() ? "" : ": " + result.message);
+       << (start_values.empty() ? "" : ", from a start")
+       << (result.message.empty() ? "" : ": " + result.message);
   log_debug(line.str());
   return result;
 }

@@ -54,8 +54,8 @@ using MipBackend = MipSolution (*)(const MipModel& model, const MipLimits& limit
 MipSolution solve_with_glpk(const MipModel& model, const MipLimits& limits);
 
 /// COIN-OR CBC 2.10 through CbcMain1 (preprocessing, cuts, heuristics), from model.start when given
-/// (CBC's MIP start: its incumbent before the search, so every bound prunes from the first node). Calls are serialised with a
-/// process-wide mutex because CbcMain1 in 2.10.8 is not thread-safe.
+/// (CBC's MIP start: its incumbent before the search, so every bound prunes from the first node). Calls are
+/// serialised with a process-wide mutex because CbcMain1 in 2.10.8 is not thread-safe.
 MipSolution solve_with_cbc(const MipModel& model, const MipLimits& limits);
 
 }  // namespace city3d::detail
