@@ -188,7 +188,7 @@ const std::vector<OptionSpec>& option_table() {
        [](const O& o) { return number_text(o.batch.reconstruction.time_limit); },
        [](O& o, V v) { o.batch.reconstruction.time_limit = parse_double("--time-limit", v); }},
       {"--debug", nullptr, "DIR", "write each building's intermediate results (planes, heightmap, edges, "
-       "polylines, walls, candidate faces) into DIR/<id>/", nullptr,
+       "polylines, walls, candidate faces, models rejected as invalid) into DIR/<id>/", nullptr,
        [](O& o, V v) { o.batch.reconstruction.debug_dir = v; }},
       // Output.
       {"--output", "-o", "DIR", "output folder (created when missing)",
