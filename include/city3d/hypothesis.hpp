@@ -95,8 +95,10 @@ struct HypothesisParams {
   int min_support_points = 3;        ///< points a plane needs near a cell (fewer if the segment is smaller), >= 1
   double vertex_merge_tolerance = 1e-3;  ///< heights at one xy position closer than this share a vertex, > 0
   double parallel_tolerance = 1e-3;  ///< |n_i x n_j| below this: roof planes treated as parallel (no line), > 0
-  int max_planes_per_cell = 4;        ///< roof planes lifted onto one cell: the best-supported ones (most of
-                                     ///< their points inside the cell, then near it), >= 1
+  int max_planes_per_cell = 3;        ///< roof planes lifted onto one cell: the best-supported ones (most of
+                                     ///< their points inside the cell, then near it), >= 1. 3, not 4: with
+                                     ///< planes of 20 points, 4 cost 2.3x the time on the Delft block for
+                                     ///< 3 mm of median RMSE on the dev set (docs/BENCHMARKS.md)
   int large_cell_count = 64;         ///< an arrangement with more inside cells than this is "large", >= 0
   int max_planes_per_large_cell = 2; ///< max_planes_per_cell of a large arrangement (the smaller of the two
                                      ///< applies): keeps the integer program of big buildings solvable, >= 1
