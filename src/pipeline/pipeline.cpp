@@ -288,7 +288,7 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
       report.note += std::string(report.note.empty() ? "" : "; ") + "outline: convex hull of the points";
     }
     if (outline.empty()) throw ReconstructionError("walls: no outline could be inferred from the points");
-    outline.resize(1);  // the main part; small detached parts are left to the LoD1 rung
+    outline.resize(1);  // the largest part only: other parts are not modelled (README, known limits)
   }
   RegularisationResult lines;
   if (!footprint_walls_only) {
