@@ -1,6 +1,8 @@
 // Tests of the OBJ / PLY model writers against reference files and by reading the output back.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -208,6 +210,45 @@ TEST_F(ModelWriter, cityjson_shares_vertices_and_labels_faces_by_normal) {
   // Face order floor, roof, 4 walls -> ground 0, wall 1, roof 2.
   EXPECT_NE(text.find("\"values\":[[0,2,1,1,1,1]]"), std::string::npos) << text;
   EXPECT_EQ(text.find("referenceSystem"), std::string::npos);
+}
+
+TEST_F(ModelWriter, cityjson_model_of_two_shells_is_a_building_of_two_parts_that_validates) {
+  // Two detached blocks in one model (a multipolygon footprint, or a cloud of two parts): a Building's
+  // Solid has one exterior shell, so each block becomes a BuildingPart with its own Solid.
+  BuildingModel m = box_model("two", {85000, 447000, 0});
+  const BuildingModel other = box_model("", {0, 0, 0});
+  for (const Point3& p : other.mesh.vertices) m.mesh.vertices.push_back({p.x + 5, p.y, p.z});
+  for (auto face : other.mesh.faces) {
+    for (auto& v : face) v += 8;
+    m.mesh.faces.push_back(face);
+  }
+  const fs::path out = dir_ / "two_shells.city.json";
+  write_cityjson(out.string(), {{m, "2.2", {{"status", std::string("ok")}}}}, {"EPSG:28992", 0.001, ""});
+  const std::string text = read_text(out);
+  EXPECT_NE(text.find("\"two\":{\"type\":\"Building\",\"attributes\":{\"status\":\"ok\"},"
+                      "\"children\":[\"two-part-1\",\"two-part-2\"]}"),
+            std::string::npos)
+      << text;
+  for (const char* part : {"\"two-part-1\":{\"type\":\"BuildingPart\",\"parents\":[\"two\"],\"geometry\":[{\"type\":\"Solid\"",
+                           "\"two-part-2\":{\"type\":\"BuildingPart\",\"parents\":[\"two\"],\"geometry\":[{\"type\":\"Solid\""})
+    EXPECT_NE(text.find(part), std::string::npos) << part << "\n" << text;
+  // 16 vertices, each part's faces on its own 8.
+  EXPECT_NE(text.find("\"boundaries\":[[[[8,11,10,9]]"), std::string::npos) << text;
+  // One shell stays a Building with a Solid.
+  write_cityjson(out.string(), {{box_model("one", {0, 0, 0}), "2.2", {}}}, {"", 0.001, ""});
+  EXPECT_NE(read_text(out).find("\"one\":{\"type\":\"Building\",\"attributes\":{},\"geometry\":[{\"type\":\"Solid\""),
+            std::string::npos)
+      << read_text(out);
+
+  const std::string schemas = CITY3D_SCHEMAS;
+  if (!fs::exists(schemas) || !fs::exists(CITY3D_AJV)) GTEST_SKIP() << "no schemas or ajv-cli: not validated";
+  write_cityjson(out.string(), {{m, "2.2", {{"status", std::string("ok")}}}}, {"EPSG:28992", 0.001, ""});
+  std::string command = std::string(CITY3D_AJV) + " validate --spec=draft7 --strict=false -s " + schemas +
+                        "/cityjson.schema.json";
+  for (const char* r : {"appearance", "cityobjects", "geomprimitives", "geomtemplates", "metadata"})
+    command += " -r " + schemas + "/" + r + ".schema.json";
+  command += " -d " + out.string() + " > " + (dir_ / "ajv.txt").string() + " 2>&1";
+  EXPECT_EQ(std::system(command.c_str()), 0) << read_text(dir_ / "ajv.txt");
 }
 
 TEST(SurfaceTypes, uses_given_semantics_when_present) {

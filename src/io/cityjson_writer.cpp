@@ -1,12 +1,14 @@
-// CityJSON 2.0 and CityJSONSeq writers: Buildings with a Solid geometry, semantic surfaces, a
-// quantising transform and attributes. Output is byte-deterministic (fixed key order, shortest
-// round-trip number formatting).
+// CityJSON 2.0 and CityJSONSeq writers: Buildings with a Solid geometry (or BuildingParts with one each,
+// for a model of several shells), semantic surfaces, a quantising transform and attributes. Output is
+// byte-deterministic (fixed key order, shortest round-trip number formatting).
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <map>
 #include <string>
 #include <tuple>
+#include <utility>
+#include <vector>
 
 #include "city3d/error.hpp"
 #include "city3d/model_io.hpp"
@@ -89,13 +91,75 @@ void append_city_object(std::string& out, const CityObject& object, const Point3
     remap[i] = it->second;
   }
   const std::vector<SurfaceType> types = surface_types(m);
-  // Semantic surface objects: only the types used, in the order ground, wall, roof.
-  bool used[3] = {false, false, false};
-  for (SurfaceType t : types) used[static_cast<int>(t)] = true;
-  int surface_index[3] = {-1, -1, -1};
-  int n_surfaces = 0;
-  for (int t = 0; t < 3; ++t)
-    if (used[t]) surface_index[t] = n_surfaces++;
+
+  // Shells: faces connected across shared edges. CityJSON gives a Building one Solid (one exterior
+  // shell); a model of several shells (a multipolygon's blocks, a cloud of detached parts) becomes a
+  // Building without geometry whose children are BuildingParts, one Solid each.
+  std::vector<std::size_t> parent(m.mesh.faces.size());
+  for (std::size_t f = 0; f < parent.size(); ++f) parent[f] = f;
+  const auto find = [&parent](std::size_t f) {
+    while (parent[f] != f) f = parent[f] = parent[parent[f]];
+    return f;
+  };
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> first_face_of_edge;
+  for (std::size_t f = 0; f < m.mesh.faces.size(); ++f) {
+    const auto& face = m.mesh.faces[f];
+    for (std::size_t k = 0; k < face.size(); ++k) {
+      const auto [it, fresh] = first_face_of_edge.emplace(std::minmax(face[k], face[(k + 1) % face.size()]), f);
+      if (!fresh) parent[find(f)] = find(it->second);
+    }
+  }
+  std::vector<std::vector<std::size_t>> shells;  // faces per shell, shells in order of their first face
+  std::map<std::size_t, std::size_t> shell_of_root;
+  for (std::size_t f = 0; f < m.mesh.faces.size(); ++f) {
+    const auto [it, fresh] = shell_of_root.emplace(find(f), shells.size());
+    if (fresh) shells.emplace_back();
+    shells[it->second].push_back(f);
+  }
+
+  // `"geometry":[{Solid}]` of the given faces, with semantic surfaces of the types they use, in the
+  // order ground, wall, roof.
+  const auto append_solid = [&](const std::vector<std::size_t>& faces) {
+    bool used[3] = {false, false, false};
+    for (std::size_t f : faces) used[static_cast<int>(types[f])] = true;
+    int surface_index[3] = {-1, -1, -1};
+    int n_surfaces = 0;
+    for (int t = 0; t < 3; ++t)
+      if (used[t]) surface_index[t] = n_surfaces++;
+    out += "\"geometry\":[{\"type\":\"Solid\",\"lod\":";
+    append_json_string(out, object.lod);
+    out += ",\"boundaries\":[[";
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      if (i) out += ',';
+      out += "[[";
+      bool first = true;
+      std::size_t previous = static_cast<std::size_t>(-1);
+      for (std::uint32_t v : m.mesh.faces[faces[i]]) {
+        const std::size_t q = remap[v];
+        if (q == previous) continue;  // consecutive vertices merged by quantisation
+        if (!first) out += ',';
+        out += std::to_string(q);
+        first = false;
+        previous = q;
+      }
+      out += "]]";
+    }
+    out += "]],\"semantics\":{\"surfaces\":[";
+    for (int t = 0, k = 0; t < 3; ++t) {
+      if (!used[t]) continue;
+      if (k++) out += ',';
+      out += "{\"type\":\"";
+      out += surface_name(static_cast<SurfaceType>(t));
+      out += "\"}";
+    }
+    out += "],\"values\":[[";
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      if (i) out += ',';
+      out += std::to_string(surface_index[static_cast<int>(types[faces[i]])]);
+    }
+    out += "]]}}]";
+  };
+  const auto part_id = [&m](std::size_t k) { return m.id + "-part-" + std::to_string(k + 1); };
 
   append_json_string(out, m.id);
   out += ":{\"type\":\"Building\",\"attributes\":{";
@@ -105,38 +169,29 @@ void append_city_object(std::string& out, const CityObject& object, const Point3
     out += ':';
     append_value(out, object.attributes[a].second);
   }
-  out += "},\"geometry\":[{\"type\":\"Solid\",\"lod\":";
-  append_json_string(out, object.lod);
-  out += ",\"boundaries\":[[";
-  for (std::size_t f = 0; f < m.mesh.faces.size(); ++f) {
-    if (f) out += ',';
-    out += "[[";
-    bool first = true;
-    std::size_t previous = static_cast<std::size_t>(-1);
-    for (std::uint32_t v : m.mesh.faces[f]) {
-      const std::size_t q = remap[v];
-      if (q == previous) continue;  // consecutive vertices merged by quantisation
-      if (!first) out += ',';
-      out += std::to_string(q);
-      first = false;
-      previous = q;
-    }
-    out += "]]";
+  out += "},";
+  if (shells.size() <= 1) {
+    std::vector<std::size_t> all(m.mesh.faces.size());
+    for (std::size_t f = 0; f < all.size(); ++f) all[f] = f;
+    append_solid(all);
+    out += '}';
+    return;
   }
-  out += "]],\"semantics\":{\"surfaces\":[";
-  for (int t = 0, k = 0; t < 3; ++t) {
-    if (!used[t]) continue;
-    if (k++) out += ',';
-    out += "{\"type\":\"";
-    out += surface_name(static_cast<SurfaceType>(t));
-    out += "\"}";
+  out += "\"children\":[";
+  for (std::size_t k = 0; k < shells.size(); ++k) {
+    if (k) out += ',';
+    append_json_string(out, part_id(k));
   }
-  out += "],\"values\":[[";
-  for (std::size_t f = 0; f < types.size(); ++f) {
-    if (f) out += ',';
-    out += std::to_string(surface_index[static_cast<int>(types[f])]);
+  out += "]}";
+  for (std::size_t k = 0; k < shells.size(); ++k) {
+    out += ',';
+    append_json_string(out, part_id(k));
+    out += ":{\"type\":\"BuildingPart\",\"parents\":[";
+    append_json_string(out, m.id);
+    out += "],";
+    append_solid(shells[k]);
+    out += '}';
   }
-  out += "]]}}]}";
 }
 
 void append_vertices(std::string& out, const std::vector<Quantised>& vertices) {
