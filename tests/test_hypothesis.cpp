@@ -727,7 +727,8 @@ namespace {
 // Issue: a roof-only cloud has its lowest point at the eaves. With that as a measured ground, the
 // roof planes, extended to an outline a little outside the points, dipped below the floor and were
 // dropped over their own cells: the opposite slope was lifted there instead (AHN3 dev buildings with
-// RMSE 0.3-0.5 m instead of 0.04 m). An unmeasured ground drops no plane.
+// RMSE 0.3-0.5 m instead of 0.04 m). An unmeasured ground drops no plane that stays within
+// unmeasured_floor_drop of it.
 Synthetic roof_only_gable(bool ground_measured) {
   Synthetic b = gable_building();
   b.footprint = {rectangle(-0.3, -0.3, 10.3, 8.3)};
@@ -770,6 +771,33 @@ TEST(Hypothesis, measured_ground_still_drops_planes_below_it) {
   const std::size_t measured = count_kind(candidates_of(b), FaceKind::roof);
   const std::size_t unmeasured = count_kind(candidates_of(roof_only_gable(false)), FaceKind::roof);
   EXPECT_LT(measured, unmeasured);
+}
+
+TEST(Hypothesis, unmeasured_ground_drops_a_plane_that_dips_metres_below_it) {
+  // A flat roof at 5 m (x < 8) beside a steep one (x > 8, slope 3): extended over the flat part's
+  // cell, the steep plane reaches z = -19 at x = 0. Without measured ground (ground_z = the lowest
+  // point) it used to drag the floor there; now it is dropped over that cell, as it comes more than
+  // unmeasured_floor_drop below ground_z.
+  Synthetic b = make_building({rectangle(0, 0, 10, 8)},
+                              {{{{0, 0}, {8, 0}, {8, 8}, {0, 8}}, 0.0, 0.0, 5.0},
+                               {{{8, 0}, {10, 0}, {10, 8}, {8, 8}}, 3.0, 0.0, -19.0}},
+                              448.0);
+  b.ground_z = std::numeric_limits<double>::infinity();
+  for (const auto& p : b.points) b.ground_z = std::min(b.ground_z, p.z);
+  b.ground_measured = false;
+  const Reconstruction r = reconstruct(b);
+  EXPECT_TRUE(r.check.valid());
+  double low = std::numeric_limits<double>::infinity();
+  for (const auto& p : r.mesh.vertices) low = std::min(low, p.z);
+  const HypothesisParams defaults;
+  EXPECT_GE(low, b.ground_z - defaults.unmeasured_floor_drop - defaults.floor_clearance - 1e-9);
+  // With the bar far enough down, the plane stays and the floor follows it (the old behaviour).
+  HypothesisParams lenient;
+  lenient.unmeasured_floor_drop = 100.0;
+  const auto deep = generate_candidates(b.points, b.roofs, b.walls, b.footprint, b.ground_z, false, lenient);
+  double deep_low = std::numeric_limits<double>::infinity();
+  for (const auto& p : deep.vertices) deep_low = std::min(deep_low, p.z);
+  EXPECT_LT(deep_low, -18.0);
 }
 
 }  // namespace

@@ -46,8 +46,10 @@
 //     comes lower than ground_z + floor_clearance at a cell vertex is dropped when another of the
 //     cell's planes stays above that. Without ground points ground_z is the lowest building point,
 //     only an upper bound of the ground (a roof-only cloud has it at the eaves, where the roof planes
-//     extended to the outline come lower): then no plane is dropped. Either way the floor is then
-//     lowered (never raised) to floor_clearance below the lowest remaining roof vertex.
+//     extended to the outline come lower): then a plane is dropped only where it comes lower than
+//     ground_z - unmeasured_floor_drop + floor_clearance (a steep plane extended over a far cell
+//     would otherwise drag the floor tens of metres down). Either way the floor is then lowered
+//     (never raised) to floor_clearance below the lowest remaining roof vertex.
 //  3. Vertical faces: over every arrangement edge, the "levels" are the roof planes of the cells on
 //     both sides (plus the floor on the footprint boundary). The vertical strip over the edge is cut
 //     by the level lines; every cell of that 1D line arrangement (between two consecutive levels) is
@@ -104,6 +106,8 @@ struct HypothesisParams {
                                      ///< applies): keeps the integer program of big buildings solvable, >= 1
   double floor_clearance = 0.1;      ///< least height of a roof vertex above the floor; the floor is lowered
                                      ///< (never raised) to keep it, > 0
+  double unmeasured_floor_drop = 1.0;  ///< without measured ground, how far below ground_z a roof plane may
+                                       ///< reach over a cell before it is dropped there (see 2), >= 0
   double min_part_area = 1.0;        ///< m2; detached parts of the inside cells smaller than this are dropped
                                      ///< (never the largest part), >= 0
   double min_edge_length = 0.01;     ///< arrangement edges shorter than this are contracted (their end

@@ -39,6 +39,7 @@ void HypothesisParams::validate() const {
   need(parallel_tolerance > 0.0, "parallel_tolerance must be > 0");
   need(max_planes_per_cell >= 1, "max_planes_per_cell must be >= 1");
   need(floor_clearance > 0.0, "floor_clearance must be > 0");
+  need(unmeasured_floor_drop >= 0.0, "unmeasured_floor_drop must be >= 0");
   need(min_part_area >= 0.0, "min_part_area must be >= 0");
   need(min_edge_length >= 0.0, "min_edge_length must be >= 0");
   need(min_cell_width >= 0.0, "min_cell_width must be >= 0");
@@ -1119,9 +1120,11 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
 
   // 2b. The floor lies below every roof face: over measured ground, a plane that dips below
   // ground_z + floor_clearance over a cell is dropped there when another candidate of the cell stays
-  // above (an unmeasured ground_z is only an upper bound of the ground: no plane is dropped for it);
-  // the floor is then lowered (never raised) to floor_clearance below the lowest remaining roof vertex.
+  // above (an unmeasured ground_z is only an upper bound of the ground: the bar is then
+  // unmeasured_floor_drop lower); the floor is then lowered (never raised) to floor_clearance below
+  // the lowest remaining roof vertex.
   const double clearance = params.floor_clearance;
+  const double bar = ground_z + clearance - (ground_measured ? 0.0 : params.unmeasured_floor_drop);
   auto lowest_over = [&](std::size_t c, int r) {
     double low = std::numeric_limits<double>::infinity();
     for (const auto& p : arr.cells[c].polygon) low = std::min(low, roof_height(roofs[static_cast<std::size_t>(r)], p.x, p.y));
@@ -1132,8 +1135,8 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
     auto& list = cell_planes[c];
     std::vector<int> above;
     for (int r : list)
-      if (lowest_over(c, r) >= ground_z + clearance) above.push_back(r);
-    if (ground_measured && !above.empty()) list = std::move(above);
+      if (lowest_over(c, r) >= bar) above.push_back(r);
+    if (!above.empty()) list = std::move(above);
     for (int r : list) floor_z = std::min(floor_z, lowest_over(c, r) - clearance);
   }
   if (floor_z < ground_z)

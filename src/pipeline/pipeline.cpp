@@ -123,6 +123,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("hypothesis.min_edge_length", p.hypothesis.min_edge_length);
   put("hypothesis.max_planes_per_cell", p.hypothesis.max_planes_per_cell);
   put("hypothesis.floor_clearance", p.hypothesis.floor_clearance);
+  put("hypothesis.unmeasured_floor_drop", p.hypothesis.unmeasured_floor_drop);
   put("hypothesis.min_part_area", p.hypothesis.min_part_area);
   put("hypothesis.min_cell_width", p.hypothesis.min_cell_width);
   put("hypothesis.line_merge_distance", p.hypothesis.line_merge_distance);
