@@ -286,7 +286,8 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
       // hull of the points (building_from_cloud), regularised like an inferred outline.
       outline.push_back(
           regularise_outline(input.footprint.polygons.front(), params.regularise.angle_threshold));
-      report.note += std::string(report.note.empty() ? "" : "; ") + "outline: convex hull of the points";
+      const std::string note = "outline: convex hull of the points";
+      if (report.note.find(note) == std::string::npos) report.note += (report.note.empty() ? "" : "; ") + note;
     }
     if (outline.empty()) throw ReconstructionError("walls: no outline could be inferred from the points");
     outline.resize(1);  // the largest part only: other parts are not modelled (README, known limits)
