@@ -11,6 +11,7 @@
 #include <random>
 #include <tuple>
 
+#include "city3d/batch.hpp"
 #include "city3d/crop.hpp"
 #include "city3d/footprint_io.hpp"
 #include "city3d/mesh_check.hpp"

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "city3d/debug_output.hpp"
 #include "city3d/error.hpp"
 #include "city3d/heightmap.hpp"
 #include "city3d/regularise.hpp"

@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "city3d/debug_output.hpp"
 #include "city3d/error.hpp"
 #include "city3d/polylines.hpp"
 #include "city3d/regularise.hpp"

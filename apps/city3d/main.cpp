@@ -9,6 +9,7 @@
 #include "city3d/info.hpp"
 #include "city3d/log.hpp"
 #include "city3d/options.hpp"
+#include "city3d/batch.hpp"
 #include "city3d/pipeline.hpp"
 
 namespace {

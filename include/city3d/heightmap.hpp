@@ -87,10 +87,6 @@ std::vector<Point2> detect_edges(const Heightmap& heightmap, const HeightmapPara
 std::vector<Polygon2> infer_outline(const Heightmap& heightmap, const std::vector<Point3>& local_points,
                                     double tolerance = 0.25, double min_area = 2.0);
 
-/// Writes the heightmap as an 8-bit grey PNG, north up: lowest data 1, highest 255, no data 0.
-/// Throws IoError naming the file when it cannot be written.
-void write_heightmap_png(const Heightmap& heightmap, const std::string& path);
-
 /// Writes the heightmap (grey, as above) with `edges` (points in the heightmap's frame, e.g. from
 /// detect_edges()) painted red, as an RGB PNG, north up. Edges outside the raster are ignored.
 /// Throws IoError naming the file when it cannot be written.

@@ -179,8 +179,4 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
                                    const std::vector<Polygon2>& footprint_local, double ground_z,
                                    bool ground_measured, const HypothesisParams& params);
 
-/// Writes the candidate faces as an OBJ file (one object per face, named by kind and index), for
-/// inspection. Throws IoError when the file cannot be written.
-void write_candidates_obj(const std::string& path, const CandidateFaces& candidates);
-
 }  // namespace city3d

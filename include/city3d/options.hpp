@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "city3d/pipeline.hpp"
+#include "city3d/batch.hpp"
 
 namespace city3d {
 

@@ -1,6 +1,5 @@
-// The pipeline: reconstruct_building() runs the stages for one building in order and walks the
-// fallback ladder; run_batch() streams tiles, crops them by footprints, reconstructs buildings in
-// parallel and writes models, CityJSON and a report in input order.
+// The pipeline of one building: reconstruct_building() runs the stages in order and walks the
+// fallback ladder. The batch job around it (tiles, footprints, threads, outputs) is in batch.hpp.
 #pragma once
 
 #include <cstddef>
@@ -111,45 +110,5 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
 /// the lowest point, and the outline (for the LoD1 rung) is the convex hull of the points.
 BuildingInput building_from_cloud(const BuildingId& id, const std::vector<Point3>& world_points,
                                   std::optional<double> ground_z = std::nullopt);
-
-/// Everything run_batch() needs.
-struct BatchOptions {
-  std::vector<std::string> point_clouds;  ///< LAS/LAZ/PLY files, or folders of them
-  std::string footprints;                 ///< footprint source; empty = single-building clouds
-  FootprintReadOptions footprint;
-  CropParams crop;
-  ReconstructionParams reconstruction;
-  std::optional<double> ground_z;         ///< single-building mode: floor height (world z)
-
-  std::string output_dir = "city3d_out";
-  MeshFormat format = MeshFormat::obj;
-  bool local_coordinates = false;
-  bool per_building_files = true;   ///< models/<id>.<ext>
-  bool merged_file = false;         ///< models.<ext> with every building
-  bool cityjson = true;             ///< buildings.city.json
-  bool cityjson_seq = false;        ///< buildings.city.jsonl
-  bool timings_in_cityjson = false; ///< add "seconds" to CityJSON attributes (breaks byte-identity)
-  int threads = 1;
-  /// Footprints are cropped and reconstructed in square blocks of this size (metres, by their
-  /// bounding-box centres), so memory follows one block's points, not the whole footprint set; the
-  /// tiles overlapping a block are streamed once per block. 0 = everything in one block. The output
-  /// does not depend on it.
-  double block_size = 1000.0;
-  bool progress = false;            ///< progress line on stderr
-  /// Skip buildings a previous run with the same inputs and parameters finished (resume.journal in
-  /// the output folder); false recomputes everything.
-  bool resume = true;
-};
-
-/// Counts of one batch run.
-struct BatchSummary {
-  std::size_t buildings = 0, ok = 0, fallback = 0, skipped = 0, failed = 0;
-  double seconds = 0.0;
-  std::string report_path;
-};
-
-/// Runs the whole job. Throws IoError / ConfigError only when the run itself cannot go on
-/// (unreadable footprints or point clouds, unwritable output); a bad building never stops it.
-BatchSummary run_batch(const BatchOptions& options);
 
 }  // namespace city3d

@@ -63,8 +63,4 @@ struct PolylineStats {
 std::vector<Polyline2> extract_polylines(const std::vector<Point2>& edge_pixels, const PolylineParams& params,
                                          PolylineStats* stats = nullptr);
 
-/// Writes polylines as an OBJ file of vertices and `l i j ...` lines (z = `z`), for inspection.
-/// Throws IoError when the file cannot be written.
-void write_polylines_obj(const std::string& path, const std::vector<Polyline2>& polylines, double z = 0.0);
-
 }  // namespace city3d

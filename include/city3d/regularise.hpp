@@ -86,8 +86,4 @@ Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold = 20
 Polygon2 fit_outline_to_points(const Polygon2& outline, const std::vector<Point3>& points, double band = 1.0,
                                double end_margin = 0.5, int min_points = 5, double max_shift = 1.5);
 
-/// Writes segments as an OBJ file (`v` lines at height z, one `l i j` per segment), for inspection.
-/// Throws IoError when the file cannot be written.
-void write_segments_obj(const std::string& path, const std::vector<Segment2>& segments, double z = 0.0);
-
 }  // namespace city3d

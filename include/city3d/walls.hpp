@@ -69,8 +69,4 @@ std::vector<VerticalPlane> infer_walls(const RegularisationResult& lines,
                                        const std::vector<std::pair<Point2, Point2>>& detected_wall_lines,
                                        const WallParams& params);
 
-/// Writes walls as an OBJ file of vertical quads from z0 to z1 (outer and inner alike), for inspection.
-/// Throws IoError when the file cannot be written.
-void write_walls_obj(const std::string& path, const std::vector<VerticalPlane>& walls, double z0, double z1);
-
 }  // namespace city3d

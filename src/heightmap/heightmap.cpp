@@ -7,7 +7,6 @@
 #include <CGAL/Projection_traits_xy_3.h>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -69,33 +68,6 @@ std::pair<float, float> height_range(const Heightmap& map) {
     highest = std::max(highest, z);
   }
   return {lowest, highest};
-}
-
-/// Grey image, north up: 0 no data, 1..255 lowest..highest.
-cv::Mat grey_image(const Heightmap& map) {
-  cv::Mat image(map.height, map.width, CV_8U, cv::Scalar(0));
-  const auto [lowest, highest] = height_range(map);
-  const double span = highest > lowest ? static_cast<double>(highest) - lowest : 0.0;
-  for (int row = 0; row < map.height; ++row) {
-    auto* out = image.ptr<std::uint8_t>(map.height - 1 - row);
-    for (int col = 0; col < map.width; ++col) {
-      const float z = map.at(col, row);
-      if (std::isnan(z)) continue;
-      out[col] = span > 0.0 ? static_cast<std::uint8_t>(std::lround(1.0 + 254.0 * (z - lowest) / span))
-                            : std::uint8_t{255};
-    }
-  }
-  return image;
-}
-
-void write_png(const cv::Mat& image, const std::string& path) {
-  bool written = false;
-  try {
-    written = cv::imwrite(path, image);
-  } catch (const cv::Exception& e) {
-    throw IoError("heightmap: cannot write " + path + ": " + e.what());
-  }
-  if (!written) throw IoError("heightmap: cannot write " + path);
 }
 
 }  // namespace
@@ -377,26 +349,6 @@ std::vector<Polygon2> infer_outline(const Heightmap& heightmap, const std::vecto
   std::stable_sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
   for (auto& f : found) outline.push_back(std::move(f.second));
   return outline;
-}
-
-void write_heightmap_png(const Heightmap& heightmap, const std::string& path) {
-  if (heightmap.width <= 0 || heightmap.height <= 0)
-    throw IoError("heightmap: cannot write " + path + ": empty heightmap");
-  detail::write_png(detail::grey_image(heightmap), path);
-}
-
-void write_edges_png(const Heightmap& heightmap, const std::vector<Point2>& edges, const std::string& path) {
-  if (heightmap.width <= 0 || heightmap.height <= 0)
-    throw IoError("heightmap: cannot write " + path + ": empty heightmap");
-  cv::Mat colour;
-  cv::cvtColor(detail::grey_image(heightmap), colour, cv::COLOR_GRAY2BGR);
-  for (const Point2& p : edges) {
-    const int col = static_cast<int>(std::floor((p.x - heightmap.origin.x) / heightmap.resolution));
-    const int row = static_cast<int>(std::floor((p.y - heightmap.origin.y) / heightmap.resolution));
-    if (col < 0 || row < 0 || col >= heightmap.width || row >= heightmap.height) continue;
-    colour.at<cv::Vec3b>(heightmap.height - 1 - row, col) = cv::Vec3b(0, 0, 255);  // BGR red
-  }
-  detail::write_png(colour, path);
 }
 
 }  // namespace city3d

@@ -1486,19 +1486,4 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
   return out;
 }
 
-void write_candidates_obj(const std::string& path, const CandidateFaces& candidates) {
-  std::FILE* file = std::fopen(path.c_str(), "w");
-  if (!file) throw IoError("hypothesis: cannot write " + path);
-  std::fprintf(file, "# city3d candidate faces\n");
-  for (const auto& v : candidates.vertices) std::fprintf(file, "v %.6f %.6f %.6f\n", v.x, v.y, v.z);
-  static const char* kind_names[] = {"roof", "wall", "floor"};
-  for (std::size_t i = 0; i < candidates.faces.size(); ++i) {
-    const auto& f = candidates.faces[i];
-    std::fprintf(file, "o %s_%zu\nf", kind_names[static_cast<int>(f.kind)], i);
-    for (auto v : f.vertices) std::fprintf(file, " %u", v + 1);
-    std::fprintf(file, "\n");
-  }
-  if (std::fclose(file) != 0) throw IoError("hypothesis: cannot write " + path);
-}
-
 }  // namespace city3d

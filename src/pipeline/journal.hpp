@@ -9,7 +9,7 @@
 #include <mutex>
 #include <string>
 
-#include "city3d/pipeline.hpp"
+#include "city3d/batch.hpp"
 
 namespace city3d::detail {
 

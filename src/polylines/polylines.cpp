@@ -733,25 +733,4 @@ std::vector<Polyline2> extract_polylines(const std::vector<Point2>& edge_pixels,
   return polylines;
 }
 
-void write_polylines_obj(const std::string& path, const std::vector<Polyline2>& polylines, double z) {
-  std::ofstream out(path);
-  if (!out) throw IoError("polylines: cannot open " + path + " for writing");
-  out.precision(17);
-  out << "# city3d polylines: " << polylines.size() << "\n";
-  std::size_t base = 1;
-  for (const auto& line : polylines) {
-    const bool closed = is_closed(line);
-    const std::size_t n = closed ? line.size() - 1 : line.size();
-    for (std::size_t i = 0; i < n; ++i) out << "v " << line[i].x << ' ' << line[i].y << ' ' << z << "\n";
-    if (n >= 2) {
-      out << 'l';
-      for (std::size_t i = 0; i < n; ++i) out << ' ' << base + i;
-      if (closed) out << ' ' << base;
-      out << "\n";
-    }
-    base += n;
-  }
-  if (!out) throw IoError("polylines: write failed for " + path);
-}
-
 }  // namespace city3d

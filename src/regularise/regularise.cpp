@@ -410,19 +410,6 @@ Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold, dou
   return result;
 }
 
-void write_segments_obj(const std::string& path, const std::vector<Segment2>& segments, double z) {
-  std::ofstream out(path);
-  if (!out) throw IoError("regularise: cannot open " + path + " for writing");
-  out.precision(17);
-  out << "# city3d segments: " << segments.size() << "\n";
-  for (const auto& s : segments) {
-    out << "v " << s.a.x << ' ' << s.a.y << ' ' << z << "\n";
-    out << "v " << s.b.x << ' ' << s.b.y << ' ' << z << "\n";
-  }
-  for (std::size_t i = 0; i < segments.size(); ++i) out << "l " << 2 * i + 1 << ' ' << 2 * i + 2 << "\n";
-  if (!out) throw IoError("regularise: write failed for " + path);
-}
-
 Polygon2 fit_outline_to_points(const Polygon2& outline, const std::vector<Point3>& points, double band,
                                double end_margin, int min_points, double max_shift) {
   const Ring2& ring = outline.outer;

@@ -329,20 +329,4 @@ std::vector<VerticalPlane> infer_walls(const RegularisationResult& lines,
   return walls;
 }
 
-void write_walls_obj(const std::string& path, const std::vector<VerticalPlane>& walls, double z0, double z1) {
-  std::ofstream out(path);
-  if (!out) throw IoError("walls: cannot open " + path + " for writing");
-  out.precision(17);
-  out << "# city3d walls: " << walls.size() << "\n";
-  for (const auto& w : walls) {
-    out << "v " << w.a.x << ' ' << w.a.y << ' ' << z0 << "\n";
-    out << "v " << w.b.x << ' ' << w.b.y << ' ' << z0 << "\n";
-    out << "v " << w.b.x << ' ' << w.b.y << ' ' << z1 << "\n";
-    out << "v " << w.a.x << ' ' << w.a.y << ' ' << z1 << "\n";
-  }
-  for (std::size_t i = 0; i < walls.size(); ++i)
-    out << "f " << 4 * i + 1 << ' ' << 4 * i + 2 << ' ' << 4 * i + 3 << ' ' << 4 * i + 4 << "\n";
-  if (!out) throw IoError("walls: write failed for " + path);
-}
-
 }  // namespace city3d

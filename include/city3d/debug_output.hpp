@@ -1,0 +1,47 @@
+// Debug output (--debug DIR): each stage's intermediate result of one building, written for a person
+// to look at (PNG images, coloured PLY points, OBJ lines and faces). The geometry modules do no file
+// IO: the pipeline passes their results to these writers. Every writer throws IoError naming the file
+// when it cannot be written.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "city3d/heightmap.hpp"
+#include "city3d/hypothesis.hpp"
+#include "city3d/planes.hpp"
+#include "city3d/polylines.hpp"
+#include "city3d/regularise.hpp"
+#include "city3d/types.hpp"
+#include "city3d/walls.hpp"
+
+namespace city3d {
+
+/// `<debug_dir>/<id made file-safe>/<name>`, creating the building's folder.
+std::string debug_path(const std::string& debug_dir, const BuildingId& id, const std::string& name);
+
+/// The points as an ASCII PLY, coloured by planar segment (a fixed colour per segment, grey for points
+/// in none), with the segment index as a property (-1: none).
+void write_planes_ply(const std::string& path, const std::vector<Point3>& points,
+                      const std::vector<PlanarSegment>& segments);
+
+/// The heightmap as an 8-bit grey PNG, north up: lowest data 1, highest 255, no data 0.
+void write_heightmap_png(const Heightmap& heightmap, const std::string& path);
+
+/// The heightmap (grey, as above) with `edges` (points in the heightmap's frame, e.g. from
+/// detect_edges()) painted red, as an RGB PNG, north up. Edges outside the raster are ignored.
+void write_edges_png(const Heightmap& heightmap, const std::vector<Point2>& edges, const std::string& path);
+
+/// Polylines as OBJ vertices and `l i j ...` lines at height `z`.
+void write_polylines_obj(const std::string& path, const std::vector<Polyline2>& polylines, double z = 0.0);
+
+/// Segments as OBJ vertices at height `z`, one `l i j` per segment.
+void write_segments_obj(const std::string& path, const std::vector<Segment2>& segments, double z = 0.0);
+
+/// Walls as vertical OBJ quads from z0 to z1 (outer and inner alike).
+void write_walls_obj(const std::string& path, const std::vector<VerticalPlane>& walls, double z0, double z1);
+
+/// The candidate faces as OBJ, one object per face named by kind and index.
+void write_candidates_obj(const std::string& path, const CandidateFaces& candidates);
+
+}  // namespace city3d

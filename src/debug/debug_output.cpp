@@ -1,0 +1,180 @@
+// Debug output (--debug DIR): each stage's intermediate result of one building written as PNG, PLY or
+// OBJ for a person to look at. The geometry modules do no file IO; the pipeline hands their results here.
+#include "city3d/debug_output.hpp"
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <system_error>
+
+#include "city3d/error.hpp"
+#include "city3d/model_io.hpp"
+
+namespace city3d {
+namespace fs = std::filesystem;
+
+namespace {
+
+/// Lowest and highest data height; {+inf, -inf} when there is none.
+std::pair<float, float> height_range(const Heightmap& map) {
+  float lowest = std::numeric_limits<float>::infinity();
+  float highest = -std::numeric_limits<float>::infinity();
+  for (float z : map.z) {
+    if (std::isnan(z)) continue;
+    lowest = std::min(lowest, z);
+    highest = std::max(highest, z);
+  }
+  return {lowest, highest};
+}
+
+/// Grey image, north up: 0 no data, 1..255 lowest..highest.
+cv::Mat grey_image(const Heightmap& map) {
+  cv::Mat image(map.height, map.width, CV_8U, cv::Scalar(0));
+  const auto [lowest, highest] = height_range(map);
+  const double span = highest > lowest ? static_cast<double>(highest) - lowest : 0.0;
+  for (int row = 0; row < map.height; ++row) {
+    auto* out = image.ptr<std::uint8_t>(map.height - 1 - row);
+    for (int col = 0; col < map.width; ++col) {
+      const float z = map.at(col, row);
+      if (std::isnan(z)) continue;
+      out[col] = span > 0.0 ? static_cast<std::uint8_t>(std::lround(1.0 + 254.0 * (z - lowest) / span))
+                            : std::uint8_t{255};
+    }
+  }
+  return image;
+}
+
+void write_png(const cv::Mat& image, const std::string& path) {
+  bool written = false;
+  try {
+    written = cv::imwrite(path, image);
+  } catch (const cv::Exception& e) {
+    throw IoError("debug: cannot write " + path + ": " + e.what());
+  }
+  if (!written) throw IoError("debug: cannot write " + path);
+}
+
+}  // namespace
+
+std::string debug_path(const std::string& debug_dir, const BuildingId& id, const std::string& name) {
+  const fs::path dir = fs::path(debug_dir) / fs::path(model_file_name(id, MeshFormat::obj)).stem();
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw IoError("debug: cannot create folder " + dir.string() + ": " + ec.message());
+  return (dir / name).string();
+}
+
+void write_planes_ply(const std::string& path, const std::vector<Point3>& points,
+                      const std::vector<PlanarSegment>& segments) {
+  std::vector<int> label(points.size(), -1);
+  for (std::size_t s = 0; s < segments.size(); ++s)
+    for (std::uint32_t i : segments[s].points) label[i] = static_cast<int>(s);
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) throw IoError("debug: cannot write " + path);
+  std::fprintf(f, "ply\nformat ascii 1.0\nelement vertex %zu\nproperty double x\nproperty double y\nproperty double z\n"
+               "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty int segment\nend_header\n",
+               points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    // A fixed pseudo-random colour per segment.
+    const unsigned h = label[i] < 0 ? 0u : static_cast<unsigned>(label[i] + 1) * 2654435761u;
+    const int r = label[i] < 0 ? 160 : 40 + (h >> 8) % 200, g = label[i] < 0 ? 160 : 40 + (h >> 16) % 200,
+              b = label[i] < 0 ? 160 : 40 + (h >> 24) % 200;
+    std::fprintf(f, "%.4f %.4f %.4f %d %d %d %d\n", points[i].x, points[i].y, points[i].z, r, g, b, label[i]);
+  }
+  if (std::fclose(f) != 0) throw IoError("debug: cannot write " + path);
+}
+
+void write_heightmap_png(const Heightmap& heightmap, const std::string& path) {
+  if (heightmap.width <= 0 || heightmap.height <= 0)
+    throw IoError("heightmap: cannot write " + path + ": empty heightmap");
+  write_png(grey_image(heightmap), path);
+}
+
+void write_edges_png(const Heightmap& heightmap, const std::vector<Point2>& edges, const std::string& path) {
+  if (heightmap.width <= 0 || heightmap.height <= 0)
+    throw IoError("heightmap: cannot write " + path + ": empty heightmap");
+  cv::Mat colour;
+  cv::cvtColor(grey_image(heightmap), colour, cv::COLOR_GRAY2BGR);
+  for (const Point2& p : edges) {
+    const int col = static_cast<int>(std::floor((p.x - heightmap.origin.x) / heightmap.resolution));
+    const int row = static_cast<int>(std::floor((p.y - heightmap.origin.y) / heightmap.resolution));
+    if (col < 0 || row < 0 || col >= heightmap.width || row >= heightmap.height) continue;
+    colour.at<cv::Vec3b>(heightmap.height - 1 - row, col) = cv::Vec3b(0, 0, 255);  // BGR red
+  }
+  write_png(colour, path);
+}
+
+void write_polylines_obj(const std::string& path, const std::vector<Polyline2>& polylines, double z) {
+  std::ofstream out(path);
+  if (!out) throw IoError("polylines: cannot open " + path + " for writing");
+  out.precision(17);
+  out << "# city3d polylines: " << polylines.size() << "\n";
+  std::size_t base = 1;
+  for (const auto& line : polylines) {
+    const bool closed = is_closed(line);
+    const std::size_t n = closed ? line.size() - 1 : line.size();
+    for (std::size_t i = 0; i < n; ++i) out << "v " << line[i].x << ' ' << line[i].y << ' ' << z << "\n";
+    if (n >= 2) {
+      out << 'l';
+      for (std::size_t i = 0; i < n; ++i) out << ' ' << base + i;
+      if (closed) out << ' ' << base;
+      out << "\n";
+    }
+    base += n;
+  }
+  if (!out) throw IoError("polylines: write failed for " + path);
+}
+
+void write_segments_obj(const std::string& path, const std::vector<Segment2>& segments, double z) {
+  std::ofstream out(path);
+  if (!out) throw IoError("regularise: cannot open " + path + " for writing");
+  out.precision(17);
+  out << "# city3d segments: " << segments.size() << "\n";
+  for (const auto& s : segments) {
+    out << "v " << s.a.x << ' ' << s.a.y << ' ' << z << "\n";
+    out << "v " << s.b.x << ' ' << s.b.y << ' ' << z << "\n";
+  }
+  for (std::size_t i = 0; i < segments.size(); ++i) out << "l " << 2 * i + 1 << ' ' << 2 * i + 2 << "\n";
+  if (!out) throw IoError("regularise: write failed for " + path);
+}
+
+void write_walls_obj(const std::string& path, const std::vector<VerticalPlane>& walls, double z0, double z1) {
+  std::ofstream out(path);
+  if (!out) throw IoError("walls: cannot open " + path + " for writing");
+  out.precision(17);
+  out << "# city3d walls: " << walls.size() << "\n";
+  for (const auto& w : walls) {
+    out << "v " << w.a.x << ' ' << w.a.y << ' ' << z0 << "\n";
+    out << "v " << w.b.x << ' ' << w.b.y << ' ' << z0 << "\n";
+    out << "v " << w.b.x << ' ' << w.b.y << ' ' << z1 << "\n";
+    out << "v " << w.a.x << ' ' << w.a.y << ' ' << z1 << "\n";
+  }
+  for (std::size_t i = 0; i < walls.size(); ++i)
+    out << "f " << 4 * i + 1 << ' ' << 4 * i + 2 << ' ' << 4 * i + 3 << ' ' << 4 * i + 4 << "\n";
+  if (!out) throw IoError("walls: write failed for " + path);
+}
+
+void write_candidates_obj(const std::string& path, const CandidateFaces& candidates) {
+  std::FILE* file = std::fopen(path.c_str(), "w");
+  if (!file) throw IoError("hypothesis: cannot write " + path);
+  std::fprintf(file, "# city3d candidate faces\n");
+  for (const auto& v : candidates.vertices) std::fprintf(file, "v %.6f %.6f %.6f\n", v.x, v.y, v.z);
+  static const char* kind_names[] = {"roof", "wall", "floor"};
+  for (std::size_t i = 0; i < candidates.faces.size(); ++i) {
+    const auto& f = candidates.faces[i];
+    std::fprintf(file, "o %s_%zu\nf", kind_names[static_cast<int>(f.kind)], i);
+    for (auto v : f.vertices) std::fprintf(file, " %u", v + 1);
+    std::fprintf(file, "\n");
+  }
+  if (std::fclose(file) != 0) throw IoError("hypothesis: cannot write " + path);
+}
+
+}  // namespace city3d
