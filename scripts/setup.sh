@@ -21,6 +21,8 @@ packages=(
 
 # The tests validate CityJSON output with ajv-cli from the npm registry: they need node and npm.
 if [ "$mode" = test ] && ! command -v npm >/dev/null 2>&1; then packages+=(nodejs npm); fi
+# The tests also run every fuzz harness briefly: clang 14 with libFuzzer and the sanitizer runtimes.
+if [ "$mode" = test ]; then packages+=(clang libclang-rt-14-dev); fi
 
 missing=()
 for p in "${packages[@]}"; do
@@ -50,4 +52,6 @@ else
     npm install --prefix build/tools --no-audit --no-fund --silent ajv-cli@5.0.0 ajv-formats@2.1.1
   fi
   ctest --test-dir build --output-on-failure -j "$jobs"
+  # A short run of every fuzz harness (fuzz/README.md; bench/fuzz.sh runs them for an hour).
+  fuzz/run.sh 15 "$jobs"
 fi
