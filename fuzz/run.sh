@@ -14,7 +14,7 @@ all=(las laz ply obj_footprints ogr_footprints config journal)
 harnesses=("$@")
 [ ${#harnesses[@]} -gt 0 ] || harnesses=("${all[@]}")
 
-build=build-fuzz
+build="${FUZZ_BUILD:-build-fuzz}"  # FUZZ_BUILD: another build folder (long runs beside development)
 if [ ! -f "$build/CMakeCache.txt" ]; then
   CXX=clang++ cmake -S fuzz -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 fi
