@@ -2,6 +2,7 @@
 // real data. Also pins the defaults of the option table so that a change is deliberate.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <cmath>
@@ -439,4 +440,41 @@ TEST_F(Reconstruct, debug_option_writes_every_intermediate_result_of_a_building)
     EXPECT_GT(fs::file_size(file), 50u) << file;
   }
   EXPECT_EQ(read_file(dir_ / "debug" / "04160" / "edges.png").substr(1, 3), "PNG");
+}
+
+// Issue 14 item 3: an output or debug path the file system refuses is an ordinary user mistake: exit
+// 1 with the path and the problem, never exit 3 ("internal error") from a std::filesystem exception.
+TEST_F(Reconstruct, unusable_output_or_debug_folder_is_an_input_error_naming_the_path) {
+  const std::string d = CITY3D_SAMPLE_DATA;
+  const std::string args = "reconstruct " + d + "/delft_sample_1.las -f " + d + "/delft_sample_footprints.gpkg --no-progress";
+  fs::create_directories(dir_ / "out_with_models_file");
+  std::ofstream(dir_ / "a_file") << "x";
+  std::ofstream(dir_ / "out_with_models_file" / "models") << "x";
+  struct Case {
+    std::string options, message;
+  };
+  const std::vector<Case> cases = {
+      {"-o " + (dir_ / "a_file").string(), "cannot create folder " + (dir_ / "a_file").string() + ": " +
+                                               (dir_ / "a_file").string() + " exists and is a file, not a folder"},
+      {"-o " + (dir_ / "a_file" / "sub").string(), (dir_ / "a_file").string() + " is a file, not a folder"},
+      {"-o " + (dir_ / "out_with_models_file").string(),
+       "output: cannot create folder " + (dir_ / "out_with_models_file" / "models").string()},
+      {"-o " + (dir_ / "out").string() + " --debug " + (dir_ / "a_file" / "debug").string(),
+       "debug: cannot create folder " + (dir_ / "a_file" / "debug").string()},
+  };
+  for (const Case& c : cases) {
+    const Result r = run(args + " " + c.options);
+    EXPECT_EQ(r.exit_code, 1) << c.options << "\n" << r.output;
+    EXPECT_TRUE(contains(r.output, c.message)) << c.options << "\n" << r.output;
+    EXPECT_FALSE(contains(r.output, "internal error")) << r.output;
+  }
+  // Without write permission (only testable when not root: root writes anywhere).
+  if (::geteuid() != 0) {
+    fs::create_directories(dir_ / "locked");
+    fs::permissions(dir_ / "locked", fs::perms::owner_read | fs::perms::owner_exec);
+    const Result r = run(args + " -o " + (dir_ / "locked" / "out").string());
+    fs::permissions(dir_ / "locked", fs::perms::owner_all);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_TRUE(contains(r.output, "Permission denied")) << r.output;
+  }
 }

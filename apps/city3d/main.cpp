@@ -3,6 +3,8 @@
 
 #include <cstdio>
 #include <exception>
+#include <filesystem>
+#include <new>
 #include <iostream>
 
 #include "city3d/error.hpp"
@@ -70,6 +72,14 @@ int main(int argc, char** argv) {
     return city3d::kExitUsage;
   } catch (const city3d::Error& e) {
     std::cerr << "city3d: " << e.what() << "\n";
+    return city3d::kExitInput;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // The library checks its folders up front; should the file system still refuse (a folder
+    // removed or a disk gone read-only during the run), that is the environment, not a bug.
+    std::cerr << "city3d: " << e.path1().string() << ": " << e.code().message() << "\n";
+    return city3d::kExitInput;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "city3d: out of memory (try fewer --jobs or a smaller --block-size)\n";
     return city3d::kExitInput;
   } catch (const std::exception& e) {
     std::cerr << "city3d: internal error: " << e.what() << "\n";

@@ -20,6 +20,7 @@
 #include "city3d/log.hpp"
 #include "city3d/model_io.hpp"
 #include "city3d/point_cloud_io.hpp"
+#include "io/output_folder.hpp"
 #include "pipeline/journal.hpp"
 #include "pipeline/report.hpp"
 
@@ -129,7 +130,8 @@ class OrderedWriter {
  public:
   OrderedWriter(const BatchOptions& options, std::size_t total, const Point3& translate, const std::string& crs)
       : options_(options), results_(total), ready_(total, false) {
-    if (options.per_building_files) fs::create_directories(fs::path(options.output_dir) / "models");
+    if (options.per_building_files)
+      detail::prepare_output_folder((fs::path(options.output_dir) / "models").string(), "output");
     if (options.cityjson_seq)
       seq_ = std::make_unique<CityJsonSeqWriter>((fs::path(options.output_dir) / "buildings.city.jsonl").string(),
                                                  CityJsonOptions{crs, 0.001, ""}, translate);
@@ -248,7 +250,8 @@ BatchSummary run_batch(const BatchOptions& options) {
   if (options.threads < 1) throw ConfigError("batch: threads must be at least 1");
   const std::vector<std::string> files = expand_inputs(options.point_clouds);
   log_info("parameters:\n" + parameters_text(options.reconstruction));
-  fs::create_directories(options.output_dir);
+  detail::prepare_output_folder(options.output_dir, "output");
+  if (!options.reconstruction.debug_dir.empty()) detail::prepare_output_folder(options.reconstruction.debug_dir, "debug");
   detail::Journal journal((fs::path(options.output_dir) / "resume.journal").string(),
                           detail::batch_fingerprint(options, files), options.resume);
 
