@@ -9,12 +9,15 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <vector>
 #include <string>
 
 #include "city3d/error.hpp"
 #include "city3d/options.hpp"
+#include "city3d/point_cloud_io.hpp"
+#include "las_writer.hpp"
 
 namespace fs = std::filesystem;
 
@@ -477,4 +480,167 @@ TEST_F(Reconstruct, unusable_output_or_debug_folder_is_an_input_error_naming_the
     EXPECT_EQ(r.exit_code, 1) << r.output;
     EXPECT_TRUE(contains(r.output, "Permission denied")) << r.output;
   }
+}
+
+namespace {
+
+// A copy of a sample tile that records `epsg` (as a projected or geographic GeoKey).
+void copy_tile_with_crs(const std::string& from, const fs::path& to, int epsg, bool geographic) {
+  const city3d::PointCloud cloud = city3d::read_point_cloud(from, city3d::kFieldClassification);
+  std::vector<city3d::test::LasPoint> points;
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    points.push_back({cloud.points[i].x, cloud.points[i].y, cloud.points[i].z, cloud.classification[i]});
+  city3d::test::LasWriteOptions o;
+  o.epsg = epsg;
+  o.geographic = geographic;
+  city3d::test::write_las(to.string(), points, o);
+}
+
+// id -> status,level of every report row.
+std::map<std::string, std::string> statuses(const fs::path& report) {
+  std::map<std::string, std::string> out;
+  const auto rows = lines_of(read_file(report));
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    std::stringstream ss(rows[i]);
+    std::string id, status, level;
+    std::getline(ss, id, ',');
+    std::getline(ss, status, ',');
+    std::getline(ss, level, ',');
+    out[id] = status + "," + level;
+  }
+  return out;
+}
+
+}  // namespace
+
+// Issue 14 item 8: the same tile given twice (twice by name, through a folder and by name, or
+// through a symbolic link) doubled every building's points and changed 13 of 15 models.
+TEST_F(Reconstruct, same_tile_given_twice_is_read_once_with_a_warning) {
+  const std::string d = CITY3D_SAMPLE_DATA;
+  const std::string tail = " -f " + d + "/delft_sample_footprints.gpkg --id-field gml_id --no-progress -o ";
+  ASSERT_EQ(run("reconstruct " + d + "/delft_sample_1.las " + d + "/delft_sample_2.las" + tail + (dir_ / "once").string())
+                .exit_code,
+            0);
+  fs::create_directories(dir_ / "tiles");
+  fs::create_symlink(d + "/delft_sample_1.las", dir_ / "tiles" / "link_to_1.las");
+  fs::copy_file(d + "/delft_sample_2.las", dir_ / "copy_of_2.las");
+  const std::vector<std::string> twice = {
+      d + "/delft_sample_1.las " + d + "/delft_sample_2.las " + d + "/delft_sample_1.las",
+      (dir_ / "tiles").string() + " " + d + "/delft_sample_1.las " + d + "/delft_sample_2.las",
+      d + "/delft_sample_1.las " + d + "/delft_sample_2.las " + (dir_ / "copy_of_2.las").string()};
+  for (std::size_t k = 0; k < twice.size(); ++k) {
+    const fs::path out = dir_ / ("twice" + std::to_string(k));
+    const Result r = run("reconstruct " + twice[k] + tail + out.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_TRUE(contains(r.output, "read once")) << r.output;
+    EXPECT_EQ(read_file(out / "buildings.city.json"), read_file(dir_ / "once" / "buildings.city.json")) << twice[k];
+    for (const auto& entry : fs::directory_iterator(dir_ / "once" / "models"))
+      EXPECT_EQ(read_file(entry.path()), read_file(out / "models" / entry.path().filename())) << entry.path();
+  }
+}
+
+// Issue 14 item 6: footprints and points in different CRSs ended with exit 0 and every building
+// skipped, even with --strict.
+TEST_F(Reconstruct, footprints_in_another_crs_are_reprojected_or_refused_with_both_extents) {
+  const std::string d = CITY3D_SAMPLE_DATA;
+  fs::create_directories(dir_);
+  const fs::path wgs84 = dir_ / "footprints_wgs84.geojson";
+  const Result converted = run_shell("ogr2ogr -f GeoJSON -t_srs EPSG:4326 -lco COORDINATE_PRECISION=10 " + wgs84.string() +
+                                     " " + d + "/delft_sample_footprints.gpkg");
+  ASSERT_EQ(converted.exit_code, 0) << converted.output;
+  copy_tile_with_crs(d + "/delft_sample_1.las", dir_ / "rd_1.las", 28992, false);
+  copy_tile_with_crs(d + "/delft_sample_2.las", dir_ / "rd_2.las", 28992, false);
+  const std::string rd_tiles = (dir_ / "rd_1.las").string() + " " + (dir_ / "rd_2.las").string();
+  const std::string opts = " --id-field gml_id --no-progress -o ";
+
+  // Tiles that record no CRS (AHN3 as delivered) under WGS84 footprints: nothing can meet.
+  Result r = run("reconstruct " + d + "/delft_sample_1.las " + d + "/delft_sample_2.las -f " + wgs84.string() + opts +
+                 (dir_ / "a").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_TRUE(contains(r.output, "no footprint meets any point cloud")) << r.output;
+  EXPECT_TRUE(contains(r.output, "EPSG:4326")) << r.output;
+  EXPECT_TRUE(contains(r.output, "the points (no CRS recorded) span x 84945.000 .. 85026.997")) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "a")) << "a failed run leaves no output folder";
+
+  // Tiles that record EPSG:28992: the WGS84 footprints are reprojected, and give the buildings
+  // the RD New footprints give.
+  r = run("reconstruct " + rd_tiles + " -f " + wgs84.string() + opts + (dir_ / "b").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "footprints reprojected")) << r.output;
+  ASSERT_EQ(run("reconstruct " + rd_tiles + " -f " + d + "/delft_sample_footprints.gpkg" + opts + (dir_ / "c").string())
+                .exit_code,
+            0);
+  const auto reprojected = statuses(dir_ / "b" / "report.csv"), direct = statuses(dir_ / "c" / "report.csv");
+  EXPECT_EQ(reprojected.size(), 15u);
+  EXPECT_EQ(reprojected, direct);
+  EXPECT_TRUE(contains(read_file(dir_ / "b" / "buildings.city.json"), "EPSG/0/28992"));
+
+  // A tile that declares EPSG:4326 (degrees) against RD New footprints.
+  copy_tile_with_crs(d + "/delft_sample_1.las", dir_ / "says_4326.las", 4326, true);
+  r = run("reconstruct " + (dir_ / "says_4326.las").string() + " -f " + d + "/delft_sample_footprints.gpkg" + opts +
+          (dir_ / "d").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_TRUE(contains(r.output, "says_4326.las declares a geographic CRS (EPSG:4326")) << r.output;
+  EXPECT_TRUE(contains(r.output, "are not degrees either")) << r.output;
+
+  // Tiles of two CRSs.
+  copy_tile_with_crs(d + "/delft_sample_2.las", dir_ / "utm_2.las", 32631, false);
+  r = run("reconstruct " + (dir_ / "rd_1.las").string() + " " + (dir_ / "utm_2.las").string() + " -f " + d +
+          "/delft_sample_footprints.gpkg" + opts + (dir_ / "e").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_TRUE(contains(r.output, "utm_2.las is in EPSG:32631 but")) << r.output;
+}
+
+// Issue 14 item 6: --strict counts a run where nothing was reconstructed as a failure.
+TEST_F(Reconstruct, strict_run_where_nothing_was_reconstructed_exits_with_4) {
+  const std::string d = CITY3D_SAMPLE_DATA;
+  const std::string args = "reconstruct " + d + "/delft_sample_1.las -f " + d +
+                           "/delft_sample_footprints.gpkg --building-classes 99 --no-progress -o ";
+  Result r = run(args + (dir_ / "a").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "no building was reconstructed")) << r.output;
+  r = run(args + (dir_ / "b").string() + " --strict");
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+}
+
+// Issue 14 item 9: `info` on a missing or empty LAS said "footprints: cannot open" or "not a vector
+// source"; a point cloud without points was skipped as "footprint has no usable polygon"; a run that
+// failed on bad input left an output folder with only a journal in it.
+TEST_F(Reconstruct, info_on_a_missing_or_empty_las_names_the_point_cloud_problem) {
+  fs::create_directories(dir_);
+  std::ofstream(dir_ / "empty.las").close();
+  Result r = run("info " + (dir_ / "missing.las").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_TRUE(contains(r.output, "las: cannot open " + (dir_ / "missing.las").string() + ": No such file")) << r.output;
+  EXPECT_FALSE(contains(r.output, "footprints")) << r.output;
+  r = run("info " + (dir_ / "empty.las").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_TRUE(contains(r.output, "las: " + (dir_ / "empty.las").string() + " is empty (0 bytes)")) << r.output;
+  EXPECT_FALSE(contains(r.output, "vector source")) << r.output;
+}
+
+TEST_F(Reconstruct, single_building_cloud_without_points_is_skipped_for_want_of_points) {
+  fs::create_directories(dir_);
+  std::ofstream(dir_ / "nothing.ply") << "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+                                         "property float z\nend_header\n";
+  const Result r = run("reconstruct " + (dir_ / "nothing.ply").string() + " --no-progress -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto rows = lines_of(read_file(dir_ / "out" / "report.csv"));
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_TRUE(contains(rows[1], "nothing,skipped,none,input,the point cloud has no points")) << rows[1];
+}
+
+TEST_F(Reconstruct, run_that_fails_on_bad_input_leaves_no_output_folder) {
+  const std::string broken = kShared + "/laz/broken/broken_corrupt_v2_bytes.laz";
+  if (!fs::exists(broken)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  // The header is fine (so the run starts), the points are not: the failure comes mid-run.
+  Result r = run("reconstruct " + broken + " --no-progress -o " + (dir_ / "out").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_TRUE(contains(r.output, "broken_corrupt_v2_bytes.laz")) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "out")) << "left behind: an output folder without results";
+  // A folder that was there before is left as it was.
+  fs::create_directories(dir_ / "kept");
+  r = run("reconstruct " + broken + " --no-progress -o " + (dir_ / "kept").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_TRUE(fs::exists(dir_ / "kept"));
 }

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <set>
 #include <string>
@@ -18,6 +20,7 @@ namespace {
 
 const std::string kDelft = std::string(CITY3D_SHARED_DATA) + "/ahn3_delft/footprints/";
 const std::string kCity3d = std::string(CITY3D_SHARED_DATA) + "/city3d_repo/";
+namespace fs = std::filesystem;
 const std::string kLocal = std::string(CITY3D_TEST_DATA) + "/footprints/";
 
 // Independent figures for the Delft layer, from SpatiaLite through ogrinfo:
@@ -553,7 +556,10 @@ TEST(ObjFootprints, city3d_footprints_002_and_003_have_the_faces_and_vertices_of
   EXPECT_EQ(set002.footprints.size(), 159u);
   EXPECT_EQ(total_vertices(set002), 1593u);
   EXPECT_EQ(set003.footprints.size(), 368u);
-  EXPECT_EQ(total_vertices(set003), 2658u);
+  // One face of 003 (line 6057) crosses itself: like any OGR source, it is repaired with MakeValid,
+  // which adds the crossing point to both parts (2658 + 2).
+  EXPECT_EQ(set003.repaired, 1u);
+  EXPECT_EQ(total_vertices(set003), 2660u);
   EXPECT_EQ(set003.footprints.back().id, "367");
   for (const Footprint& footprint : set003.footprints) expect_normal_form(footprint);
   // 003 is in RD New world coordinates (first vertex line: v 83946.140625 446902.84375 0).
@@ -609,4 +615,38 @@ TEST(ObjFootprints, has_one_layer_named_obj_and_no_other) {
 }
 
 }  // namespace
+}  // namespace city3d
+
+namespace city3d {
+
+// Issue 14 item 9: a bow-tie footprint was repaired from GeoJSON but skipped from a City3D OBJ file.
+TEST(ObjFootprints, bow_tie_face_is_repaired_into_the_same_two_triangles_as_from_geojson) {
+  const fs::path dir = fs::temp_directory_path() / "city3d_obj_bowtie";
+  fs::create_directories(dir);
+  // The bow-tie of sample_broken.geojson ("bowtie"), as an OBJ face.
+  std::ofstream(dir / "bowtie.obj") << "v 84994.546 447549.1 0\nv 84998.546 447553.1 0\nv 84998.546 447549.1 0\n"
+                                       "v 84994.546 447553.1 0\no bowtie\nf 1 2 3 4\n";
+  const FootprintSet obj = read_footprints((dir / "bowtie.obj").string());
+  FootprintReadOptions by_name;
+  by_name.id_field = "gml_id";
+  const FootprintSet geojson = read_footprints(kLocal + "sample_broken.geojson", by_name);
+  fs::remove_all(dir);
+  ASSERT_EQ(obj.footprints.size(), 1u);
+  EXPECT_TRUE(obj.skipped.empty());
+  EXPECT_EQ(obj.repaired, 1u);
+  EXPECT_TRUE(contains(obj.footprints[0].note, "repaired with MakeValid")) << obj.footprints[0].note;
+  const Footprint* expected = nullptr;
+  for (const Footprint& f : geojson.footprints)
+    if (f.id == "bowtie") expected = &f;
+  ASSERT_NE(expected, nullptr);
+  ASSERT_EQ(obj.footprints[0].polygons.size(), expected->polygons.size());
+  for (std::size_t i = 0; i < expected->polygons.size(); ++i) {
+    ASSERT_EQ(obj.footprints[0].polygons[i].outer.size(), expected->polygons[i].outer.size());
+    for (std::size_t k = 0; k < expected->polygons[i].outer.size(); ++k) {
+      EXPECT_DOUBLE_EQ(obj.footprints[0].polygons[i].outer[k].x, expected->polygons[i].outer[k].x);
+      EXPECT_DOUBLE_EQ(obj.footprints[0].polygons[i].outer[k].y, expected->polygons[i].outer[k].y);
+    }
+  }
+}
+
 }  // namespace city3d

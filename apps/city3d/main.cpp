@@ -38,7 +38,12 @@ int run_reconstruct(const city3d::RunOptions& options) {
     std::fprintf(stderr,
                  "city3d: %zu buildings: %zu ok, %zu fallback, %zu skipped, %zu failed in %.1f s; report %s\n",
                  s.buildings, s.ok, s.fallback, s.skipped, s.failed, s.seconds, s.report_path.c_str());
-  return options.strict && s.failed > 0 ? city3d::kExitStrict : city3d::kExitOk;
+  // Nothing reconstructed at all (every footprint skipped, say for want of points) is worth a word
+  // even when every building has its reason in the report, and a failure under --strict.
+  const bool nothing = s.ok + s.fallback == 0;
+  if (nothing && options.verbosity > 0)
+    std::fprintf(stderr, "city3d: no building was reconstructed (each one's reason is in %s)\n", s.report_path.c_str());
+  return options.strict && (s.failed > 0 || nothing) ? city3d::kExitStrict : city3d::kExitOk;
 }
 
 }  // namespace

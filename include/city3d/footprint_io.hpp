@@ -20,6 +20,10 @@ struct FootprintReadOptions {
   std::optional<Box2> bbox;      ///< keep only footprints intersecting this box (OGR spatial filter)
   bool repair = true;            ///< repair invalid polygons with MakeValid; false = skip them
   std::string ground_field;      ///< numeric attribute with the floor height (world z); empty = none
+  /// CRS of the point clouds ("EPSG:n" or WKT); empty = unknown. When the source's own CRS is
+  /// known and differs, every footprint is reprojected into this one (through OGR/PROJ) and
+  /// FootprintSet::srs / reprojected_from say so. --bbox still applies in the source's CRS.
+  std::string target_srs;
 };
 
 /// A footprint that was not kept, and why.
@@ -34,7 +38,8 @@ struct FootprintSet {
   std::string driver;   ///< OGR driver short name, or "OBJ"
   std::string layer;
   std::string id_field; ///< "FID" when the feature id is used
-  std::string srs;      ///< "EPSG:28992" when identified, else WKT, else empty
+  std::string srs;      ///< "EPSG:28992" when identified, else WKT, else empty (after any reprojection)
+  std::string reprojected_from;  ///< the source's own CRS when the footprints were reprojected, else empty
   std::vector<Footprint> footprints;
   std::vector<SkippedFootprint> skipped;
   std::size_t feature_count = 0;   ///< features read from the layer (after the filters)

@@ -21,7 +21,8 @@ struct PointCloudSummary {
 /// Reads the header and streams every point's classification. Throws IoError.
 PointCloudSummary summarise_point_cloud(const std::string& path);
 
-/// True when the file starts with a point-cloud signature ("LASF" or "ply").
+/// True when the file is named .las, .laz or .ply (case-insensitive), whether or not it exists, or
+/// starts with a point-cloud signature ("LASF" or "ply").
 bool looks_like_point_cloud(const std::string& path);
 
 /// The text `city3d info` prints for a point-cloud file (header, count, bounds, class histogram, CRS).

@@ -15,7 +15,7 @@ enum ExitCode : int {
   kExitInput = 1,     ///< the run could not go on: unreadable or invalid input, unwritable output
   kExitUsage = 2,     ///< bad command line: unknown command or option, bad value
   kExitInternal = 3,  ///< an unexpected internal error (a bug): please report it
-  kExitStrict = 4,    ///< `reconstruct --strict`: the run finished but some buildings failed
+  kExitStrict = 4,    ///< `reconstruct --strict`: the run finished but some buildings failed or none was reconstructed
 };
 
 /// Everything one invocation of `city3d` can set, with its defaults.

@@ -87,7 +87,8 @@ PointCloud read_point_cloud(const std::string& path, PointFields fields = kField
 
 /// As open_point_cloud(path, fields), with a LAZ file of several chunks decoded on `decode_threads`
 /// threads (the chunks after the one being read are decoded ahead, at most `decode_threads` of them
-/// held in memory). The points, their order and the errors are the same as with one thread; 0 and 1
+/// held in memory). The points, their order and the errors are the same as with one thread (before
+/// an error, the number of good points already handed out may differ); 0 and 1
 /// both mean "decode in the calling thread". LAS and PLY files ignore it.
 std::unique_ptr<PointCloudReader> open_point_cloud(const std::string& path, PointFields fields,
                                                    unsigned decode_threads);

@@ -2,6 +2,7 @@
 // size is summarised in bounded memory.
 #include "city3d/info.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -58,6 +59,12 @@ std::string fixed(double v, int decimals) {
 }  // namespace
 
 bool looks_like_point_cloud(const std::string& path) {
+  // By extension first: a missing or empty tile_07.las is a point cloud that cannot be read, and
+  // its error must say so, not that it is no vector source.
+  const auto dot = path.find_last_of('.');
+  std::string ext = dot == std::string::npos ? "" : path.substr(dot + 1);
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == "las" || ext == "laz" || ext == "ply") return true;
   std::ifstream in(path, std::ios::binary);
   char magic[4] = {0, 0, 0, 0};
   in.read(magic, 4);

@@ -224,7 +224,7 @@ const std::vector<OptionSpec>& option_table() {
        "(0 = all at once; the output is the same)",
        [](const O& o) { return number_text(o.batch.block_size); },
        [](O& o, V v) { o.batch.block_size = parse_double("--block-size", v); }},
-      {"--strict", nullptr, nullptr, "exit with code 4 when any building failed", nullptr,
+      {"--strict", nullptr, nullptr, "exit with code 4 when any building failed or none was reconstructed", nullptr,
        [](O& o, V) { o.strict = true; }},
       {"--residuals", nullptr, "PATH", "evaluate: also write every point's distance to the model as CSV (x,y,z,distance)",
        nullptr, [](O& o, V v) { o.residuals = v; }},
@@ -350,7 +350,7 @@ std::string help_text() {
       << "  1  the run could not go on: unreadable or invalid input, unwritable output\n"
       << "  2  bad command line: unknown command or option, bad value\n"
       << "  3  internal error (a bug; please report it)\n"
-      << "  4  reconstruct --strict: the run finished but some buildings failed\n";
+      << "  4  reconstruct --strict: the run finished but some buildings failed or none was reconstructed\n";
   return out.str();
 }
 

@@ -22,6 +22,18 @@ std::vector<std::string> list_ogr_layers(const std::string& path);
 /// Reads a City3D OBJ polygon file: every face is one footprint. Throws IoError.
 FootprintSet read_obj_footprints(const std::string& path, const FootprintReadOptions& options);
 
+/// What became of one footprint geometry: its usable polygons, or why there are none.
+struct RepairedPolygons {
+  std::vector<Polygon2> polygons;  ///< empty when the footprint must be skipped
+  std::string skip_reason;         ///< set when skipped
+  std::string repair_note;         ///< set when repaired (the validity problem GEOS reported)
+};
+
+/// Checks polygons read by any footprint reader (rings as stored, in any orientation) with GEOS and
+/// repairs invalid ones with MakeValid (when `repair`), exactly as OGR sources are treated, so that a
+/// bow-tie gives the same footprint from GeoJSON and from an OBJ file. Rings come out normalised.
+RepairedPolygons check_and_repair(const std::vector<Polygon2>& polygons, bool repair);
+
 /// Twice the signed area of a ring (shoelace formula); positive when counter-clockwise. The
 /// first vertex is subtracted from every vertex first, which keeps the products small at RD New
 /// magnitudes (x ~ 85 000, y ~ 447 000) where they would otherwise cancel catastrophically.

@@ -168,21 +168,36 @@ FootprintSet read_obj_footprints(const std::string& path, const FootprintReadOpt
       if (bounds.empty() || !bounds.intersects(*options.bbox)) continue;
     }
     ++set.feature_count;
-    if (!normalise_polygon(polygon)) {
-      const std::string reason =
-          "face at line " + std::to_string(face.line) + " has fewer than 3 distinct vertices or no area";
+    const std::string where = "face at line " + std::to_string(face.line);
+    auto skip = [&](const std::string& reason) {
       log_warning(kModule + std::string("skipped ") + id + " in " + path + ": " + reason);
       set.skipped.push_back({id, reason});
+    };
+    if (clean_ring(polygon.outer).size() < 3) {
+      skip(where + " has fewer than 3 distinct vertices");
+      continue;
+    }
+    // The same validity check and MakeValid repair as OGR sources get: a bow-tie face becomes two
+    // triangles here too.
+    RepairedPolygons outcome = check_and_repair({polygon}, options.repair);
+    if (outcome.polygons.empty()) {
+      skip(where + ": " + outcome.skip_reason);
       continue;
     }
     Footprint footprint;
     footprint.id = std::move(id);
-    footprint.polygons.push_back(std::move(polygon));
+    footprint.polygons = std::move(outcome.polygons);
+    if (!outcome.repair_note.empty()) {
+      ++set.repaired;
+      log_warning(kModule + std::string("repaired ") + footprint.id + " in " + path + " (" + where + "): " +
+                  outcome.repair_note);
+      footprint.note = "footprint repaired with MakeValid: " + outcome.repair_note;
+    }
     set.footprints.push_back(std::move(footprint));
   }
   if (faces.empty()) throw IoError(kModule + path + " layer 'obj' has no polygon features");
   log_info(kModule + std::to_string(set.footprints.size()) + " footprints from " + path + " (" +
-           std::to_string(set.skipped.size()) + " skipped)");
+           std::to_string(set.skipped.size()) + " skipped, " + std::to_string(set.repaired) + " repaired)");
   return set;
 }
 

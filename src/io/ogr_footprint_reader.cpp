@@ -151,26 +151,12 @@ OGRLayer& select_layer(GDALDataset& dataset, const std::string& path, const std:
                 " (layers: " + join(layer_names(dataset)) + ")");
 }
 
+std::string describe_srs(const OGRSpatialReference& srs);
+
 /// "EPSG:n" when the layer's SRS carries or can be matched to an EPSG code, else its WKT, else "".
 std::string describe_srs(OGRLayer& layer) {
   const OGRSpatialReference* srs = layer.GetSpatialRef();
-  if (srs == nullptr) return {};
-  std::unique_ptr<OGRSpatialReference> copy(srs->Clone());
-  auto epsg = [&]() -> std::string {
-    const char* authority = copy->GetAuthorityName(nullptr);
-    const char* code = copy->GetAuthorityCode(nullptr);
-    if (authority != nullptr && code != nullptr && iequals(authority, "EPSG")) {
-      return std::string("EPSG:") + code;
-    }
-    return {};
-  };
-  std::string text = epsg();
-  if (text.empty() && copy->AutoIdentifyEPSG() == OGRERR_NONE) text = epsg();
-  if (!text.empty()) return text;
-  char* wkt = nullptr;
-  if (copy->exportToWkt(&wkt) == OGRERR_NONE && wkt != nullptr) text = wkt;
-  CPLFree(wkt);
-  return text;
+  return srs == nullptr ? std::string() : describe_srs(*srs);
 }
 
 Ring2 ring_from_ogr(const OGRLinearRing& ring) {
@@ -219,22 +205,9 @@ std::unique_ptr<OGRMultiPolygon> polygonal_parts(std::unique_ptr<OGRGeometry> ge
   return multi;
 }
 
-/// Where one feature's geometry ended up.
-struct GeometryOutcome {
-  std::vector<Polygon2> polygons;  ///< empty when skipped
-  std::string skip_reason;         ///< set when skipped
-  std::string repair_note;         ///< set when repaired (the validity problem GEOS reported)
-};
-
-GeometryOutcome convert_geometry(const OGRGeometry& source, bool repair) {
-  GeometryOutcome outcome;
-  std::unique_ptr<OGRGeometry> geometry(source.clone());
-  // Curves (CurvePolygon, MultiSurface) are linearised with GDAL's default step of 4 degrees.
-  if (geometry->hasCurveGeometry()) geometry.reset(geometry->getLinearGeometry());
-  geometry->flattenTo2D();  // footprints are 2D; z (and m) would only confuse IsValid
-  std::unique_ptr<OGRMultiPolygon> multi(
-      OGRGeometryFactory::forceToMultiPolygon(geometry.release())->toMultiPolygon());
-
+/// Checks a multipolygon with GEOS and repairs it with MakeValid when invalid (and `repair`).
+RepairedPolygons repair_multipolygon(std::unique_ptr<OGRMultiPolygon> multi, bool repair) {
+  RepairedPolygons outcome;
   CPLErrorReset();
   if (!multi->IsValid()) {
     // GEOS reports why a geometry is invalid through the error handler ("Self-intersection at or
@@ -266,12 +239,94 @@ GeometryOutcome convert_geometry(const OGRGeometry& source, bool repair) {
   return outcome;
 }
 
+/// One feature's geometry: linearised, flattened to 2D, reprojected when `transform` is given,
+/// then checked and repaired.
+RepairedPolygons convert_geometry(const OGRGeometry& source, bool repair, OGRCoordinateTransformation* transform,
+                                  const std::string& target_name) {
+  std::unique_ptr<OGRGeometry> geometry(source.clone());
+  // Curves (CurvePolygon, MultiSurface) are linearised with GDAL's default step of 4 degrees.
+  if (geometry->hasCurveGeometry()) geometry.reset(geometry->getLinearGeometry());
+  geometry->flattenTo2D();  // footprints are 2D; z (and m) would only confuse IsValid
+  if (transform != nullptr && geometry->transform(transform) != OGRERR_NONE) {
+    RepairedPolygons outcome;
+    outcome.skip_reason = "cannot reproject to " + target_name + gdal_message();
+    return outcome;
+  }
+  std::unique_ptr<OGRMultiPolygon> multi(
+      OGRGeometryFactory::forceToMultiPolygon(geometry.release())->toMultiPolygon());
+  return repair_multipolygon(std::move(multi), repair);
+}
+
+/// "EPSG:n" when `srs` carries or can be matched to an EPSG code, else its WKT.
+std::string describe_srs(const OGRSpatialReference& srs) {
+  std::unique_ptr<OGRSpatialReference> copy(srs.Clone());
+  auto epsg = [&]() -> std::string {
+    const char* authority = copy->GetAuthorityName(nullptr);
+    const char* code = copy->GetAuthorityCode(nullptr);
+    if (authority != nullptr && code != nullptr && iequals(authority, "EPSG")) return std::string("EPSG:") + code;
+    return {};
+  };
+  std::string text = epsg();
+  if (text.empty() && copy->AutoIdentifyEPSG() == OGRERR_NONE) text = epsg();
+  if (!text.empty()) return text;
+  char* wkt = nullptr;
+  if (copy->exportToWkt(&wkt) == OGRERR_NONE && wkt != nullptr) text = wkt;
+  CPLFree(wkt);
+  return text;
+}
+
+/// The transformation from the layer's CRS into `target` (the points' CRS), or nullptr when either
+/// is unknown or they are the same. Updates set.srs / set.reprojected_from. Throws IoError when the
+/// target cannot be understood or PROJ has no transformation between the two.
+std::unique_ptr<OGRCoordinateTransformation> reprojection(OGRLayer& layer, const std::string& target_text,
+                                                          const std::string& path, FootprintSet& set) {
+  const OGRSpatialReference* layer_srs = layer.GetSpatialRef();
+  if (target_text.empty() || layer_srs == nullptr) return nullptr;
+  OGRSpatialReference source(*layer_srs);
+  OGRSpatialReference target;
+  if (target.SetFromUserInput(target_text.c_str()) != OGRERR_NONE)
+    throw IoError(kModule + std::string("cannot understand the point clouds' CRS '") + target_text.substr(0, 80) +
+                  "'" + gdal_message());
+  // x = easting / longitude, y = northing / latitude, whatever the CRS definition says.
+  source.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  target.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  if (source.IsSame(&target)) return nullptr;
+  std::unique_ptr<OGRCoordinateTransformation> transform(OGRCreateCoordinateTransformation(&source, &target));
+  const std::string target_name = describe_srs(target);
+  if (!transform)
+    throw IoError(kModule + std::string("cannot reproject ") + path + " from " + set.srs.substr(0, 80) + " to " +
+                  target_name.substr(0, 80) + " (the point clouds' CRS)" + gdal_message());
+  log_warning(kModule + path + " is in " + set.srs.substr(0, 80) + ", the point clouds in " +
+              target_name.substr(0, 80) + ": footprints reprojected");
+  set.reprojected_from = set.srs;
+  set.srs = target_name;
+  return transform;
+}
+
 bool intersects(const OGREnvelope& envelope, const Box2& box) {
   return !(envelope.MinX > box.max.x || envelope.MaxX < box.min.x || envelope.MinY > box.max.y ||
            envelope.MaxY < box.min.y);
 }
 
 }  // namespace
+
+RepairedPolygons check_and_repair(const std::vector<Polygon2>& polygons, bool repair) {
+  QuietGdalErrors quiet;
+  auto multi = std::make_unique<OGRMultiPolygon>();
+  auto ring_of = [](const Ring2& ring) {
+    auto r = std::make_unique<OGRLinearRing>();
+    for (const Point2& p : ring) r->addPoint(p.x, p.y);
+    if (!ring.empty()) r->addPoint(ring.front().x, ring.front().y);  // OGR rings are closed
+    return r;
+  };
+  for (const Polygon2& p : polygons) {
+    OGRPolygon polygon;
+    polygon.addRingDirectly(ring_of(p.outer).release());
+    for (const Ring2& hole : p.holes) polygon.addRingDirectly(ring_of(hole).release());
+    multi->addGeometry(&polygon);
+  }
+  return repair_multipolygon(std::move(multi), repair);
+}
 
 std::vector<std::string> list_ogr_layers(const std::string& path) {
   QuietGdalErrors quiet;
@@ -290,6 +345,7 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
   set.driver = dataset->GetDriver() != nullptr ? dataset->GetDriver()->GetDescription() : "";
   set.layer = layer.GetName();
   set.srs = describe_srs(layer);
+  std::unique_ptr<OGRCoordinateTransformation> transform = reprojection(layer, options.target_srs, path, set);
 
   if (!may_hold_polygons(layer.GetGeomType())) {
     throw IoError(kModule + where + " has no polygon features (geometry type " +
@@ -414,7 +470,7 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
       continue;
     }
 
-    GeometryOutcome outcome = convert_geometry(*geometry, options.repair);
+    RepairedPolygons outcome = convert_geometry(*geometry, options.repair, transform.get(), set.srs);
     if (outcome.polygons.empty()) {
       skip(id, outcome.skip_reason);
       continue;

@@ -9,6 +9,8 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <string>
 #include <system_error>
 
 #include "city3d/error.hpp"
@@ -50,6 +52,30 @@ void prepare_output_folder(const std::string& dir, const std::string& module) {
   }
   ::close(fd);
   ::unlink(probe.c_str());
+}
+
+void remove_output_without_results(const std::string& dir) noexcept {
+  try {
+    std::error_code ec;
+    const fs::path root(dir);
+    for (const auto& entry : fs::directory_iterator(root, ec)) {
+      const std::string name = entry.path().filename().string();
+      if (name == "models" && entry.is_directory(ec) && fs::is_empty(entry.path(), ec)) continue;
+      if (name == "resume.journal" && entry.is_regular_file(ec)) {
+        std::ifstream in(entry.path(), std::ios::binary);
+        std::string line;
+        std::size_t lines = 0;
+        while (std::getline(in, line) && lines < 2) ++lines;
+        if (lines <= 1) continue;  // the header alone: no building finished
+      }
+      return;  // something worth keeping
+    }
+    if (ec) return;
+    fs::remove(root / "models", ec);
+    fs::remove(root / "resume.journal", ec);
+    fs::remove(root, ec);
+  } catch (...) {
+  }
 }
 
 }  // namespace city3d::detail

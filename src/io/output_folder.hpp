@@ -13,4 +13,10 @@ namespace city3d::detail {
 /// folder <dir>: <reason>". `module` names the option in messages ("output", "debug").
 void prepare_output_folder(const std::string& dir, const std::string& module);
 
+/// After a run failed: removes folder `dir` (created by that run) when it holds nothing but an empty
+/// models/ folder and a resume journal without a finished building (its header line only), so a
+/// failed run does not leave a folder that looks like a result. Anything else is left alone.
+/// Never throws.
+void remove_output_without_results(const std::string& dir) noexcept;
+
 }  // namespace city3d::detail

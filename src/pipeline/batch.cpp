@@ -20,6 +20,7 @@
 #include "city3d/log.hpp"
 #include "city3d/model_io.hpp"
 #include "city3d/point_cloud_io.hpp"
+#include "io/input_check.hpp"
 #include "io/output_folder.hpp"
 #include "pipeline/journal.hpp"
 #include "pipeline/report.hpp"
@@ -243,17 +244,18 @@ std::vector<std::size_t> with_neighbours(const std::vector<Footprint>& footprint
 
 }  // namespace
 
-BatchSummary run_batch(const BatchOptions& options) {
+namespace {
+
+BatchSummary run_batch_in_folder(const BatchOptions& options) {
   const auto start = Clock::now();
   options.reconstruction.validate();
   options.crop.validate();
   if (options.threads < 1) throw ConfigError("batch: threads must be at least 1");
-  const std::vector<std::string> files = expand_inputs(options.point_clouds);
+  const std::vector<std::string> files = detail::distinct_inputs(expand_inputs(options.point_clouds));
+  // Every header is checked before anything is written, and gives the CRS and extents.
+  std::vector<PointCloudInfo> infos;
+  for (const std::string& f : files) infos.push_back(read_point_cloud_info(f));
   log_info("parameters:\n" + parameters_text(options.reconstruction));
-  detail::prepare_output_folder(options.output_dir, "output");
-  if (!options.reconstruction.debug_dir.empty()) detail::prepare_output_folder(options.reconstruction.debug_dir, "debug");
-  detail::Journal journal((fs::path(options.output_dir) / "resume.journal").string(),
-                          detail::batch_fingerprint(options, files), options.resume);
 
   // What to reconstruct: the footprints (cropped from the tiles block by block), or one building
   // per single-building cloud (read when its turn comes).
@@ -262,7 +264,12 @@ BatchSummary run_batch(const BatchOptions& options) {
   std::string crs;
   Box2 extent;
   if (!options.footprints.empty()) {
-    set = read_footprints(options.footprints, options.footprint);
+    // Footprints in another CRS than the points are reprojected into theirs.
+    FootprintReadOptions read_options = options.footprint;
+    const std::string points_crs = detail::common_point_cloud_crs(files, infos);
+    read_options.target_srs = points_crs;
+    set = read_footprints(options.footprints, read_options);
+    detail::check_footprints_meet_points(set, infos, points_crs);
     crs = set.srs.rfind("EPSG:", 0) == 0 ? set.srs : "";
     for (const SkippedFootprint& s : set.skipped) {
       BuildingReport row;
@@ -276,12 +283,16 @@ BatchSummary run_batch(const BatchOptions& options) {
       for (const Polygon2& p : f.polygons)
         for (const Point2& v : p.outer) extent.add(v);
   }
+  detail::prepare_output_folder(options.output_dir, "output");
+  if (!options.reconstruction.debug_dir.empty()) detail::prepare_output_folder(options.reconstruction.debug_dir, "debug");
+  detail::Journal journal((fs::path(options.output_dir) / "resume.journal").string(),
+                          detail::batch_fingerprint(options, files), options.resume);
   const std::size_t total = options.footprints.empty() ? files.size() : set.footprints.size();
   // The CityJSONSeq transform must be known before the first building: the footprints' corner, or
   // for clouds their first header's corner.
   Point3 translate{0, 0, 0};
   if (options.footprints.empty() && !files.empty()) {
-    const PointCloudInfo info = read_point_cloud_info(files.front());
+    const PointCloudInfo& info = infos.front();
     if (!info.bounds.empty()) extent.add({info.bounds.min.x, info.bounds.min.y});
   }
   if (!extent.empty()) translate = {std::floor(extent.min.x), std::floor(extent.min.y), 0.0};
@@ -381,6 +392,21 @@ BatchSummary run_batch(const BatchOptions& options) {
   detail::write_report_csv(summary.report_path, rows);
   detail::write_report_json((fs::path(options.output_dir) / "report.json").string(), rows, summary);
   return summary;
+}
+
+}  // namespace
+
+BatchSummary run_batch(const BatchOptions& options) {
+  std::error_code ec;
+  const bool existed = fs::exists(options.output_dir, ec);
+  try {
+    return run_batch_in_folder(options);
+  } catch (...) {
+    // A run that stops before finishing a building leaves no folder it created (nothing in it but
+    // a journal without buildings).
+    if (!existed) detail::remove_output_without_results(options.output_dir);
+    throw;
+  }
 }
 
 }  // namespace city3d

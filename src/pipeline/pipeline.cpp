@@ -335,6 +335,7 @@ BuildingInput building_from_cloud(const BuildingId& id, const std::vector<Point3
   BuildingInput input;
   input.id = id;
   input.footprint.id = id;
+  input.footprint_given = false;
   if (world_points.empty()) return input;
   Box3 box;
   for (const Point3& p : world_points) box.add(p);
@@ -378,7 +379,12 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
       // Reported by the LoD1 rung if it comes to that.
     }
   }
-  if (input.footprint.polygons.empty()) {
+  if (input.points.empty() && !input.footprint_given) {
+    // A single-building cloud without points has no outline either: say what is really missing.
+    r.status = BuildingStatus::skipped;
+    r.stage = "input";
+    r.reason = "the point cloud has no points";
+  } else if (input.footprint.polygons.empty()) {
     r.status = BuildingStatus::skipped;
     r.stage = "crop";
     r.reason = "footprint has no usable polygon";

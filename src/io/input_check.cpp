@@ -1,0 +1,159 @@
+// Input checks across files: file identity by device and inode (names, links, folders), copies by
+// size and the bytes at both ends, CRS comparison through OGR.
+#include "io/input_check.hpp"
+
+#include <ogr_spatialref.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <utility>
+
+#include "city3d/error.hpp"
+#include "city3d/log.hpp"
+#include "io/input_file.hpp"
+
+namespace city3d::detail {
+namespace {
+
+constexpr std::size_t kCompareBytes = 64 * 1024;
+
+/// The first and last kCompareBytes of a file (all of it when smaller).
+std::string ends_of(const std::string& path, std::uint64_t size) {
+  InputFile file(path, "input");
+  const std::size_t head = static_cast<std::size_t>(std::min<std::uint64_t>(size, kCompareBytes));
+  std::string bytes(head, '\0');
+  file.read_at(0, bytes.data(), head);
+  if (size > kCompareBytes) {
+    const std::size_t tail = static_cast<std::size_t>(std::min<std::uint64_t>(size - kCompareBytes, kCompareBytes));
+    std::string end(tail, '\0');
+    file.read_at(size - tail, end.data(), tail);
+    bytes += end;
+  }
+  return bytes;
+}
+
+/// Millimetres for metres, about 0.1 m for degrees.
+std::string fixed(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", std::fabs(v) <= 360 ? 6 : 3, v);
+  return buf;
+}
+
+std::string short_crs(const std::string& crs) {
+  if (crs.empty()) return "no CRS recorded";
+  return crs.size() > 60 ? crs.substr(0, 57) + "..." : crs;
+}
+
+std::unique_ptr<OGRSpatialReference> parse_crs(const std::string& text, const std::string& file) {
+  auto srs = std::make_unique<OGRSpatialReference>();
+  if (srs->SetFromUserInput(text.c_str()) != OGRERR_NONE)
+    throw IoError("input: " + file + " records a CRS city3d cannot understand: '" + short_crs(text) + "'");
+  srs->SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  return srs;
+}
+
+}  // namespace
+
+std::vector<std::string> distinct_inputs(const std::vector<std::string>& files) {
+  std::vector<std::string> kept;
+  std::map<std::pair<dev_t, ino_t>, std::string> by_identity;
+  std::multimap<off_t, std::string> by_size;  // kept files, for the copy check
+  for (const std::string& f : files) {
+    struct stat st {};
+    if (::stat(f.c_str(), &st) != 0) {  // the reader names the problem
+      kept.push_back(f);
+      continue;
+    }
+    const auto [it, inserted] = by_identity.emplace(std::make_pair(st.st_dev, st.st_ino), f);
+    if (!inserted) {
+      log_warning("input: " + f + " is the same file as " + it->second + ": read once");
+      continue;
+    }
+    std::string copy_of;
+    const auto range = by_size.equal_range(st.st_size);
+    if (range.first != range.second) {
+      const std::string mine = ends_of(f, static_cast<std::uint64_t>(st.st_size));
+      for (auto k = range.first; k != range.second && copy_of.empty(); ++k)
+        if (ends_of(k->second, static_cast<std::uint64_t>(st.st_size)) == mine) copy_of = k->second;
+    }
+    if (!copy_of.empty()) {
+      log_warning("input: " + f + " is a copy of " + copy_of + " (same size and content): read once");
+      continue;
+    }
+    by_size.emplace(st.st_size, f);
+    kept.push_back(f);
+  }
+  return kept;
+}
+
+std::string common_point_cloud_crs(const std::vector<std::string>& files, const std::vector<PointCloudInfo>& infos) {
+  std::string crs, first_file;
+  std::unique_ptr<OGRSpatialReference> first;
+  for (std::size_t i = 0; i < infos.size(); ++i) {
+    if (infos[i].crs.empty()) continue;
+    auto srs = parse_crs(infos[i].crs, files[i]);
+    if (!first) {
+      if (srs->IsGeographic()) {
+        const Box3& b = infos[i].bounds;
+        const bool degrees = !b.empty() && std::fabs(b.min.x) <= 360 && std::fabs(b.max.x) <= 360 &&
+                             std::fabs(b.min.y) <= 90 && std::fabs(b.max.y) <= 90;
+        throw IoError("input: " + files[i] + " declares a geographic CRS (" + short_crs(infos[i].crs) +
+                      ", degrees); city3d needs projected coordinates in metres" +
+                      (degrees || b.empty() ? std::string(": reproject the points")
+                                            : ": its coordinates (x " + fixed(b.min.x) + " .. " + fixed(b.max.x) +
+                                                  ") are not degrees either, so its CRS record is probably wrong"));
+      }
+      first = std::move(srs);
+      crs = infos[i].crs;
+      first_file = files[i];
+    } else if (!srs->IsSame(first.get())) {
+      throw IoError("input: " + files[i] + " is in " + short_crs(infos[i].crs) + " but " + first_file + " is in " +
+                    short_crs(crs) + ": give point clouds of one CRS");
+    }
+  }
+  return crs;
+}
+
+void check_footprints_meet_points(const FootprintSet& footprints, const std::vector<PointCloudInfo>& infos,
+                                  const std::string& points_crs) {
+  if (footprints.footprints.empty() || infos.empty()) return;
+  Box2 points;
+  for (const PointCloudInfo& info : infos) {
+    if (info.bounds.empty()) return;  // PLY: bounds unknown until read
+    points.add({info.bounds.min.x, info.bounds.min.y});
+    points.add({info.bounds.max.x, info.bounds.max.y});
+  }
+  Box2 all;
+  for (const Footprint& f : footprints.footprints) {
+    Box2 box;
+    for (const Polygon2& p : f.polygons)
+      for (const Point2& v : p.outer) box.add(v);
+    all.add(box.min);
+    all.add(box.max);
+    for (const PointCloudInfo& info : infos) {
+      Box2 tile;
+      tile.add({info.bounds.min.x, info.bounds.min.y});
+      tile.add({info.bounds.max.x, info.bounds.max.y});
+      if (box.intersects(tile)) return;
+    }
+  }
+  const std::string footprint_crs = footprints.reprojected_from.empty()
+                                        ? short_crs(footprints.srs)
+                                        : short_crs(footprints.srs) + ", reprojected from " +
+                                              short_crs(footprints.reprojected_from);
+  std::string hint = "are footprints and points in the same coordinate system?";
+  if (points_crs.empty() && !footprints.srs.empty())
+    hint = "the point clouds record no CRS: if they are not in " + short_crs(footprints.srs) +
+           ", reproject the footprints to theirs (ogr2ogr -t_srs)";
+  throw IoError("input: no footprint meets any point cloud: the " + std::to_string(footprints.footprints.size()) +
+                " footprints of " + footprints.path + " (" + footprint_crs + ") span x " + fixed(all.min.x) + " .. " +
+                fixed(all.max.x) + ", y " + fixed(all.min.y) + " .. " + fixed(all.max.y) + "; the points (" +
+                short_crs(points_crs) + ") span x " + fixed(points.min.x) + " .. " + fixed(points.max.x) + ", y " +
+                fixed(points.min.y) + " .. " + fixed(points.max.y) + ": " + hint);
+}
+
+}  // namespace city3d::detail
