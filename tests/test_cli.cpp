@@ -17,7 +17,9 @@
 #include "city3d/error.hpp"
 #include "city3d/options.hpp"
 #include "city3d/point_cloud_io.hpp"
+#include "cli/option_table.hpp"
 #include "las_writer.hpp"
+#include "pipeline/journal.hpp"
 
 namespace fs = std::filesystem;
 
@@ -643,4 +645,162 @@ TEST_F(Reconstruct, run_that_fails_on_bad_input_leaves_no_output_folder) {
   r = run("reconstruct " + broken + " --no-progress -o " + (dir_ / "kept").string());
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_TRUE(fs::exists(dir_ / "kept"));
+}
+
+// Issue 13 item 7: --config FILE.toml with every option, --print-config to start one.
+namespace {
+
+city3d::RunOptions parse(std::vector<std::string> args) {
+  args.insert(args.begin(), "city3d");
+  std::vector<const char*> argv;
+  for (const std::string& a : args) argv.push_back(a.c_str());
+  return city3d::parse_command_line(static_cast<int>(argv.size()), argv.data());
+}
+
+std::string config_error(std::vector<std::string> args) {
+  try {
+    parse(std::move(args));
+  } catch (const city3d::ConfigError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+// What decides a run's output, as the resume journal sees it, plus every option as --print-config
+// prints it.
+std::string effective(const city3d::RunOptions& o) {
+  return city3d::detail::batch_fingerprint(o.batch, {}) + "\n" + city3d::parameters_text(o.batch.reconstruction) +
+         "\n" + city3d::config_text(o);
+}
+
+class Config : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("city3d_config_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string write(const std::string& name, const std::string& text) const {
+    std::ofstream(dir_ / name) << text;
+    return (dir_ / name).string();
+  }
+  fs::path dir_;
+};
+
+}  // namespace
+
+TEST_F(Config, every_option_of_the_table_is_a_key_of_print_config_with_its_value) {
+  const std::string text = city3d::config_text(city3d::RunOptions{});
+  for (const city3d::detail::OptionSpec& spec : city3d::detail::option_table()) {
+    // Every row shows its value, so that --print-config prints what --config read.
+    EXPECT_TRUE(static_cast<bool>(spec.show)) << spec.flag << " has no show function";
+    if (!city3d::detail::in_config_file(spec)) {
+      EXPECT_FALSE(contains(text, std::string("\n") + (spec.flag + 2) + " =")) << spec.flag;
+      continue;
+    }
+    const std::string key = spec.flag + 2;
+    EXPECT_TRUE(contains(text, "\n" + key + " = ") || contains(text, "\n# " + key + " = ")) << key;
+  }
+  EXPECT_TRUE(contains(text, "\nlambda-data = 0.34\n")) << text;
+  EXPECT_TRUE(contains(text, "\nbuilding-classes = [6]\n")) << text;
+  EXPECT_TRUE(contains(text, "\noutput = \"city3d_out\"\n")) << text;
+  EXPECT_TRUE(contains(text, "\nstrict = false\n")) << text;
+  EXPECT_TRUE(contains(text, "\n# footprints = \"PATH\"\n")) << text;
+}
+
+TEST_F(Config, print_config_read_back_gives_identical_effective_parameters) {
+  // The defaults.
+  const std::string defaults = write("defaults.toml", city3d::config_text(parse({"--print-config"})));
+  EXPECT_EQ(effective(parse({"reconstruct", "x.las", "--config", defaults})), effective(parse({"reconstruct", "x.las"})));
+  // Every kind of value changed from its default.
+  const std::vector<std::string> flags = {
+      "--footprints", "fp \"quoted\".gpkg", "--layer", "pand", "--id-field", "gml_id", "--where", "bouwjaar > 1900",
+      "--bbox", "84970.5,447530,85030,447580.25", "--ground-field", "h", "--no-repair", "--building-classes",
+      "6,26", "--ground-class", "9", "--ignore-classes", "--ground-buffer", "2.5", "--ground-percentile", "12.5",
+      "--ground-z", "-1.75", "--roof-percentile", "60", "--lod", "1.2", "--min-points", "33", "--plane-distance",
+      "0.123456789012", "--plane-angle", "15", "--resolution", "0.3", "--eps-d", "0.2", "--eps-c", "1.5",
+      "--snap-angle", "10", "--walls", "footprint", "--lambda-data", "0.3", "--lambda-complexity", "0.65",
+      "--lambda-roof", "0.05", "--solver", "glpk", "--time-limit", "7.5", "--debug", "dbg", "-o", "out dir",
+      "--format", "ply", "--no-model-files", "--merged", "--no-cityjson", "--cityjsonseq", "--timings",
+      "--local-coordinates", "-j", "3", "--no-resume", "--block-size", "250", "--strict", "--no-progress", "-q"};
+  std::vector<std::string> args = {"reconstruct", "x.las"};
+  args.insert(args.end(), flags.begin(), flags.end());
+  const city3d::RunOptions direct = parse(args);
+  const std::string file = write("changed.toml", city3d::config_text(direct));
+  const city3d::RunOptions from_file = parse({"reconstruct", "x.las", "--config", file});
+  EXPECT_EQ(effective(from_file), effective(direct));
+  EXPECT_EQ(from_file.batch.footprints, "fp \"quoted\".gpkg");
+  EXPECT_EQ(from_file.batch.crop.building_classes, (std::vector<std::uint8_t>{6, 26}));
+  EXPECT_DOUBLE_EQ(from_file.batch.reconstruction.planes.max_distance, 0.123456789012);
+  EXPECT_EQ(from_file.batch.threads, 3);
+  EXPECT_EQ(from_file.batch.output_dir, "out dir");
+  EXPECT_EQ(from_file.batch.format, city3d::MeshFormat::ply_binary);
+  EXPECT_TRUE(from_file.strict);
+  EXPECT_EQ(from_file.verbosity, 0);
+  EXPECT_EQ(from_file.progress, 0);
+  ASSERT_TRUE(from_file.batch.ground_z.has_value());
+  EXPECT_DOUBLE_EQ(*from_file.batch.ground_z, -1.75);
+  ASSERT_TRUE(from_file.batch.footprint.bbox.has_value());
+  EXPECT_DOUBLE_EQ(from_file.batch.footprint.bbox->max.y, 447580.25);
+  EXPECT_NE(effective(from_file), effective(parse({"reconstruct", "x.las"})));
+}
+
+TEST_F(Config, options_on_the_command_line_override_the_file) {
+  const std::string file = write("c.toml", "jobs = 3\nlambda-data = 0.5\nstrict = true\noutput = \"from_file\"\n"
+                                           "building-classes = [6, 26]\n");
+  const city3d::RunOptions o = parse({"reconstruct", "x.las", "--config", file, "-j", "2", "--strict=false"});
+  EXPECT_EQ(o.batch.threads, 2);
+  EXPECT_FALSE(o.strict);
+  EXPECT_DOUBLE_EQ(o.batch.reconstruction.selection.lambda_data, 0.5);
+  EXPECT_EQ(o.batch.output_dir, "from_file");
+  EXPECT_EQ(o.batch.crop.building_classes, (std::vector<std::uint8_t>{6, 26}));
+  // Wherever --config stands among the options.
+  EXPECT_EQ(parse({"reconstruct", "--lambda-data", "0.4", "x.las", "--config", file}).batch.reconstruction.selection.lambda_data,
+            0.4);
+  // And through the executable: --print-config shows the merged result.
+  const Result r = run("--config " + file + " --lambda-data 0.25 --print-config");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "\nlambda-data = 0.25\n")) << r.output;
+  EXPECT_TRUE(contains(r.output, "\njobs = 3\n")) << r.output;
+}
+
+TEST_F(Config, every_problem_names_the_file_the_key_and_the_line_and_exits_with_2) {
+  struct Case {
+    std::string text, message;
+  };
+  const std::vector<Case> cases = {
+      {"jobs = 2\nlambda-data = \n", "line 2 column 15: "},                                // TOML syntax
+      {"jobs = 2\nid_field = \"x\"\n", "line 2: unknown key 'id_field' (did you mean 'id-field'?)"},
+      {"frobnicate = 1\n", "line 1: unknown key 'frobnicate'"},
+      {"[reconstruction]\njobs = 2\n", "line 1: unknown key 'reconstruction' (a table"},
+      {"\n\njobs = \"2\"\n", "line 3: jobs must be a number, not a string"},
+      {"strict = 1\n", "line 1: strict must be true or false, not an integer"},
+      {"output = 3\n", "line 1: output must be a string, not an integer"},
+      {"building-classes = [6, [2]]\n", "line 1: building-classes must be an array of numbers or strings"},
+      {"solver = \"simplex\"\n", "line 1: solver: 'simplex' is not auto, glpk or cbc"},
+      {"min-points = 2\n", "line 1: min-points: '2' is not an integer >= 3"},
+      {"bbox = [1, 2, 3]\n", "line 1: bbox: expected XMIN,YMIN,XMAX,YMAX"},
+      {"\neps-d = 0.0\n", "max_hausdorff must be > 0 (got 0)"},
+  };
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const std::string file = write("bad" + std::to_string(i) + ".toml", cases[i].text);
+    const std::string message = config_error({"reconstruct", "x.las", "--config", file});
+    EXPECT_TRUE(contains(message, file)) << cases[i].text << "\n" << message;
+    EXPECT_TRUE(contains(message, cases[i].message)) << cases[i].text << "\n" << message;
+  }
+  EXPECT_TRUE(contains(config_error({"reconstruct", "x.las", "--config", (dir_ / "missing.toml").string()}),
+                       "config: cannot open " + (dir_ / "missing.toml").string()));
+  // The last case: a range error found by a stage, traced to its line and key.
+  EXPECT_TRUE(contains(config_error({"reconstruct", "x.las", "--config", (dir_ / "bad11.toml").string()}),
+                       "line 2: eps-d"));
+  // Every problem of a file at once, in file order.
+  const std::string several = write("several.toml", "jobs = \"x\"\nfoo = 1\nstrict = 3\n");
+  const std::string message = config_error({"reconstruct", "x.las", "--config", several});
+  EXPECT_LT(message.find("line 1"), message.find("line 2")) << message;
+  EXPECT_LT(message.find("line 2"), message.find("line 3")) << message;
+  const Result r = run("reconstruct x.las --config " + several);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(contains(r.output, "several.toml line 3: strict must be true or false")) << r.output;
 }

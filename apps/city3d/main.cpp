@@ -64,6 +64,10 @@ int main(int argc, char** argv) {
     std::cout << "city3d " << CITY3D_VERSION << "\n";
     return city3d::kExitOk;
   }
+  if (options.print_config) {
+    std::cout << city3d::config_text(options);
+    return city3d::kExitOk;
+  }
   city3d::set_log_level(static_cast<city3d::LogLevel>(options.verbosity));
   try {
     if (options.command == "info") return run_info(options);

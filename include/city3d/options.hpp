@@ -30,11 +30,20 @@ struct RunOptions {
   int progress = -1;                 ///< -1 automatic (on when stderr is a terminal), 0 off, 1 on
   int verbosity = 1;                 ///< 0 quiet, 1 warnings, 2 info, 3 debug
   std::string residuals;             ///< evaluate: CSV of each point's distance to the model, or empty
+  std::string config_path;           ///< --config: the TOML file the options were read from, or empty
+  bool print_config = false;         ///< --print-config: print the effective options as TOML and exit
 };
 
-/// Parses argv. Throws ConfigError naming the offending argument (unknown option, missing or bad
-/// value, unknown command) after collecting every problem.
+/// Parses argv. With `--config FILE.toml`, the file's options are applied first and those given on
+/// the command line replace them (`--switch=false` undoes the file's `switch = true`). Throws
+/// ConfigError naming the offending argument (unknown option, missing or bad value, unknown
+/// command), or the file, key and line of a configuration problem, after collecting every problem.
 RunOptions parse_command_line(int argc, const char* const* argv);
+
+/// The TOML configuration text --print-config prints: every option of the table (but --help,
+/// --version, --config, --print-config) with its value in `options`, under a comment with its help;
+/// options without a value are commented out. --config reads it back to the same options.
+std::string config_text(const RunOptions& options);
 
 /// The --help text: usage, commands, every option with its default, exit codes.
 std::string help_text();

@@ -11,18 +11,11 @@
 #include <sstream>
 
 #include "city3d/error.hpp"
+#include "cli/option_table.hpp"
 
 namespace city3d {
+namespace detail {
 namespace {
-
-struct OptionSpec {
-  const char* flag;        ///< "--footprints"
-  const char* short_flag;  ///< "-f" or nullptr
-  const char* value_name;  ///< "PATH", or nullptr for a switch
-  const char* help;
-  std::function<std::string(const RunOptions&)> show_default;  ///< empty string: no default shown
-  std::function<void(RunOptions&, const std::string&)> apply;
-};
 
 double parse_double(const std::string& flag, const std::string& text) {
   char* end = nullptr;
@@ -47,10 +40,12 @@ Box2 parse_bbox(const std::string& flag, const std::string& text) {
   return box;
 }
 
-std::string number_text(double v) {
-  std::ostringstream out;
-  out << v;
-  return out.str();
+std::string yes_no(bool b) { return b ? "true" : "false"; }
+
+std::string bbox_text(const std::optional<Box2>& box) {
+  if (!box) return "";
+  return number_text(box->min.x) + "," + number_text(box->min.y) + "," + number_text(box->max.x) + "," +
+         number_text(box->max.y);
 }
 
 int parse_int(const std::string& flag, const std::string& text, int min_value) {
@@ -80,6 +75,8 @@ std::string classes_text(const std::vector<std::uint8_t>& classes) {
   return s;
 }
 
+}  // namespace
+
 const std::vector<OptionSpec>& option_table() {
   using O = RunOptions;
   using V = const std::string&;
@@ -88,18 +85,23 @@ const std::vector<OptionSpec>& option_table() {
       {"--footprints", "-f", "PATH",
        "footprint source: any OGR vector source (GeoPackage, Shapefile, GeoJSON, SQLite) or a City3D OBJ polygon "
        "file; without it every point-cloud file is one building",
-       nullptr, [](O& o, V v) { o.batch.footprints = v; }},
-      {"--layer", nullptr, "NAME", "footprint layer (default: the first layer with polygons)", nullptr,
+       [](const O& o) { return o.batch.footprints; }, [](O& o, V v) { o.batch.footprints = v; }},
+      {"--layer", nullptr, "NAME", "footprint layer (default: the first layer with polygons)",
+       [](const O& o) { return o.batch.footprint.layer; },
        [](O& o, V v) { o.batch.footprint.layer = v; }},
       {"--id-field", nullptr, "NAME", "footprint attribute holding the building id (default: the feature id, FID)",
-       nullptr, [](O& o, V v) { o.batch.footprint.id_field = v; }},
-      {"--where", nullptr, "SQL", "OGR attribute filter on the footprints, e.g. \"bouwjaar > 1900\"", nullptr,
+       [](const O& o) { return o.batch.footprint.id_field; }, [](O& o, V v) { o.batch.footprint.id_field = v; }},
+      {"--where", nullptr, "SQL", "OGR attribute filter on the footprints, e.g. \"bouwjaar > 1900\"",
+       [](const O& o) { return o.batch.footprint.attribute_filter; },
        [](O& o, V v) { o.batch.footprint.attribute_filter = v; }},
-      {"--bbox", nullptr, "XMIN,YMIN,XMAX,YMAX", "keep only footprints intersecting this box (footprint CRS)", nullptr,
+      {"--bbox", nullptr, "XMIN,YMIN,XMAX,YMAX", "keep only footprints intersecting this box (footprint CRS)",
+       [](const O& o) { return bbox_text(o.batch.footprint.bbox); },
        [](O& o, V v) { o.batch.footprint.bbox = parse_bbox("--bbox", v); }},
       {"--ground-field", nullptr, "NAME", "footprint attribute with the floor height (world z); overrides the ground "
-       "points where set", nullptr, [](O& o, V v) { o.batch.footprint.ground_field = v; }},
-      {"--no-repair", nullptr, nullptr, "skip invalid footprints instead of repairing them with MakeValid", nullptr,
+       "points where set", [](const O& o) { return o.batch.footprint.ground_field; },
+       [](O& o, V v) { o.batch.footprint.ground_field = v; }},
+      {"--no-repair", nullptr, nullptr, "skip invalid footprints instead of repairing them with MakeValid",
+       [](const O& o) { return yes_no(!o.batch.footprint.repair); },
        [](O& o, V) { o.batch.footprint.repair = false; }},
       // Cropping and heights.
       {"--building-classes", nullptr, "LIST", "LAS classes of building points (comma-separated)",
@@ -109,14 +111,15 @@ const std::vector<OptionSpec>& option_table() {
        [](const O& o) { return std::to_string(o.batch.crop.ground_class); },
        [](O& o, V v) { o.batch.crop.ground_class = parse_classes("--ground-class", v).front(); }},
       {"--ignore-classes", nullptr, nullptr, "every point inside a footprint is a building point (no ground points)",
-       nullptr, [](O& o, V) { o.batch.crop.use_classes = ClassUse::never; }},
+       [](const O& o) { return yes_no(o.batch.crop.use_classes == ClassUse::never); }, [](O& o, V) { o.batch.crop.use_classes = ClassUse::never; }},
       {"--ground-buffer", nullptr, "M", "ground points within this distance of a footprint give its floor height",
        [](const O& o) { return number_text(o.batch.crop.ground_buffer); },
        [](O& o, V v) { o.batch.crop.ground_buffer = parse_double("--ground-buffer", v); }},
       {"--ground-percentile", nullptr, "P", "percentile (0-100) of the ground points' z taken as the floor",
        [](const O& o) { return number_text(o.batch.crop.ground_percentile); },
        [](O& o, V v) { o.batch.crop.ground_percentile = parse_double("--ground-percentile", v); }},
-      {"--ground-z", nullptr, "Z", "floor height for single-building clouds (default: their lowest point)", nullptr,
+      {"--ground-z", nullptr, "Z", "floor height for single-building clouds (default: their lowest point)",
+       [](const O& o) { return o.batch.ground_z ? number_text(*o.batch.ground_z) : std::string(); },
        [](O& o, V v) { o.batch.ground_z = parse_double("--ground-z", v); }},
       {"--roof-percentile", nullptr, "P", "LoD1 roof height: percentile (0-100) of the building points' z",
        [](const O& o) { return number_text(o.batch.reconstruction.lod1.roof_percentile); },
@@ -188,7 +191,8 @@ const std::vector<OptionSpec>& option_table() {
        [](const O& o) { return number_text(o.batch.reconstruction.time_limit); },
        [](O& o, V v) { o.batch.reconstruction.time_limit = parse_double("--time-limit", v); }},
       {"--debug", nullptr, "DIR", "write each building's intermediate results (planes, heightmap, edges, "
-       "polylines, walls, candidate faces, models rejected as invalid) into DIR/<id>/", nullptr,
+       "polylines, walls, candidate faces, models rejected as invalid) into DIR/<id>/",
+       [](const O& o) { return o.batch.reconstruction.debug_dir; },
        [](O& o, V v) { o.batch.reconstruction.debug_dir = v; }},
       // Output.
       {"--output", "-o", "DIR", "output folder (created when missing)",
@@ -199,46 +203,88 @@ const std::vector<OptionSpec>& option_table() {
          o.batch.format = parse_mesh_format(v);
          o.format = v;
        }},
-      {"--no-model-files", nullptr, nullptr, "do not write models/<id>.<format> per building", nullptr,
+      {"--no-model-files", nullptr, nullptr, "do not write models/<id>.<format> per building",
+       [](const O& o) { return yes_no(!o.batch.per_building_files); },
        [](O& o, V) { o.batch.per_building_files = false; }},
-      {"--merged", nullptr, nullptr, "also write every building into one models.<format> file", nullptr,
+      {"--merged", nullptr, nullptr, "also write every building into one models.<format> file",
+       [](const O& o) { return yes_no(o.batch.merged_file); },
        [](O& o, V) { o.batch.merged_file = true; }},
-      {"--no-cityjson", nullptr, nullptr, "do not write buildings.city.json", nullptr,
+      {"--no-cityjson", nullptr, nullptr, "do not write buildings.city.json", [](const O& o) { return yes_no(!o.batch.cityjson); },
        [](O& o, V) { o.batch.cityjson = false; }},
       {"--cityjsonseq", nullptr, nullptr, "also write buildings.city.jsonl (CityJSONSeq, one building per line)",
-       nullptr, [](O& o, V) { o.batch.cityjson_seq = true; }},
+       [](const O& o) { return yes_no(o.batch.cityjson_seq); }, [](O& o, V) { o.batch.cityjson_seq = true; }},
       {"--timings", nullptr, nullptr, "add each building's seconds to its CityJSON attributes (output then differs "
-       "from run to run)", nullptr, [](O& o, V) { o.batch.timings_in_cityjson = true; }},
+       "from run to run)", [](const O& o) { return yes_no(o.batch.timings_in_cityjson); },
+       [](O& o, V) { o.batch.timings_in_cityjson = true; }},
       {"--local-coordinates", nullptr, nullptr,
-       "write local coordinates and record each building's origin, instead of world coordinates", nullptr,
+       "write local coordinates and record each building's origin, instead of world coordinates",
+       [](const O& o) { return yes_no(o.batch.local_coordinates); },
        [](O& o, V) { o.batch.local_coordinates = true; }},
       // Run.
       {"--jobs", "-j", "N", "buildings reconstructed in parallel (output is identical for any N)",
        [](const O& o) { return std::to_string(o.batch.threads); },
        [](O& o, V v) { o.batch.threads = parse_int("--jobs", v, 1); }},
       {"--no-resume", nullptr, nullptr,
-       "recompute every building, even those an interrupted earlier run into the same folder finished", nullptr,
+       "recompute every building, even those an interrupted earlier run into the same folder finished",
+       [](const O& o) { return yes_no(!o.batch.resume); },
        [](O& o, V) { o.batch.resume = false; }},
       {"--block-size", nullptr, "M",
        "footprints are processed in square blocks of this size, so memory follows one block's points "
        "(0 = all at once; the output is the same)",
        [](const O& o) { return number_text(o.batch.block_size); },
        [](O& o, V v) { o.batch.block_size = parse_double("--block-size", v); }},
-      {"--strict", nullptr, nullptr, "exit with code 4 when any building failed or none was reconstructed", nullptr,
+      {"--strict", nullptr, nullptr, "exit with code 4 when any building failed or none was reconstructed",
+       [](const O& o) { return yes_no(o.strict); },
        [](O& o, V) { o.strict = true; }},
       {"--residuals", nullptr, "PATH", "evaluate: also write every point's distance to the model as CSV (x,y,z,distance)",
-       nullptr, [](O& o, V v) { o.residuals = v; }},
-      {"--progress", nullptr, nullptr, "progress on stderr even when it is not a terminal", nullptr,
+       [](const O& o) { return o.residuals; }, [](O& o, V v) { o.residuals = v; }},
+      {"--progress", nullptr, nullptr, "progress on stderr even when it is not a terminal",
+       [](const O& o) { return yes_no(o.progress == 1); },
        [](O& o, V) { o.progress = 1; }},
-      {"--no-progress", nullptr, nullptr, "no progress line", nullptr, [](O& o, V) { o.progress = 0; }},
-      {"--verbose", "-v", nullptr, "more messages on stderr (repeat for debug)", nullptr,
+      {"--no-progress", nullptr, nullptr, "no progress line", [](const O& o) { return yes_no(o.progress == 0); },
+       [](O& o, V) { o.progress = 0; }},
+      {"--verbose", "-v", nullptr, "more messages on stderr (repeat for debug)",
+       [](const O& o) { return yes_no(o.verbosity >= 2); },
        [](O& o, V) { o.verbosity = std::min(o.verbosity + 1, 3); }},
-      {"--quiet", "-q", nullptr, "errors only", nullptr, [](O& o, V) { o.verbosity = 0; }},
-      {"--help", "-h", nullptr, "print this help and exit", nullptr, [](O& o, V) { o.help = true; }},
-      {"--version", nullptr, nullptr, "print the version and exit", nullptr, [](O& o, V) { o.version = true; }},
+      {"--quiet", "-q", nullptr, "errors only", [](const O& o) { return yes_no(o.verbosity == 0); },
+       [](O& o, V) { o.verbosity = 0; }},
+      {"--config", nullptr, "FILE.toml",
+       "read options from a TOML file (keys are the long options without '--'; city3d --print-config writes "
+       "one); options given on the command line override it",
+       [](const O& o) { return o.config_path; }, [](O& o, V v) { o.config_path = v; }},
+      {"--print-config", nullptr, nullptr,
+       "print every option as TOML with its effective value (the defaults, a --config file, the command line) "
+       "and exit",
+       [](const O& o) { return yes_no(o.print_config); }, [](O& o, V) { o.print_config = true; }},
+      {"--help", "-h", nullptr, "print this help and exit", [](const O& o) { return yes_no(o.help); },
+       [](O& o, V) { o.help = true; }},
+      {"--version", nullptr, nullptr, "print the version and exit", [](const O& o) { return yes_no(o.version); },
+       [](O& o, V) { o.version = true; }},
   };
   return table;
 }
+
+bool in_config_file(const OptionSpec& spec) {
+  const std::string flag = spec.flag;
+  return flag != "--help" && flag != "--version" && flag != "--config" && flag != "--print-config";
+}
+
+std::string number_text(double v) {
+  // The fewest significant digits that read back to the same double: 0.34, not 0.34000000000000002.
+  char buf[40];
+  for (int digits = 6; digits <= 17; ++digits) {
+    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+    if (std::strtod(buf, nullptr) == v) break;
+  }
+  return buf;
+}
+
+}  // namespace detail
+
+namespace {
+
+using detail::OptionSpec;
+using detail::option_table;
 
 const char* const kCommands[][2] = {
     {"reconstruct", "CLOUD... [-f FOOTPRINTS]  models of every footprint (or of every single-building cloud)"},
@@ -246,11 +292,35 @@ const char* const kCommands[][2] = {
     {"info", "FILE...                        what point-cloud files (LAS, LAZ, PLY) and footprint sources hold"},
 };
 
+/// One option as given on the command line, before it is applied.
+struct GivenOption {
+  const OptionSpec* spec;
+  std::string flag;   ///< as typed ("-j", "--jobs")
+  std::string value;  ///< for a switch: "true" or "false" ("--strict=false" undoes a config file's "strict = true")
+};
+
+/// Applies one option, turning the option's own error into a problem line.
+void apply_option(RunOptions& options, const OptionSpec& spec, const std::string& value, const std::string& where,
+                  std::vector<std::string>& problems) {
+  if (!spec.value_name && value == "false") return;  // a switch not given
+  try {
+    spec.apply(options, value);
+  } catch (const ConfigError& e) {
+    std::string message = e.what();
+    // "option --jobs: 'x' is not ..." from a file reads "<file> line 3: jobs: 'x' is not ...".
+    const std::string prefix = std::string("option ") + spec.flag + ": ";
+    if (!where.empty() && message.rfind(prefix, 0) == 0) message = std::string(spec.flag + 2) + ": " + message.substr(prefix.size());
+    problems.push_back(where.empty() ? message : where + ": " + message);
+  }
+}
+
 }  // namespace
 
 RunOptions parse_command_line(int argc, const char* const* argv) {
   RunOptions options;
   std::vector<std::string> problems;
+  std::vector<GivenOption> given;
+  std::vector<std::string> positional;
   for (int i = 1; i < argc; ++i) {
     std::string arg = argv[i];
     if (arg.size() > 1 && arg[0] == '-') {
@@ -283,16 +353,73 @@ RunOptions parse_command_line(int argc, const char* const* argv) {
           continue;
         }
         value = argv[++i];
-      } else if (!spec->value_name && has_inline_value) {
-        problems.push_back("option " + arg + " takes no value");
-        continue;
+      } else if (!spec->value_name) {
+        if (!has_inline_value) {
+          value = "true";
+        } else if (value != "true" && value != "false") {
+          problems.push_back("option " + arg + " takes no value (or =true / =false)");
+          continue;
+        }
       }
+      given.push_back({spec, arg, value});
+    } else {
+      positional.push_back(arg);
+    }
+  }
+
+  // The configuration file first, then the command line over it: an option given on the command
+  // line replaces the file's value (and "--switch=false" the file's "switch = true").
+  std::string config_path;
+  for (const GivenOption& g : given)
+    if (std::string(g.spec->flag) == "--config") config_path = g.value;
+  std::vector<detail::ConfigEntry> config_entries;  // those not overridden
+  if (!config_path.empty()) {
+    try {
+      for (const detail::ConfigEntry& entry : detail::read_config_file(config_path)) {
+        const bool overridden = std::any_of(given.begin(), given.end(),
+                                            [&](const GivenOption& g) { return g.spec == entry.spec; });
+        if (overridden) continue;
+        apply_option(options, *entry.spec, entry.value, "config: " + config_path + " line " + std::to_string(entry.line),
+                     problems);
+        config_entries.push_back(entry);
+      }
+    } catch (const ConfigError& e) {
+      problems.push_back(e.what());
+    }
+  }
+  for (const GivenOption& g : given) apply_option(options, *g.spec, g.value, "", problems);
+
+  // Values that are fine one by one but out of range for a stage: the stage's message, and which
+  // option (flag, or file, line and key) set the value it refuses.
+  if (problems.empty()) {
+    auto stages_accept = [](const RunOptions& o) {
       try {
-        spec->apply(options, value);
+        o.batch.reconstruction.validate();
+        o.batch.crop.validate();
+        return std::string();
       } catch (const ConfigError& e) {
-        problems.push_back(e.what());
+        return std::string(e.what());
       }
-    } else if (options.command.empty()) {
+    };
+    const std::string refused = stages_accept(options);
+    if (!refused.empty()) {
+      std::vector<std::string> culprits;
+      auto probe = [&](const OptionSpec& spec, const std::string& value, const std::string& name) {
+        RunOptions alone;
+        std::vector<std::string> ignored;
+        apply_option(alone, spec, value, "", ignored);
+        if (ignored.empty() && !stages_accept(alone).empty()) culprits.push_back(name);
+      };
+      for (const detail::ConfigEntry& entry : config_entries) probe(*entry.spec, entry.value, "config: " + config_path + " line " + std::to_string(entry.line) + ": " + entry.key);
+      for (const GivenOption& g : given) probe(*g.spec, g.value, "option " + g.flag);
+      std::string from;
+      for (const std::string& c : culprits) from += (from.empty() ? " (set by " : "; ") + c;
+      problems.push_back(refused + (from.empty() ? "" : from + ")"));
+    }
+  }
+
+  for (const std::string& arg : positional) {
+    if (options.command.empty()) {
       bool known = false;
       for (const auto& c : kCommands) known = known || arg == c[0];
       if (!known)
@@ -302,7 +429,7 @@ RunOptions parse_command_line(int argc, const char* const* argv) {
       options.inputs.push_back(arg);
     }
   }
-  if (!options.help && !options.version && problems.empty()) {
+  if (!options.help && !options.version && !options.print_config && problems.empty()) {
     if (options.command.empty()) problems.push_back("no command given (see city3d --help)");
     if (options.command == "info" && options.inputs.empty()) problems.push_back("info: no file given");
     if (options.command == "evaluate" && options.inputs.size() != 2)
@@ -339,16 +466,17 @@ std::string help_text() {
     else
       out << "\n" << std::string(34, ' ');
     out << s.help;
-    if (s.show_default) {
-      const std::string d = s.show_default(defaults);
-      out << " [default: " << (d.empty() ? "none" : d) << "]";
+    // Switches are off by default; a value without a default says so in its help.
+    if (s.value_name && s.show) {
+      const std::string d = s.show(defaults);
+      if (!d.empty()) out << " [default: " << d << "]";
     }
     out << "\n";
   }
   out << "\nexit codes:\n"
       << "  0  the run finished\n"
       << "  1  the run could not go on: unreadable or invalid input, unwritable output\n"
-      << "  2  bad command line: unknown command or option, bad value\n"
+      << "  2  bad command line or --config file: unknown command or option, bad value\n"
       << "  3  internal error (a bug; please report it)\n"
       << "  4  reconstruct --strict: the run finished but some buildings failed or none was reconstructed\n";
   return out.str();

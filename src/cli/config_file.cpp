@@ -1,0 +1,298 @@
+// The TOML configuration file (--config) and its writer (--print-config), both driven by the option
+// table: a key is a long option without "--", its type follows from the row (see option_table.hpp).
+// Parsed with toml++, which gives every key and value its line for the messages.
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "city3d/error.hpp"
+#include "city3d/options.hpp"
+#include "cli/option_table.hpp"
+
+namespace city3d {
+namespace detail {
+namespace {
+
+enum class ValueType { boolean, array, number, string, number_or_string };
+
+bool is_number_text(const std::string& text) {
+  if (text.empty()) return false;
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  return *end == '\0' && std::isfinite(v);
+}
+
+ValueType value_type(const OptionSpec& spec) {
+  if (!spec.value_name) return ValueType::boolean;
+  const std::string name = spec.value_name;
+  if (name == "LIST" || name.find(',') != std::string::npos) return ValueType::array;
+  const std::string d = spec.show ? spec.show(RunOptions{}) : std::string();
+  if (d.empty()) return ValueType::number_or_string;
+  return is_number_text(d) ? ValueType::number : ValueType::string;
+}
+
+const char* type_name(const toml::node& node) {
+  switch (node.type()) {
+    case toml::node_type::string: return "a string";
+    case toml::node_type::integer: return "an integer";
+    case toml::node_type::floating_point: return "a number";
+    case toml::node_type::boolean: return "a boolean";
+    case toml::node_type::array: return "an array";
+    case toml::node_type::table: return "a table";
+    default: return "a date or time";
+  }
+}
+
+/// A TOML scalar as option text; false when it is no scalar of an accepted kind.
+bool scalar_text(const toml::node& node, bool numbers, bool strings, std::string& text) {
+  if (numbers && node.is_integer()) {
+    text = std::to_string(node.as_integer()->get());
+    return true;
+  }
+  if (numbers && node.is_floating_point()) {
+    text = number_text(node.as_floating_point()->get());
+    return true;
+  }
+  if (strings && node.is_string()) {
+    text = node.as_string()->get();
+    return true;
+  }
+  return false;
+}
+
+/// Levenshtein distance, for "did you mean".
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+std::string closest_key(const std::string& key) {
+  std::string best;
+  // A third of the key's letters may differ (one for short keys): "id_field" -> "id-field".
+  std::size_t best_distance = std::max<std::size_t>(1, key.size() / 3) + 1;
+  for (const OptionSpec& spec : option_table()) {
+    if (!in_config_file(spec)) continue;
+    const std::string candidate = spec.flag + 2;
+    const std::size_t d = edit_distance(key, candidate);
+    if (d < best_distance) {
+      best_distance = d;
+      best = candidate;
+    }
+  }
+  return best;
+}
+
+std::vector<ConfigEntry> read_table(const toml::table& table, const std::string& name) {
+  std::vector<ConfigEntry> entries;
+  std::vector<std::pair<long, std::string>> problems;  // by line: toml++ keeps keys sorted, not in file order
+  for (const auto& [key_node, node] : table) {
+    const std::string key(key_node.str());
+    const long line = static_cast<long>(key_node.source().begin.line);
+    const std::string where = "config: " + name + " line " + std::to_string(line) + ": ";
+    const OptionSpec* spec = nullptr;
+    for (const OptionSpec& s : option_table())
+      if (in_config_file(s) && key == s.flag + 2) spec = &s;
+    if (!spec) {
+      std::string message = where + "unknown key '" + key + "'";
+      if (node.is_table())
+        message += " (a table: the file has no sections, every key is a long option without '--')";
+      else if (const std::string near = closest_key(key); !near.empty())
+        message += " (did you mean '" + near + "'?)";
+      else
+        message += " (keys are the long options without '--'; city3d --print-config lists them)";
+      problems.emplace_back(line, message);
+      continue;
+    }
+    const ValueType type = value_type(*spec);
+    std::string text;
+    bool ok = false;
+    std::string expected;
+    switch (type) {
+      case ValueType::boolean:
+        expected = "true or false";
+        if (node.is_boolean()) {
+          text = node.as_boolean()->get() ? "true" : "false";
+          ok = true;
+        }
+        break;
+      case ValueType::array:
+        expected = "an array (e.g. [1, 2]) or a comma-separated string";
+        if (const toml::array* array = node.as_array()) {
+          ok = true;
+          for (const toml::node& item : *array) {
+            std::string part;
+            if (!scalar_text(item, true, true, part)) {
+              ok = false;
+              expected = "an array of numbers or strings";
+              break;
+            }
+            text += (text.empty() ? "" : ",") + part;
+          }
+        } else {
+          ok = scalar_text(node, true, true, text);
+        }
+        break;
+      case ValueType::number:
+        expected = "a number";
+        ok = scalar_text(node, true, false, text);
+        break;
+      case ValueType::string:
+        expected = "a string";
+        ok = scalar_text(node, false, true, text);
+        break;
+      case ValueType::number_or_string:
+        expected = "a number or a string";
+        ok = scalar_text(node, true, true, text);
+        break;
+    }
+    if (!ok) {
+      problems.emplace_back(line, where + key + " must be " + expected + ", not " + type_name(node));
+      continue;
+    }
+    entries.push_back({spec, text, key, line});
+  }
+  std::sort(entries.begin(), entries.end(), [](const ConfigEntry& a, const ConfigEntry& b) { return a.line < b.line; });
+  if (!problems.empty()) {
+    std::stable_sort(problems.begin(), problems.end());
+    std::string message;
+    for (const auto& p : problems) message += (message.empty() ? "" : "\n") + p.second;
+    throw ConfigError(message);
+  }
+  return entries;
+}
+
+/// A TOML basic string: quotes, backslashes and control characters escaped.
+std::string quoted(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      case '\r': out += "\\r"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned char>(c));
+          out += buf;
+        } else {
+          out += c;
+        }
+    }
+  }
+  return out + "\"";
+}
+
+std::string toml_value(const OptionSpec& spec, const std::string& text) {
+  switch (value_type(spec)) {
+    case ValueType::boolean: return text == "true" ? "true" : "false";
+    case ValueType::array: {
+      std::string out = "[";
+      std::stringstream parts(text);
+      std::string part;
+      bool first = true;
+      while (std::getline(parts, part, ',')) {
+        out += (first ? "" : ", ") + (is_number_text(part) ? part : quoted(part));
+        first = false;
+      }
+      return out + "]";
+    }
+    case ValueType::number: return is_number_text(text) ? text : quoted(text);
+    case ValueType::number_or_string: return is_number_text(text) ? text : quoted(text);
+    case ValueType::string: return quoted(text);
+  }
+  return quoted(text);
+}
+
+/// What a commented-out key without a value shows: the value's name in the value's TOML shape.
+std::string placeholder(const OptionSpec& spec) {
+  const std::string name = spec.value_name;
+  switch (value_type(spec)) {
+    case ValueType::array: {
+      std::string out = "[";
+      for (const char c : name) out += c == ',' ? std::string(", ") : std::string(1, c);
+      return out + "]";
+    }
+    case ValueType::string: return "\"" + name + "\"";
+    case ValueType::number_or_string: return name.size() <= 3 ? name : "\"" + name + "\"";  // Z, DEG; "PATH"
+    default: return name;
+  }
+}
+
+/// `text` as comment lines of at most about 100 characters.
+std::string comment(const std::string& text) {
+  std::string out, line = "#";
+  std::stringstream words(text);
+  std::string word;
+  while (words >> word) {
+    if (line.size() + 1 + word.size() > 100 && line.size() > 1) {
+      out += line + "\n";
+      line = "#";
+    }
+    line += " " + word;
+  }
+  return out + line + "\n";
+}
+
+}  // namespace
+
+std::vector<ConfigEntry> read_config_text(const std::string& text, const std::string& name) {
+  toml::table table;
+  try {
+    table = toml::parse(text, name);
+  } catch (const toml::parse_error& e) {
+    const auto& begin = e.source().begin;
+    throw ConfigError("config: " + name + " line " + std::to_string(begin.line) + " column " + std::to_string(begin.column) +
+                      ": " + std::string(e.description()));
+  }
+  return read_table(table, name);
+}
+
+std::vector<ConfigEntry> read_config_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError("config: cannot open " + path + ": no such file or not readable");
+  std::stringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw ConfigError("config: cannot read " + path);
+  return read_config_text(text.str(), path);
+}
+
+}  // namespace detail
+
+std::string config_text(const RunOptions& options) {
+  std::ostringstream out;
+  out << "# city3d " << CITY3D_VERSION << " configuration: every option of `city3d --help`, keys without '--'.\n"
+      << "# Read with `city3d COMMAND --config FILE.toml`; options on the command line override these.\n"
+      << "# Commented-out keys have no value (their default is in the comment above them).\n";
+  for (const detail::OptionSpec& spec : detail::option_table()) {
+    if (!detail::in_config_file(spec)) continue;
+    const std::string key = spec.flag + 2;
+    const std::string value = spec.show ? spec.show(options) : std::string();
+    out << "\n" << detail::comment(std::string(spec.help) + " (" + spec.flag +
+                                   (spec.value_name ? std::string(" ") + spec.value_name : std::string()) + ")");
+    if (spec.value_name && value.empty())
+      out << "# " << key << " = " << detail::placeholder(spec) << "\n";
+    else
+      out << key << " = " << detail::toml_value(spec, value) << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace city3d
