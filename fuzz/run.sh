@@ -16,7 +16,7 @@ harnesses=("$@")
 
 build="${FUZZ_BUILD:-build-fuzz}"  # FUZZ_BUILD: another build folder (long runs beside development)
 if [ ! -f "$build/CMakeCache.txt" ]; then
-  CXX=clang++ cmake -S fuzz -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+  CXX=clang++ cmake -S fuzz -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCITY3D_MAIN_BUILD="$PWD/build" >/dev/null
 fi
 cmake --build "$build" -j "$jobs" >/dev/null
 
