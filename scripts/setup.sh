@@ -16,6 +16,7 @@ packages=(
   libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libboost-dev
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   libglpk-dev coinor-libcbc-dev
+  libtomlplusplus-dev nlohmann-json3-dev
   libgtest-dev
 )
 

@@ -1,6 +1,7 @@
 // Tests of the LASzip decoder: every LAS/LAZ pair in shared/data/laz decodes to the exact bytes of
 // its .las twin, the AHN3 tiles decode, and every deliberately broken file is rejected cleanly.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <unistd.h>
 
 #include <algorithm>
@@ -12,7 +13,6 @@
 #include <map>
 #include <memory>
 #include <optional>
-#include <regex>
 #include <set>
 #include <string>
 #include <thread>
@@ -156,16 +156,13 @@ void expect_identical(const std::string& laz, const std::string& las, std::size_
   EXPECT_TRUE(decoded == expected) << laz << ": " << first_difference(decoded, expected, record_length);
 }
 
-/// Case names, in manifest order.
+/// Case names, in manifest order: the LAS/LAZ pairs, not the broken files.
 std::vector<std::string> manifest_case_names() {
+  if (!fs::exists(kLazDir + "/manifest.json")) return {};  // no ../shared/data: the LazManifest test says so
   const auto bytes = read_file(kLazDir + "/manifest.json");
-  const std::string text(bytes.begin(), bytes.end());
-  const auto broken = text.find("\"broken\"");
-  const std::string pairs = text.substr(0, broken);
+  const nlohmann::json manifest = nlohmann::json::parse(bytes.begin(), bytes.end());
   std::vector<std::string> names;
-  const std::regex name_re("\"name\":\\s*\"([^\"]+)\",\\s*\"las_size\"");  // pair names, not item names
-  for (std::sregex_iterator it(pairs.begin(), pairs.end(), name_re), end; it != end; ++it)
-    names.push_back((*it)[1]);
+  for (const nlohmann::json& pair : manifest.at("pairs")) names.push_back(pair.at("name").get<std::string>());
   return names;
 }
 
