@@ -90,4 +90,32 @@ class CityJsonSeqWriter {
   std::unique_ptr<Impl> impl_;
 };
 
+/// The CityJSONFeature text of one object (one line of CityJSONSeq, without its newline), its
+/// vertices quantised with `options.scale` and `translate`. Throws IoError when the scale is invalid.
+std::string cityjson_feature(const CityObject& object, const CityJsonOptions& options, const Point3& translate);
+
+/// The first line of a CityJSONSeq file (without its newline): the CityJSON header with the transform.
+std::string cityjson_seq_header(const CityJsonOptions& options, const Point3& translate);
+
+/// Builds one CityJSON file from CityJSONFeature texts (as cityjson_feature() makes them, with the
+/// same options and translate), in the order add() is called: every feature's CityObjects members
+/// are copied byte for byte, its vertices appended to the file's vertex list and its vertex indices
+/// moved accordingly. The result equals write_cityjson() of the same objects with that transform,
+/// and holds whatever the features hold. Memory stays small (vertices are spooled to a temporary
+/// file). The file appears under its final name only after close() (atomic). Throws IoError naming
+/// the path, or the feature's position when a text is not a CityJSONFeature.
+class CityJsonAssembler {
+ public:
+  CityJsonAssembler(const std::string& path, const CityJsonOptions& options, const Point3& translate);
+  ~CityJsonAssembler();
+  CityJsonAssembler(const CityJsonAssembler&) = delete;
+  CityJsonAssembler& operator=(const CityJsonAssembler&) = delete;
+  void add(const std::string& feature);
+  void close();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
 }  // namespace city3d

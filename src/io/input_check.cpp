@@ -118,9 +118,9 @@ std::string common_point_cloud_crs(const std::vector<std::string>& files, const 
   return crs;
 }
 
-void check_footprints_meet_points(const FootprintSet& footprints, const std::vector<PointCloudInfo>& infos,
-                                  const std::string& points_crs) {
-  if (footprints.footprints.empty() || infos.empty()) return;
+void check_footprints_meet_points(const std::vector<Box2>& boxes, const FootprintSet& footprints,
+                                  const std::vector<PointCloudInfo>& infos, const std::string& points_crs) {
+  if (boxes.empty() || infos.empty()) return;
   Box2 points;
   for (const PointCloudInfo& info : infos) {
     if (info.bounds.empty()) return;  // PLY: bounds unknown until read
@@ -128,10 +128,8 @@ void check_footprints_meet_points(const FootprintSet& footprints, const std::vec
     points.add({info.bounds.max.x, info.bounds.max.y});
   }
   Box2 all;
-  for (const Footprint& f : footprints.footprints) {
-    Box2 box;
-    for (const Polygon2& p : f.polygons)
-      for (const Point2& v : p.outer) box.add(v);
+  for (const Box2& box : boxes) {
+    if (box.empty()) continue;
     all.add(box.min);
     all.add(box.max);
     for (const PointCloudInfo& info : infos) {
@@ -149,7 +147,7 @@ void check_footprints_meet_points(const FootprintSet& footprints, const std::vec
   if (points_crs.empty() && !footprints.srs.empty())
     hint = "the point clouds record no CRS: if they are not in " + short_crs(footprints.srs) +
            ", reproject the footprints to theirs (ogr2ogr -t_srs)";
-  throw IoError("input: no footprint meets any point cloud: the " + std::to_string(footprints.footprints.size()) +
+  throw IoError("input: no footprint meets any point cloud: the " + std::to_string(boxes.size()) +
                 " footprints of " + footprints.path + " (" + footprint_crs + ") span x " + fixed(all.min.x) + " .. " +
                 fixed(all.max.x) + ", y " + fixed(all.min.y) + " .. " + fixed(all.max.y) + "; the points (" +
                 short_crs(points_crs) + ") span x " + fixed(points.min.x) + " .. " + fixed(points.max.x) + ", y " +

@@ -21,10 +21,11 @@ std::vector<std::string> distinct_inputs(const std::vector<std::string>& files);
 /// geographic (degrees, where city3d needs metres).
 std::string common_point_cloud_crs(const std::vector<std::string>& files, const std::vector<PointCloudInfo>& infos);
 
-/// Throws IoError when no footprint's bounding box meets any point cloud's header bounds (the
-/// usual sign of footprints and points in different CRSs), naming both extents and CRSs. Does
-/// nothing when there are no footprints or some cloud's bounds are unknown (PLY).
-void check_footprints_meet_points(const FootprintSet& footprints, const std::vector<PointCloudInfo>& infos,
-                                  const std::string& points_crs);
+/// Throws IoError when none of the footprints' bounding boxes `boxes` (those `footprints` kept, in
+/// the points' CRS) meets any point cloud's header bounds (the usual sign of footprints and points
+/// in different CRSs), naming both extents and CRSs. Does nothing when there are no footprints or
+/// some cloud's bounds are unknown (PLY).
+void check_footprints_meet_points(const std::vector<Box2>& boxes, const FootprintSet& footprints,
+                                  const std::vector<PointCloudInfo>& infos, const std::string& points_crs);
 
 }  // namespace city3d::detail

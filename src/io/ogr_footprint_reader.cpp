@@ -296,8 +296,6 @@ std::unique_ptr<OGRCoordinateTransformation> reprojection(OGRLayer& layer, const
   if (!transform)
     throw IoError(kModule + std::string("cannot reproject ") + path + " from " + set.srs.substr(0, 80) + " to " +
                   target_name.substr(0, 80) + " (the point clouds' CRS)" + gdal_message());
-  log_warning(kModule + path + " is in " + set.srs.substr(0, 80) + ", the point clouds in " +
-              target_name.substr(0, 80) + ": footprints reprojected");
   set.reprojected_from = set.srs;
   set.srs = target_name;
   return transform;
@@ -334,7 +332,9 @@ std::vector<std::string> list_ogr_layers(const std::string& path) {
   return layer_names(*dataset);
 }
 
-FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOptions& options) {
+FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOptions& options,
+                                 const FootprintReadMode& mode) {
+  const auto warn = [&mode](const std::string& message) { mode.quiet ? log_debug(message) : log_warning(message); };
   QuietGdalErrors quiet;
   GDALDatasetUniquePtr dataset = open_vector(path);
   OGRLayer& layer = select_layer(*dataset, path, options.layer);
@@ -346,6 +346,9 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
   set.layer = layer.GetName();
   set.srs = describe_srs(layer);
   std::unique_ptr<OGRCoordinateTransformation> transform = reprojection(layer, options.target_srs, path, set);
+  if (transform && !mode.quiet)
+    log_warning(kModule + path + " is in " + set.reprojected_from.substr(0, 80) + ", the point clouds in " +
+                set.srs.substr(0, 80) + ": footprints reprojected");
 
   if (!may_hold_polygons(layer.GetGeomType())) {
     throw IoError(kModule + where + " has no polygon features (geometry type " +
@@ -404,15 +407,24 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
   // OGR's spatial filter lets the driver use its index (GeoPackage R-tree, SpatiaLite); some
   // drivers apply it only approximately, and with GEOS OGR may drop a feature whose envelope
   // meets the box while its polygon does not, so each envelope is checked against the box below.
+  // With reprojection the box is in the points' CRS, OGR's filter in the layer's: the box goes
+  // back through the inverse transformation (its edges densified), each envelope forward.
   if (options.bbox) {
     const Box2& box = *options.bbox;
-    layer.SetSpatialFilterRect(box.min.x, box.min.y, box.max.x, box.max.y);
+    double min_x = box.min.x, min_y = box.min.y, max_x = box.max.x, max_y = box.max.y;
+    bool filter = true;
+    if (transform) {
+      std::unique_ptr<OGRCoordinateTransformation> back(transform->GetInverse());
+      filter = back && back->TransformBounds(box.min.x, box.min.y, box.max.x, box.max.y, &min_x, &min_y, &max_x,
+                                             &max_y, 21);
+    }
+    if (filter) layer.SetSpatialFilterRect(min_x, min_y, max_x, max_y);
   }
 
   std::unordered_map<BuildingId, std::int64_t> first_fid_of_id;
   std::size_t polygon_features = 0;
   auto skip = [&](const BuildingId& id, const std::string& reason) {
-    log_warning(kModule + std::string("skipped ") + id + " in " + where + ": " + reason);
+    warn(kModule + std::string("skipped ") + id + " in " + where + ": " + reason);
     set.skipped.push_back({id, reason});
   };
 
@@ -432,6 +444,9 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
     if (options.bbox && geometry != nullptr && !geometry->IsEmpty()) {
       OGREnvelope envelope;
       geometry->getEnvelope(&envelope);
+      if (transform && !transform->TransformBounds(envelope.MinX, envelope.MinY, envelope.MaxX, envelope.MaxY,
+                                                   &envelope.MinX, &envelope.MinY, &envelope.MaxX, &envelope.MaxY, 21))
+        continue;  // cannot be placed in the points' CRS: the scan reports it
       if (!intersects(envelope, *options.bbox)) continue;
     }
     ++set.feature_count;
@@ -463,7 +478,8 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
 
     // The first feature with an id owns it, even when that feature is skipped for its geometry:
     // a later feature silently taking its place would hide the problem.
-    const auto [first, inserted] = first_fid_of_id.emplace(id, fid);
+    const auto [first, inserted] =
+        mode.keep_duplicates ? std::make_pair(first_fid_of_id.end(), true) : first_fid_of_id.emplace(id, fid);
     if (!inserted) {
       skip(id,
            "duplicated id (first at fid " + std::to_string(first->second) + ", this is " + fid_text + ")");
@@ -477,7 +493,7 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
     }
     if (!outcome.repair_note.empty()) {
       ++set.repaired;
-      log_warning(kModule + std::string("repaired ") + id + " in " + where + ": " + outcome.repair_note);
+      warn(kModule + std::string("repaired ") + id + " in " + where + ": " + outcome.repair_note);
     }
     Footprint footprint;
     footprint.id = std::move(id);
@@ -491,7 +507,10 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
     const bool has_hole = std::any_of(footprint.polygons.begin(), footprint.polygons.end(),
                                       [](const Polygon2& p) { return !p.holes.empty(); });
     if (has_hole) ++set.with_holes;
-    set.footprints.push_back(std::move(footprint));
+    if (mode.sink)
+      (*mode.sink)(std::move(footprint));
+    else
+      set.footprints.push_back(std::move(footprint));
   }
 
   // No polygon at all: an error when the unfiltered layer has none either; an empty selection
@@ -503,8 +522,10 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
       throw IoError(kModule + where + " has no polygon features");
     }
   }
-  log_info(kModule + std::to_string(set.footprints.size()) + " footprints from " + where + " (" +
-           std::to_string(set.skipped.size()) + " skipped, " + std::to_string(set.repaired) + " repaired)");
+  const std::string summary = kModule + std::to_string(set.feature_count - set.skipped.size()) +
+                              " footprints from " + where + " (" + std::to_string(set.skipped.size()) + " skipped, " +
+                              std::to_string(set.repaired) + " repaired)";
+  mode.quiet ? log_debug(summary) : log_info(summary);
   return set;
 }
 
