@@ -111,7 +111,9 @@ const std::vector<OptionSpec>& option_table() {
       {"--where", nullptr, "SQL", "OGR attribute filter on the footprints, e.g. \"bouwjaar > 1900\"",
        [](const O& o) { return o.batch.footprint.attribute_filter; },
        [](O& o, V v) { o.batch.footprint.attribute_filter = v; }},
-      {"--bbox", nullptr, "XMIN,YMIN,XMAX,YMAX", "keep only footprints intersecting this box (footprint CRS)",
+      {"--bbox", nullptr, "XMIN,YMIN,XMAX,YMAX",
+       "keep only footprints intersecting this box (footprint CRS; the points' CRS when the footprints are "
+       "reprojected)",
        [](const O& o) { return bbox_text(o.batch.footprint.bbox); },
        [](O& o, V v) { o.batch.footprint.bbox = parse_bbox("--bbox", v); }},
       {"--ground-field", nullptr, "NAME", "footprint attribute with the floor height (world z); overrides the ground "
