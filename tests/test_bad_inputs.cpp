@@ -37,6 +37,7 @@ const std::string kShared = CITY3D_SHARED_DATA;
 
 struct Case {
   std::string name, args, message, report, known;
+  std::vector<std::string> absent;  ///< paths (with placeholders) that must not exist after the run
   int exit_code = 0;
   double seconds = 10;
 };
@@ -54,6 +55,8 @@ std::vector<Case> load_manifest() {
     c.message = t["message"].value_or(std::string());
     c.report = t["report"].value_or(std::string());
     c.known = t["known"].value_or(std::string());
+    if (const toml::array* absent = t["absent"].as_array())
+      for (const toml::node& path : *absent) c.absent.push_back(path.value_or(std::string()));
     c.exit_code = static_cast<int>(t["exit"].value_or(std::int64_t{-1}));
     c.seconds = t["seconds"].value_or(10.0);
     if (c.name.empty() || c.args.empty() || c.message.empty() || c.exit_code < 0)
@@ -67,6 +70,13 @@ std::vector<LasPoint> grid(int n, double z, std::uint8_t cls) {
   std::vector<LasPoint> points;
   for (int i = 0; i < n; ++i) points.push_back({85000.0 + (i % 10) * 0.5, 447550.0 + (i / 10) * 0.5, z, cls});
   return points;
+}
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
 }
 
 void write_text(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
@@ -90,6 +100,16 @@ std::vector<LasPoint> sample_points(const std::string& path) {
   for (std::size_t i = 0; i < cloud.size(); ++i)
     points.push_back({cloud.points[i].x, cloud.points[i].y, cloud.points[i].z, cloud.classification[i]});
   return points;
+}
+
+/// The sample block's reconstruction into `out` (what a finished earlier run leaves), with `extra`
+/// options.
+void sample_run(const fs::path& out, const std::string& extra = "") {
+  const std::string d = CITY3D_SAMPLE_DATA;
+  const std::string command = std::string(CITY3D_EXE) + " reconstruct " + d + "/delft_sample_1.las " + d +
+                              "/delft_sample_2.las -f " + d + "/delft_sample_footprints.gpkg --id-field gml_id " +
+                              extra + " -q --no-progress -o " + out.string() + " > /dev/null 2>&1";
+  if (std::system(command.c_str()) != 0) throw std::runtime_error("test: the earlier run failed: " + command);
 }
 
 /// The generators: each makes its file (or folder) in `dir` and returns its path.
@@ -197,6 +217,29 @@ const std::map<std::string, std::function<fs::path(const fs::path&)>>& generator
          if (std::system(command.c_str()) != 0) throw std::runtime_error("ogr2ogr failed: " + command);
          return out;
        }},
+      {"output_with_damaged_journal",
+       [](const fs::path& dir) {
+         // One changed digit inside the third line's record (issue 14 item 4).
+         sample_run(dir / "out");
+         std::string journal = read_file(dir / "out" / "resume.journal");
+         std::size_t line = journal.find('\n', journal.find('\n') + 1) + 1;
+         const std::size_t at = journal.find_first_of("123456789", journal.find("\"csv\"", line));
+         journal[at] = journal[at] == '9' ? '8' : static_cast<char>(journal[at] + 1);
+         write_text(dir / "out" / "resume.journal", journal);
+         return dir / "out";
+       }},
+      {"output_with_temporary_files_of_a_killed_run",
+       [](const fs::path& dir) {
+         sample_run(dir / "out");
+         write_text(dir / "out" / "buildings.city.jsonl.tmp-99999-0", "{\"type\":\"CityJSON\"");
+         write_text(dir / "out" / "models" / "b31be49eb-00ba-11e6-b420-2bdcc4ab5d7f.obj.tmp-99999-1", "v 0 0");
+         return dir / "out";
+       }},
+      {"output_of_an_earlier_run_with_more_buildings",
+       [](const fs::path& dir) {
+         sample_run(dir / "out");
+         return dir / "out";
+       }},
       {"plain_file",
        [](const fs::path& dir) {
          write_text(dir / "plain_file", "not a folder\n");
@@ -217,12 +260,6 @@ void replace_all(std::string& s, const std::string& from, const std::string& to)
     s.replace(at, from.size(), to);
 }
 
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 // gtest prints a case by its name, not as bytes.
 void PrintTo(const Case& c, std::ostream* out) { *out << c.name; }
@@ -275,6 +312,10 @@ TEST_P(BadInput, exits_with_its_code_and_message_within_its_time) {
   if (!c.report.empty()) {
     const std::string report = read_file(tmp / "out" / "report.csv");
     EXPECT_TRUE(std::regex_search(report, std::regex(c.report))) << "report /" << c.report << "/ not in:\n" << report;
+  }
+  for (std::string path : c.absent) {
+    replace_all(path, "{tmp}", tmp.string());
+    EXPECT_FALSE(fs::exists(path)) << path << " should not exist after the run";
   }
   if (!HasFailure()) fs::remove_all(tmp);
 }
