@@ -5,6 +5,7 @@
 #include <exception>
 #include <filesystem>
 #include <new>
+#include <system_error>
 #include <iostream>
 
 #include "city3d/error.hpp"
@@ -96,6 +97,10 @@ int main(int argc, char** argv) {
     // The library checks its folders up front; should the file system still refuse (a folder
     // removed or a disk gone read-only during the run), that is the environment, not a bug.
     std::cerr << "city3d: " << e.path1().string() << ": " << e.code().message() << "\n";
+    return city3d::kExitInput;
+  } catch (const std::system_error& e) {
+    // The operating system refused a resource (a thread, a file): the environment, not a bug.
+    std::cerr << "city3d: the system refused: " << e.what() << " (try fewer --jobs)\n";
     return city3d::kExitInput;
   } catch (const std::bad_alloc&) {
     std::cerr << "city3d: out of memory (try fewer --jobs or a smaller --block-size)\n";
