@@ -588,7 +588,6 @@ BatchSummary merge_shards(const MergeOptions& options) {
   return summary;
 }
 
-
 BatchSummary run_batch(const BatchOptions& options) {
   std::error_code ec;
   const bool existed = fs::exists(options.output_dir, ec);
