@@ -114,7 +114,7 @@ TEST(Executable, help_lists_every_option_with_its_default_and_the_exit_codes) {
         "--ground-class", "--ignore-classes", "--ground-buffer", "--ground-percentile", "--ground-z",
         "--roof-percentile", "--output", "--format", "--no-model-files", "--merged", "--no-cityjson", "--cityjsonseq",
         "--timings", "--local-coordinates", "--jobs", "--strict", "--progress", "--no-progress", "--verbose",
-        "--quiet", "--help", "--version"})
+        "--quiet", "--help", "--version", "--config", "--print-config"})
     EXPECT_TRUE(contains(r.output, flag)) << flag;
   EXPECT_TRUE(contains(r.output, "[default: city3d_out]"));
   EXPECT_TRUE(contains(r.output, "[default: obj]"));
@@ -746,6 +746,15 @@ TEST_F(Config, print_config_read_back_gives_identical_effective_parameters) {
   ASSERT_TRUE(from_file.batch.footprint.bbox.has_value());
   EXPECT_DOUBLE_EQ(from_file.batch.footprint.bbox->max.y, 447580.25);
   EXPECT_NE(effective(from_file), effective(parse({"reconstruct", "x.las"})));
+}
+
+TEST_F(Config, executable_reads_back_what_it_prints) {
+  const Result printed = run("--print-config");
+  ASSERT_EQ(printed.exit_code, 0) << printed.output;
+  const std::string file = write("printed.toml", printed.output);
+  const Result again = run("--config " + file + " --print-config");
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_EQ(again.output, printed.output);
 }
 
 TEST_F(Config, options_on_the_command_line_override_the_file) {
