@@ -375,6 +375,8 @@ class PlyReader final : public PointCloudReader {
                       std::to_string(item) + " of " + std::to_string(el.count) + ", before the vertices");
       };
       if (binary() && !el.has_list) {
+        // count * record_size must not wrap around: a count that large cannot be in the file anyway.
+        if (el.record_size != 0 && el.count > std::numeric_limits<std::uint64_t>::max() / el.record_size) fail(0);
         if (!cursor_.skip(el.count * el.record_size)) fail(0);
         continue;
       }
@@ -385,24 +387,40 @@ class PlyReader final : public PointCloudReader {
             if (p.is_list) {
               const std::uint8_t* c = cursor_.take(type_size(p.count_type));
               if (!c) fail(item);
-              items = static_cast<std::uint64_t>(decode(c, p.count_type, big_endian()));
+              items = list_length(decode(c, p.count_type, big_endian()), el.name, item, p.name);
             }
             if (!cursor_.skip(items * type_size(p.type))) fail(item);
           } else {
             std::string_view t = cursor_.token();
             if (t.empty()) fail(item);
             if (!p.is_list) continue;
-            const double count = number(t, el.name, item, p.name);
-            if (!(count >= 0.0))
-              throw IoError("ply: " + info_.path + " " + el.name + " " + std::to_string(item) +
-                            " list '" + p.name + "' has a negative length");
-            for (std::uint64_t k = 0; k < static_cast<std::uint64_t>(count); ++k) {
+            const std::uint64_t count = list_length(number(t, el.name, item, p.name), el.name, item, p.name);
+            for (std::uint64_t k = 0; k < count; ++k) {
               if (cursor_.token().empty()) fail(item);
             }
           }
         }
       }
     }
+  }
+
+  /// A list length as read (any PLY type, so any double): a whole number from 0 to 2^53, or the
+  /// item is broken. Converting anything else to an integer would be undefined behaviour.
+  std::uint64_t list_length(double count, const std::string& element, std::uint64_t item,
+                            const std::string& property) const {
+    if (!(count >= 0.0) || count > 9007199254740992.0 || count != std::floor(count)) {
+      std::ostringstream os;
+      os << "ply: " << info_.path << " " << element << " " << item << " list '" << property
+         << "' has a length of " << count << " (must be a whole number >= 0)";
+      throw IoError(os.str());
+    }
+    return static_cast<std::uint64_t>(count);
+  }
+
+  /// A double as a float normal component: out-of-range values saturate (a cast would be undefined).
+  static float to_float(double v) {
+    const double max = std::numeric_limits<float>::max();
+    return static_cast<float>(v > max ? max : v < -max ? -max : v);  // NaN passes through as NaN
   }
 
   /// Fills values_ with the next vertex's properties, as doubles.
@@ -433,8 +451,7 @@ class PlyReader final : public PointCloudReader {
     }
     out.points[at] = p;
     if (fields_ & kFieldNormal)
-      out.normals[at] = {static_cast<float>(values_[roles_.nx]), static_cast<float>(values_[roles_.ny]),
-                         static_cast<float>(values_[roles_.nz])};
+      out.normals[at] = {to_float(values_[roles_.nx]), to_float(values_[roles_.ny]), to_float(values_[roles_.nz])};
     if (fields_ & kFieldClassification) out.classification[at] = saturate<std::uint8_t>(values_[roles_.cls]);
     // Colours are stored as in the file: 0-255 for uchar, 0-65535 for ushort.
     if (fields_ & kFieldRgb)
