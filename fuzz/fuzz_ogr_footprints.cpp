@@ -21,6 +21,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     city3d::FootprintReadOptions options;
     options.ground_field = size % 2 ? "h" : "";
     options.id_field = size % 3 == 0 ? "id" : "";
+    // Reprojection into the points' CRS, and a region in it (the block reads of a run).
+    if (size % 5 == 0) options.target_srs = "EPSG:28992";
+    if (size % 7 == 0) {
+      city3d::Box2 box;
+      box.add({84950.0, 447500.0});
+      box.add({85050.0, 447600.0});
+      options.bbox = box;
+    }
     const city3d::FootprintSet set = city3d::read_footprints(path, options);
     for (const city3d::Footprint& fp : set.footprints) {
       if (fp.polygons.empty()) __builtin_trap();

@@ -27,7 +27,7 @@ seeds_of() {
     laz) echo fuzz/seeds/laz ;;
     ply) echo tests/data/ply tests/data/ply/broken ;;
     obj_footprints) echo tests/data/footprints ;;
-    ogr_footprints) echo tests/data/footprints ;;
+    ogr_footprints) echo tests/data/footprints fuzz/seeds/ogr_footprints ;;
     *) [ -d "fuzz/seeds/$1" ] && echo "fuzz/seeds/$1" ;;
   esac
 }
