@@ -179,6 +179,13 @@ const std::map<std::string, std::function<fs::path(const fs::path&)>>& generator
          write_text(dir / "giant_vertex_count.ply", ply_ascii({{1, 2, 3}, {4, 5, 6}, {7, 8, 9}}, "1000000000000"));
          return dir / "giant_vertex_count.ply";
        }},
+      {"ply_empty_element_of_1e11_items",
+       [](const fs::path& dir) {
+         write_text(dir / "empty_element.ply",
+                    "ply\nformat ascii 1.0\nelement face 100000000000\nelement vertex 1\nproperty float x\n"
+                    "property float y\nproperty float z\nend_header\n1 2 3\n");
+         return dir / "empty_element.ply";
+       }},
       {"cloud_zero_points",
        [](const fs::path& dir) {
          write_text(dir / "zero_points.ply", ply_ascii({}));
