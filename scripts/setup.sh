@@ -21,6 +21,8 @@ packages=(
 
 # The tests validate CityJSON output with ajv-cli from the npm registry: they need node and npm.
 if [ "$mode" = test ] && ! command -v npm >/dev/null 2>&1; then packages+=(nodejs npm); fi
+# The Slurm test starts a private single-node cluster (../shared/SLURM.md): the daemons and clients only.
+if [ "$mode" = test ]; then packages+=(slurmctld slurmd slurm-client); fi
 
 missing=()
 for p in "${packages[@]}"; do
