@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdio>
@@ -20,6 +21,7 @@
 #include <thread>
 #include <vector>
 
+#include "city3d/footprint_io.hpp"
 #include "city3d/model_io.hpp"
 
 extern char** environ;
@@ -345,4 +347,57 @@ TEST(CityJsonAssembly, features_spliced_into_one_file_equal_write_cityjson_of_th
     EXPECT_TRUE(contains(e.what(), "feature 1 is not a CityJSONFeature")) << e.what();
   }
   fs::remove_all(dir);
+}
+
+TEST(FootprintSource, regions_read_through_the_spatial_filter_hold_the_scans_footprints_with_its_numbers) {
+  using namespace city3d;
+  for (const std::string& path : {std::string(CITY3D_SAMPLE_DATA) + "/delft_sample_footprints.gpkg",
+                                  std::string(CITY3D_TEST_DATA) + "/footprints/sample_broken.geojson"}) {
+    SCOPED_TRACE(path);
+    FootprintReadOptions options;
+    options.id_field = "gml_id";
+    const FootprintSet all = read_footprints(path, options);
+    FootprintSource source(path, options);
+    std::vector<std::string> scanned;
+    const FootprintSet scan = source.scan([&](std::size_t n, const Footprint& f) {
+      EXPECT_EQ(n, scanned.size());
+      scanned.push_back(f.id);
+    });
+    // The same footprints in the same order as read_footprints, and the same skipped ones (the
+    // broken source has a duplicated id, which only a read of every feature can tell).
+    ASSERT_EQ(scanned.size(), all.footprints.size());
+    for (std::size_t i = 0; i < scanned.size(); ++i) EXPECT_EQ(scanned[i], all.footprints[i].id);
+    ASSERT_EQ(scan.skipped.size(), all.skipped.size());
+    EXPECT_TRUE(scan.footprints.empty());
+    // A region around everything: every kept footprint, geometry and all, and nothing else.
+    Box2 everything;
+    everything.add({-1e7, -1e7});
+    everything.add({1e7, 1e7});
+    const auto found = source.read_box(everything);
+    ASSERT_EQ(found.size(), all.footprints.size());
+    for (std::size_t i = 0; i < found.size(); ++i) {
+      EXPECT_EQ(found[i].first, i);
+      EXPECT_EQ(found[i].second.id, all.footprints[i].id);
+      ASSERT_EQ(found[i].second.polygons.size(), all.footprints[i].polygons.size());
+      EXPECT_EQ(found[i].second.polygons[0].outer.size(), all.footprints[i].polygons[0].outer.size());
+    }
+    // A small region at a vertex of the first footprint: that footprint, and only footprints whose
+    // bounding box meets the region (OGR may also leave out those whose polygon does not).
+    const Polygon2& first = all.footprints.front().polygons.front();
+    Box2 small;
+    small.add(first.outer[0]);
+    small.add({first.outer[0].x + 0.5, first.outer[0].y + 0.5});
+    std::set<std::size_t> expected;
+    for (std::size_t i = 0; i < all.footprints.size(); ++i) {
+      Box2 b;
+      for (const Polygon2& p : all.footprints[i].polygons)
+        for (const Point2& v : p.outer) b.add(v);
+      if (b.intersects(small)) expected.insert(i);
+    }
+    std::set<std::size_t> got;
+    for (const auto& [n, f] : source.read_box(small)) got.insert(n);
+    EXPECT_LT(expected.size(), all.footprints.size());
+    EXPECT_TRUE(got.count(0));
+    EXPECT_TRUE(std::includes(expected.begin(), expected.end(), got.begin(), got.end()));
+  }
 }
