@@ -144,7 +144,8 @@ class Shards : public ::testing::Test {
 }  // namespace
 
 TEST_F(Shards, merge_of_1_2_4_and_7_shards_is_byte_identical_to_one_process) {
-  ASSERT_EQ(reconstruct(dir_ / "single", "-j 2").exit_code, 0);
+  // One block per cropping pass here; the shards crop several blocks of a tile at a time.
+  ASSERT_EQ(reconstruct(dir_ / "single", "-j 2 --group-area 0").exit_code, 0);
   for (int n : {1, 2, 4, 7}) {
     SCOPED_TRACE(std::to_string(n) + " shards");
     std::string folders;
@@ -237,10 +238,14 @@ TEST_F(Shards, run_killed_with_kill_9_resumes_to_the_same_output_from_a_damaged_
   ASSERT_LT(digit, journal.find('\n', record));
   journal[digit] = journal[digit] == '7' ? '3' : '7';
   write_file(resumed / "resume.journal", journal);
+  // The model of a building the journal holds (other than the damaged one): models are written
+  // before their records, so the folder may hold one more without a record yet.
   std::vector<std::string> models;
   for (const std::string& name : files_in(resumed / "models"))
-    if (name.size() > 4 && name.substr(name.size() - 4) == ".obj") models.push_back(name);
-  EXPECT_GE(models.size(), 3u);  // written before their records
+    if (name.size() > 4 && name.substr(name.size() - 4) == ".obj" &&
+        journal.find("\"" + name + "\"", journal.find('\n', record)) != std::string::npos)
+      models.push_back(name);
+  EXPECT_GE(models.size(), 3u);
   if (models.empty()) models.push_back("none");
   std::string model = read_file(resumed / "models" / models.back());
   if (!model.empty()) model[model.size() / 2] = model[model.size() / 2] == '1' ? '2' : '1';

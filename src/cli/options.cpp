@@ -241,6 +241,11 @@ const std::vector<OptionSpec>& option_table() {
        "(0 = all at once; the output is the same)",
        [](const O& o) { return number_text(o.batch.block_size); },
        [](O& o, V v) { o.batch.block_size = parse_double("--block-size", v); }},
+      {"--group-area", nullptr, "M2",
+       "blocks of one tile are cropped together, one read of the tile, up to this much footprint area "
+       "(memory follows it; 0 = one block at a time; the output is the same)",
+       [](const O& o) { return number_text(o.batch.group_area); },
+       [](O& o, V v) { o.batch.group_area = parse_double("--group-area", v); }},
       {"--shard", nullptr, "K/N",
        "reconstruct only shard K of N (blocks dealt out by footprint area) into the output folder; "
        "`city3d merge` combines the N folders",
