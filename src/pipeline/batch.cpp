@@ -282,7 +282,6 @@ BatchSummary run_batch(const BatchOptions& options) {
                       " does not exist (K/N with 1 <= K <= N)");
   const std::vector<std::string> files = expand_inputs(options.point_clouds);
   log_info("parameters:\n" + parameters_text(options.reconstruction));
-  detail::OutputFolder folder(options.output_dir);
 
   // The plan: every building of the run, in output order, and its block.
   Plan plan;
@@ -376,6 +375,9 @@ BatchSummary run_batch(const BatchOptions& options) {
              std::to_string(my_blocks.size()) + " of " + std::to_string(plan.blocks.size()) + " blocks, " +
              std::to_string(header.expected) + " of " + std::to_string(plan.layout.records) + " buildings");
 
+  // The output folder is touched only now that the inputs have been read: a run that cannot start
+  // leaves an earlier run's outputs as they were.
+  detail::OutputFolder folder(options.output_dir);
   if (options.per_building_files) {
     std::error_code ec;
     fs::create_directories(fs::path(options.output_dir) / "models", ec);
