@@ -22,7 +22,9 @@
 #include <vector>
 
 #include "city3d/footprint_io.hpp"
+#include "city3d/error.hpp"
 #include "city3d/model_io.hpp"
+#include "city3d/options.hpp"
 
 extern char** environ;
 
@@ -405,4 +407,27 @@ TEST(FootprintSource, regions_read_through_the_spatial_filter_hold_the_scans_foo
     EXPECT_TRUE(got.count(0));
     EXPECT_TRUE(std::includes(expected.begin(), expected.end(), got.begin(), got.end()));
   }
+}
+
+TEST(ShardOption, parses_k_of_n_and_rejects_what_is_not_a_shard) {
+  using city3d::parse_command_line;
+  const char* good[] = {"city3d", "reconstruct", "x.las", "--shard", "2/4"};
+  const city3d::RunOptions o = parse_command_line(5, good);
+  EXPECT_EQ(o.batch.shard, 2);
+  EXPECT_EQ(o.batch.shards, 4);
+  for (const char* bad : {"0/4", "5/4", "2", "a/b", "2/0", "-1/3", "1.5/3"}) {
+    const char* argv[] = {"city3d", "reconstruct", "x.las", "--shard", bad};
+    try {
+      parse_command_line(5, argv);
+      ADD_FAILURE() << bad;
+    } catch (const city3d::ConfigError& e) {
+      EXPECT_TRUE(contains(e.what(), "option --shard: expected K/N")) << e.what();
+    }
+  }
+  const char* merge_without_folders[] = {"city3d", "merge", "-o", "out"};
+  EXPECT_THROW(parse_command_line(4, merge_without_folders), city3d::ConfigError);
+  const char* shard_on_info[] = {"city3d", "info", "x.las", "--shard", "1/2"};
+  EXPECT_THROW(parse_command_line(5, shard_on_info), city3d::ConfigError);
+  const char* merge[] = {"city3d", "merge", "a", "b", "-o", "out"};
+  EXPECT_EQ(parse_command_line(6, merge).inputs.size(), 2u);
 }

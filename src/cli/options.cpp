@@ -247,7 +247,8 @@ const std::vector<OptionSpec>& option_table() {
        [](const O& o) { return number_text(o.batch.group_area); },
        [](O& o, V v) { o.batch.group_area = parse_double("--group-area", v); }},
       {"--shard", nullptr, "K/N",
-       "reconstruct only shard K of N (blocks dealt out by footprint area) into the output folder; "
+       "reconstruct only shard K of N (consecutive blocks in tile order, balanced by footprint area) into the "
+       "output folder; "
        "`city3d merge` combines the N folders",
        nullptr, [](O& o, V v) { parse_shard(v, o.batch.shard, o.batch.shards); }},
       {"--strict", nullptr, nullptr, "exit with code 4 when any building failed", nullptr,

@@ -1,6 +1,7 @@
 // The batch job (run_batch) and the merge of shards (merge_shards). A run is planned before any
 // building is reconstructed, from what every shard can compute alike: the footprints are scanned once
-// (no geometry kept) and grouped into square blocks, and the blocks are dealt out to the shards. Each
+// (no geometry kept) and grouped into square blocks, and the blocks, in the order of their home tiles, are
+// cut into consecutive runs, one per shard. Blocks of one tile are cropped together (one stream of it). Each
 // block's footprints are then read through an OGR spatial filter, its tiles cropped, its buildings
 // reconstructed in parallel (reconstruct_building, pipeline.cpp), and each finished building's
 // outputs (model file, CityJSONFeature, report rows) recorded in the journal. The run-level files are
