@@ -32,15 +32,15 @@ struct BatchOptions {
   bool cityjson_seq = false;        ///< buildings.city.jsonl
   bool timings_in_cityjson = false; ///< add "seconds" to CityJSON attributes (breaks byte-identity)
   int threads = 1;
-  /// Footprints are cropped and reconstructed in square blocks of this size (metres, by their
-  /// bounding-box centres), so memory follows one block's points, not the whole footprint set; the
-  /// tiles overlapping a block are streamed once per block. 0 = everything in one block. The output
-  /// does not depend on it.
+  /// Footprints are grouped into square blocks of this size (metres, by their bounding-box
+  /// centres): the units shards are made of, and which cropping passes group (group_area). 0 =
+  /// everything in one block. The output does not depend on it.
   double block_size = 1000.0;
   /// Blocks of the same home tile (the tile holding a block's centre) are cropped together, one
   /// stream of their tiles, up to this much footprint area (m2; a block larger than that alone), so
-  /// that a tile is not streamed once per block. Memory follows this area: 250,000 m2 of Delft's
-  /// dense centre is about 7,000 buildings. 0 = one block per pass. The output does not depend on it.
+  /// that a tile is not streamed once per block. Memory follows this area (about 0.6 KB per m2 at
+  /// AHN3 density: 250,000 m2, 4,600 buildings of Delft's centre, peaked at 272 MB with 2 threads).
+  /// 0 = one block per pass. The output does not depend on it.
   double group_area = 250000.0;
   bool progress = false;            ///< progress line on stderr
   /// Skip buildings a previous run with the same inputs and parameters finished (resume.journal in

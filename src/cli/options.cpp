@@ -237,8 +237,8 @@ const std::vector<OptionSpec>& option_table() {
        "recompute every building, even those an interrupted earlier run into the same folder finished", nullptr,
        [](O& o, V) { o.batch.resume = false; }},
       {"--block-size", nullptr, "M",
-       "footprints are processed in square blocks of this size, so memory follows one block's points "
-       "(0 = all at once; the output is the same)",
+       "footprints are processed in square blocks of this size: shards are made of them and cropping passes "
+       "group them (0 = all at once; the output is the same)",
        [](const O& o) { return number_text(o.batch.block_size); },
        [](O& o, V v) { o.batch.block_size = parse_double("--block-size", v); }},
       {"--group-area", nullptr, "M2",
