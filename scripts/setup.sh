@@ -24,6 +24,8 @@ packages=(
 if [ "$mode" = test ] && ! command -v npm >/dev/null 2>&1; then packages+=(nodejs npm); fi
 # The tests also run every fuzz harness briefly: clang 14 with libFuzzer and the sanitizer runtimes.
 if [ "$mode" = test ]; then packages+=(clang libclang-rt-14-dev); fi
+# The Slurm test starts a private single-node cluster (../shared/SLURM.md): the daemons and clients only.
+if [ "$mode" = test ]; then packages+=(slurmctld slurmd slurm-client); fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <memory>
 #include <string>
-#include <vector>
 
 #include "city3d/batch.hpp"
 
@@ -34,11 +33,5 @@ class ReportWriter {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
-
-/// Writes the CSV report (header + one row per building), atomically. Throws IoError.
-void write_report_csv(const std::string& path, const std::vector<BuildingReport>& rows);
-
-/// Writes the JSON report ({"summary": ..., "buildings": [...]}), atomically. Throws IoError.
-void write_report_json(const std::string& path, const std::vector<BuildingReport>& rows, const BatchSummary& summary);
 
 }  // namespace city3d::detail
