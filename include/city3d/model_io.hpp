@@ -46,19 +46,26 @@ void write_models(const std::string& path, const std::vector<BuildingModel>& mod
 /// vertices or faces, and when the file holds no face.
 BuildingModel read_obj_model(const std::string& path);
 
-/// One attribute value of a city object: null, boolean, integer, number or text.
-using AttributeValue = std::variant<std::monostate, bool, std::int64_t, double, std::string>;
-
-/// A building as a CityJSON `Building`: its model, the LoD of its geometry and its attributes.
-struct CityObject {
+/// One geometry of a city object: a level of detail and its model (one Solid per edge-connected part).
+struct CityGeometry {
+  std::string lod = "2.2";  ///< CityJSON LoD string ("1.2", "1.3", "2.2")
   BuildingModel model;
-  std::string lod = "2.2";  ///< CityJSON LoD string of the geometry ("1.2", "2.2")
+};
+
+/// A building as a CityJSON `Building`: its id, its geometries (one per level of detail) and its
+/// attributes.
+struct CityObject {
+  BuildingId id;
+  std::vector<CityGeometry> geometries;
   std::vector<std::pair<std::string, AttributeValue>> attributes;
 };
 
+/// The transform and metadata of a CityJSON file. One run writes buildings.city.json and
+/// buildings.city.jsonl with the same options, so both carry the same transform.
 struct CityJsonOptions {
   std::string crs;             ///< "EPSG:28992" (written as an OGC CRS URL), or empty when unknown
-  double scale = 0.001;        ///< transform scale in metres: 0.001 keeps millimetres
+  double scale = 0.0001;       ///< transform scale in metres: 0.0001 keeps 0.1 mm, 0.001 millimetres
+  Point3 translate;            ///< transform translation, metres; a whole number keeps the grid exact
   std::string reference_date;  ///< metadata referenceDate (YYYY-MM-DD), or empty
 };
 
@@ -66,10 +73,10 @@ struct CityJsonOptions {
 /// near-vertical wall, otherwise roof).
 std::vector<SurfaceType> surface_types(const BuildingModel& model);
 
-/// Writes one CityJSON 2.0 file holding every object as a `Building` whose geometry is a `Solid`
-/// with semantic surfaces (RoofSurface, WallSurface, GroundSurface). Vertices are quantised with
-/// the transform (scale, translate = the minimum corner of all vertices) and shared per building.
-/// Atomic write; throws IoError naming the path.
+/// Writes one CityJSON 2.0 file holding every object as a `Building` with one geometry per level
+/// of detail: a `Solid`, or a `MultiSolid` (one Solid per part) for a model of several parts, with
+/// semantic surfaces (RoofSurface, WallSurface, GroundSurface). Vertices are quantised with the
+/// given transform and shared per building. Atomic write; throws IoError naming the path.
 void write_cityjson(const std::string& path, const std::vector<CityObject>& objects, const CityJsonOptions& options);
 
 /// Streams CityJSONSeq (CityJSON Text Sequences): a first line with the CityJSON header and
@@ -77,8 +84,8 @@ void write_cityjson(const std::string& path, const std::vector<CityObject>& obje
 /// The file appears under its final name only after close() (atomic).
 class CityJsonSeqWriter {
  public:
-  /// `translate` is the transform's translation for the whole file (e.g. the footprints' minimum corner).
-  CityJsonSeqWriter(const std::string& path, const CityJsonOptions& options, const Point3& translate);
+  /// The header carries options' transform, which every feature line uses.
+  CityJsonSeqWriter(const std::string& path, const CityJsonOptions& options);
   ~CityJsonSeqWriter();
   CityJsonSeqWriter(const CityJsonSeqWriter&) = delete;
   CityJsonSeqWriter& operator=(const CityJsonSeqWriter&) = delete;

@@ -745,3 +745,148 @@ std::vector<ValidityError> validate_model(const PolygonMesh& mesh, const Validit
 }
 
 }  // namespace city3d
+
+namespace city3d {
+namespace {
+
+// Drops repeated consecutive vertices and faces of fewer than three, then unused vertices.
+void clean_model(BuildingModel& model) {
+  std::vector<std::vector<std::uint32_t>> faces;
+  std::vector<SurfaceType> surfaces;
+  const bool typed = model.surfaces.size() == model.mesh.faces.size();
+  for (std::size_t f = 0; f < model.mesh.faces.size(); ++f) {
+    std::vector<std::uint32_t> face;
+    for (std::uint32_t i : model.mesh.faces[f])
+      if (face.empty() || face.back() != i) face.push_back(i);
+    while (face.size() > 1 && face.front() == face.back()) face.pop_back();
+    if (face.size() < 3) continue;
+    faces.push_back(std::move(face));
+    if (typed) surfaces.push_back(model.surfaces[f]);
+  }
+  std::vector<std::uint32_t> index(model.mesh.vertices.size(), UINT32_MAX);
+  std::vector<Point3> vertices;
+  for (auto& face : faces)
+    for (std::uint32_t& i : face) {
+      if (index[i] == UINT32_MAX) {
+        index[i] = static_cast<std::uint32_t>(vertices.size());
+        vertices.push_back(model.mesh.vertices[i]);
+      }
+      i = index[i];
+    }
+  model.mesh.vertices = std::move(vertices);
+  model.mesh.faces = std::move(faces);
+  if (typed) model.surfaces = std::move(surfaces);
+}
+
+// Cuts zero-width spikes off every face: a vertex whose two edges fold back onto each other (the
+// same neighbour on both sides, or collinear edges pointing the same way). Returns how many.
+std::size_t remove_spikes(BuildingModel& model) {
+  std::size_t removed = 0;
+  for (auto& face : model.mesh.faces) {
+    for (bool changed = true; changed && face.size() >= 3;) {
+      changed = false;
+      for (std::size_t k = 0; k < face.size() && face.size() >= 3; ++k) {
+        const std::size_t n = face.size();
+        const Point3& a = model.mesh.vertices[face[(k + n - 1) % n]];
+        const Point3& b = model.mesh.vertices[face[k]];
+        const Point3& c = model.mesh.vertices[face[(k + 1) % n]];
+        const Vec ba = sub(a, b), bc = sub(c, b);
+        const double lab = norm(ba), lbc = norm(bc);
+        const bool same = face[(k + n - 1) % n] == face[(k + 1) % n];
+        const bool folded = lab > 0 && lbc > 0 && dot(ba, bc) > 0 && norm(cross(ba, bc)) <= 1e-9 * lab * lbc;
+        if (!same && !folded) continue;
+        face.erase(face.begin() + static_cast<std::ptrdiff_t>(k));
+        if (same) face.erase(face.begin() + static_cast<std::ptrdiff_t>(k % face.size()));  // a, b, a -> a
+        ++removed;
+        changed = true;
+        break;
+      }
+    }
+  }
+  return removed;
+}
+
+// Polygon-level codes (1xx, 2xx) of one face on its own.
+std::vector<int> face_codes(const BuildingModel& model, std::size_t f, const ValidityParams& params) {
+  SolidGeometry solid;
+  solid.vertices = model.mesh.vertices;
+  solid.shells = {{{model.mesh.faces[f]}}};
+  std::vector<int> codes;
+  for (const ValidityError& e : validate_solid(solid, params))
+    if (e.code < 300) codes.push_back(e.code);
+  return codes;
+}
+
+}  // namespace
+
+void round_to_grid(BuildingModel& model, double grid) {
+  if (grid > 0) {
+    std::map<std::array<long long, 3>, std::uint32_t> index_of;
+    std::vector<std::uint32_t> remap(model.mesh.vertices.size());
+    std::vector<Point3> vertices;
+    for (std::size_t i = 0; i < model.mesh.vertices.size(); ++i) {
+      const Point3& p = model.mesh.vertices[i];
+      const std::array<long long, 3> q{std::llround((p.x + model.origin.x) / grid),
+                                        std::llround((p.y + model.origin.y) / grid),
+                                        std::llround((p.z + model.origin.z) / grid)};
+      const auto [it, fresh] = index_of.emplace(q, static_cast<std::uint32_t>(vertices.size()));
+      if (fresh)
+        vertices.push_back({q[0] * grid - model.origin.x, q[1] * grid - model.origin.y, q[2] * grid - model.origin.z});
+      remap[i] = it->second;
+    }
+    model.mesh.vertices = std::move(vertices);
+    for (auto& face : model.mesh.faces)
+      for (std::uint32_t& i : face)
+        if (i < remap.size()) i = remap[i];
+  }
+  clean_model(model);
+}
+
+WrittenValidity validate_as_written(BuildingModel& model, double grid, const ValidityParams& params) {
+  WrittenValidity result;
+  round_to_grid(model, grid);
+  result.found = validate_model(model.mesh, params);
+  result.remaining = result.found;
+  if (result.found.empty()) return result;
+
+  std::string repairs;
+  const std::size_t spikes = remove_spikes(model);
+  if (spikes) {
+    round_to_grid(model, grid);
+    repairs = "cut " + std::to_string(spikes) + " zero-width spike" + (spikes > 1 ? "s" : "");
+  }
+  // Faces that are not planar as rounded, or not simple: split into triangles of their own vertices.
+  std::vector<std::vector<std::uint32_t>> faces;
+  std::vector<SurfaceType> surfaces;
+  const bool typed = model.surfaces.size() == model.mesh.faces.size();
+  std::size_t split = 0;
+  for (std::size_t f = 0; f < model.mesh.faces.size(); ++f) {
+    const std::vector<int> codes = face_codes(model, f, params);
+    const bool bad = std::any_of(codes.begin(), codes.end(), [](int c) { return c == 203 || c == 204 || c == 104; });
+    if (!bad || model.mesh.faces[f].size() <= 3) {
+      faces.push_back(model.mesh.faces[f]);
+      if (typed) surfaces.push_back(model.surfaces[f]);
+      continue;
+    }
+    PolygonMesh one;
+    one.vertices = model.mesh.vertices;
+    one.faces = {model.mesh.faces[f]};
+    for (const auto& t : triangulate(one)) {
+      faces.push_back({t[0], t[1], t[2]});
+      if (typed) surfaces.push_back(model.surfaces[f]);
+    }
+    ++split;
+  }
+  if (split) {
+    model.mesh.faces = std::move(faces);
+    if (typed) model.surfaces = std::move(surfaces);
+    round_to_grid(model, grid);
+    repairs += (repairs.empty() ? "" : "; ") + std::string("split ") + std::to_string(split) + " face" +
+               (split > 1 ? "s" : "") + " into triangles";
+  }
+  result.repairs = repairs;
+  result.remaining = repairs.empty() ? result.found : validate_model(model.mesh, params);
+  return result;
+}
+
+}  // namespace city3d

@@ -20,6 +20,7 @@
 #include "city3d/log.hpp"
 #include "city3d/model_io.hpp"
 #include "city3d/point_cloud_io.hpp"
+#include "city3d/run_outputs.hpp"
 #include "pipeline/journal.hpp"
 #include "pipeline/report.hpp"
 
@@ -105,50 +106,33 @@ void crop_tiles(const std::vector<std::string>& files, const std::vector<Footpri
   }
 }
 
-std::vector<std::pair<std::string, AttributeValue>> cityjson_attributes(const BuildingReport& r, bool timings) {
-  std::vector<std::pair<std::string, AttributeValue>> a = {
-      {"status", std::string(to_string(r.status))},
-      {"level", std::string(to_string(r.level))},
-      {"reason", r.reason.empty() ? AttributeValue{} : AttributeValue{r.reason}},
-      {"note", r.note.empty() ? AttributeValue{} : AttributeValue{r.note}},
-      {"ground_z", r.ground_z},
-      {"ground_method", r.ground_method},
-      {"roof_z_p70", r.roof_z},
-      {"points", static_cast<std::int64_t>(r.points)},
-      {"planes", static_cast<std::int64_t>(r.planes)},
-      {"faces", static_cast<std::int64_t>(r.faces)},
-      {"rmse", r.rmse >= 0 ? AttributeValue{r.rmse} : AttributeValue{}},
-  };
-  if (timings) a.emplace_back("seconds", r.seconds);
-  return a;
-}
-
 // Writes each building's outputs as soon as it and every building before it are done, so output
 // order (and bytes) never depend on the thread count, and finished work is on disk early.
 class OrderedWriter {
  public:
-  OrderedWriter(const BatchOptions& options, std::size_t total, const Point3& translate, const std::string& crs)
-      : options_(options), results_(total), ready_(total, false) {
+  OrderedWriter(const BatchOptions& options, std::size_t total, const CityJsonOptions& cityjson,
+                const std::vector<Footprint>* footprints)
+      : options_(options), cityjson_(cityjson), footprints_(footprints), results_(total), ready_(total, false) {
     if (options.per_building_files) fs::create_directories(fs::path(options.output_dir) / "models");
     if (options.cityjson_seq)
       seq_ = std::make_unique<CityJsonSeqWriter>((fs::path(options.output_dir) / "buildings.city.jsonl").string(),
-                                                 CityJsonOptions{crs, 0.001, ""}, translate);
+                                                 cityjson_);
   }
 
   void submit(std::size_t index, BuildingResult result) {
     std::lock_guard<std::mutex> lock(mutex_);
     results_[index] = std::move(result);
     ready_[index] = true;
-    while (next_ < results_.size() && ready_[next_]) write(results_[next_++]);
+    while (next_ < results_.size() && ready_[next_]) write(next_, results_[next_]), ++next_;
   }
 
-  void finish(const std::string& crs) {
+  void finish() {
     if (seq_) seq_->close();
     const fs::path out(options_.output_dir);
-    if (options_.cityjson) write_cityjson((out / "buildings.city.json").string(), objects_, {crs, 0.001, ""});
+    if (options_.cityjson) write_cityjson((out / "buildings.city.json").string(), objects_, cityjson_);
     if (options_.merged_file) {
       std::vector<BuildingModel> models;
-      for (CityObject& o : objects_) models.push_back(o.model);
+      for (CityObject& o : objects_) models.push_back(o.geometries.back().model);
       write_models((out / ("models" + mesh_extension(options_.format))).string(), models,
                    {options_.format, options_.local_coordinates});
     }
@@ -160,21 +144,32 @@ class OrderedWriter {
     return rows;
   }
 
+  /// The written buildings' city objects, in input order (kept when a run-level output needs them).
+  const std::vector<CityObject>& objects() const { return objects_; }
+
  private:
-  void write(BuildingResult& result) {
+  void write(std::size_t index, BuildingResult& result) {
     if (!result.model) return;
     if (options_.per_building_files) {
       const fs::path file = fs::path(options_.output_dir) / "models" / model_file_name(result.model->id, options_.format);
       write_model(file.string(), *result.model, {options_.format, options_.local_coordinates});
     }
-    CityObject object{std::move(*result.model), cityjson_lod(result.report.level),
-                      cityjson_attributes(result.report, options_.timings_in_cityjson)};
+    CityObject object{result.model->id, {},
+                      detail::output_attributes(result.report, footprints_ && index < footprints_->size()
+                                                                   ? (*footprints_)[index].attributes
+                                                                   : Attributes{},
+                                                options_.timings_in_cityjson)};
+    for (LodModel& lod : result.lods) object.geometries.push_back({lod.lod, std::move(lod.model)});
+    if (object.geometries.empty()) object.geometries.push_back({cityjson_lod(result.report.level), *result.model});
     result.model.reset();
+    result.lods.clear();
     if (seq_) seq_->add(object);
-    if (options_.cityjson || options_.merged_file) objects_.push_back(std::move(object));
+    if (options_.cityjson || options_.merged_file || options_.gpkg || options_.html) objects_.push_back(std::move(object));
   }
 
   const BatchOptions& options_;
+  CityJsonOptions cityjson_;
+  const std::vector<Footprint>* footprints_;
   std::mutex mutex_;
   std::vector<BuildingResult> results_;
   std::vector<bool> ready_;
@@ -274,15 +269,16 @@ BatchSummary run_batch(const BatchOptions& options) {
         for (const Point2& v : p.outer) extent.add(v);
   }
   const std::size_t total = options.footprints.empty() ? files.size() : set.footprints.size();
-  // The CityJSONSeq transform must be known before the first building: the footprints' corner, or
-  // for clouds their first header's corner.
-  Point3 translate{0, 0, 0};
+  // One transform for the run, known before the first building (CityJSONSeq streams): the
+  // footprints' corner, or for clouds their first header's corner, in whole metres; both CityJSON
+  // files use it.
+  CityJsonOptions cityjson{crs, options.reconstruction.output_grid, {0, 0, 0}, ""};
   if (options.footprints.empty() && !files.empty()) {
     const PointCloudInfo info = read_point_cloud_info(files.front());
     if (!info.bounds.empty()) extent.add({info.bounds.min.x, info.bounds.min.y});
   }
-  if (!extent.empty()) translate = {std::floor(extent.min.x), std::floor(extent.min.y), 0.0};
-  OrderedWriter writer(options, total, translate, crs);
+  if (!extent.empty()) cityjson.translate = {std::floor(extent.min.x), std::floor(extent.min.y), 0.0};
+  OrderedWriter writer(options, total, cityjson, options.footprints.empty() ? nullptr : &set.footprints);
 
   // Reconstructs buildings `indices` (global, input order) in parallel; make_input(k) gives the
   // input of indices[k] and is called by the worker that reconstructs it.
@@ -361,7 +357,7 @@ BatchSummary run_batch(const BatchOptions& options) {
       reconstruct_all(block, [&](std::size_t k) { return std::move(inputs[k]); });
     }
   }
-  writer.finish(crs);
+  writer.finish();
 
   std::vector<BuildingReport> rows = writer.reports();
   rows.insert(rows.end(), skipped_rows.begin(), skipped_rows.end());
@@ -377,6 +373,12 @@ BatchSummary run_batch(const BatchOptions& options) {
   summary.report_path = (fs::path(options.output_dir) / "report.csv").string();
   detail::write_report_csv(summary.report_path, rows);
   detail::write_report_json((fs::path(options.output_dir) / "report.json").string(), rows, summary);
+  if (options.gpkg || options.html) {
+    const std::vector<BuildingRecord> records =
+        building_records(rows, options.footprints.empty() ? nullptr : &set.footprints, writer.objects());
+    if (options.gpkg) write_gpkg((fs::path(options.output_dir) / "buildings.gpkg").string(), records, crs);
+    if (options.html) write_report_html((fs::path(options.output_dir) / "report.html").string(), records, crs);
+  }
   return summary;
 }
 

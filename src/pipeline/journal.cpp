@@ -16,7 +16,7 @@ namespace city3d::detail {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr const char* kMagic = "city3d-journal 1";
+constexpr const char* kMagic = "city3d-journal 2";
 
 std::string escape(const std::string& s) {
   std::string out;
@@ -60,19 +60,8 @@ std::vector<std::string> split_tabs(const std::string& line) {
   }
 }
 
-std::string serialise(const BuildingResult& result) {
-  const BuildingReport& r = result.report;
-  std::ostringstream out;
-  out << escape(r.id) << '\t' << static_cast<int>(r.status) << '\t' << static_cast<int>(r.level) << '\t'
-      << escape(r.stage) << '\t' << escape(r.reason) << '\t' << escape(r.note) << '\t' << r.points << '\t'
-      << r.ground_points << '\t' << num(r.ground_z) << '\t' << escape(r.ground_method) << '\t' << num(r.roof_z)
-      << '\t' << r.planes << '\t' << r.walls << '\t' << r.candidate_faces << '\t' << r.faces << '\t'
-      << num(r.rmse) << '\t' << (r.valid ? 1 : 0) << '\t' << num(r.seconds) << '\t';
-  if (!result.model) {
-    out << "-\n";
-    return out.str();
-  }
-  const BuildingModel& m = *result.model;
+// A model as four fields: origin, vertices, faces, surface types.
+void serialise_model(std::ostringstream& out, const BuildingModel& m) {
   out << num(m.origin.x) << ' ' << num(m.origin.y) << ' ' << num(m.origin.z) << '\t' << m.mesh.vertices.size();
   for (const Point3& p : m.mesh.vertices) out << ' ' << num(p.x) << ' ' << num(p.y) << ' ' << num(p.z);
   out << '\t' << m.mesh.faces.size();
@@ -82,6 +71,63 @@ std::string serialise(const BuildingResult& result) {
   }
   out << '\t' << m.surfaces.size();
   for (SurfaceType t : m.surfaces) out << ' ' << static_cast<int>(t);
+}
+
+bool parse_model(const std::vector<std::string>& f, std::size_t at, const BuildingId& id, BuildingModel& m) {
+  m.id = id;
+  std::istringstream origin(f[at]), vertices(f[at + 1]), faces(f[at + 2]), surfaces(f[at + 3]);
+  if (!(origin >> m.origin.x >> m.origin.y >> m.origin.z)) return false;
+  std::size_t n = 0;
+  if (!(vertices >> n)) return false;
+  m.mesh.vertices.resize(n);
+  for (Point3& p : m.mesh.vertices)
+    if (!(vertices >> p.x >> p.y >> p.z)) return false;
+  if (!(faces >> n)) return false;
+  m.mesh.faces.resize(n);
+  for (auto& face : m.mesh.faces) {
+    std::size_t k = 0;
+    if (!(faces >> k)) return false;
+    face.resize(k);
+    for (std::uint32_t& v : face)
+      if (!(faces >> v) || v >= m.mesh.vertices.size()) return false;
+  }
+  if (!(surfaces >> n)) return false;
+  m.surfaces.resize(n);
+  for (SurfaceType& t : m.surfaces) {
+    int v = 0;
+    if (!(surfaces >> v) || v < 0 || v > 2) return false;
+    t = static_cast<SurfaceType>(v);
+  }
+  return true;
+}
+
+// The report's 3DBAG-style fields, after the first 18.
+constexpr std::size_t kReportFields = 36;
+
+std::string serialise(const BuildingResult& result) {
+  const BuildingReport& r = result.report;
+  std::ostringstream out;
+  out << escape(r.id) << '\t' << static_cast<int>(r.status) << '\t' << static_cast<int>(r.level) << '\t'
+      << escape(r.stage) << '\t' << escape(r.reason) << '\t' << escape(r.note) << '\t' << r.points << '\t'
+      << r.ground_points << '\t' << num(r.ground_z) << '\t' << escape(r.ground_method) << '\t' << num(r.roof_z)
+      << '\t' << r.planes << '\t' << r.walls << '\t' << r.candidate_faces << '\t' << r.faces << '\t'
+      << num(r.rmse) << '\t' << (r.valid ? 1 : 0) << '\t' << num(r.seconds) << '\t';
+  out << escape(r.lods) << '\t' << escape(r.lods_reconstructed) << '\t' << num(r.footprint_area) << '\t'
+      << num(r.point_density) << '\t' << num(r.h_roof_50p) << '\t' << num(r.h_roof_70p) << '\t' << num(r.h_roof_min)
+      << '\t' << num(r.h_roof_max) << '\t' << num(r.h_ridge) << '\t' << escape(r.roof_type) << '\t'
+      << num(r.volume_lod12) << '\t' << num(r.volume_lod13) << '\t' << num(r.volume_lod22) << '\t'
+      << num(r.rmse_lod12) << '\t' << num(r.rmse_lod13) << '\t' << num(r.rmse_lod22) << '\t'
+      << escape(r.validity_found) << '\t' << escape(r.repairs) << '\t';
+  if (!result.model) {
+    out << "-\n";
+    return out.str();
+  }
+  serialise_model(out, *result.model);
+  out << '\t' << result.lods.size();
+  for (const LodModel& lod : result.lods) {
+    out << '\t' << escape(lod.lod) << '\t';
+    serialise_model(out, lod.model);
+  }
   out << "\tend\n";
   return out.str();
 }
@@ -89,7 +135,7 @@ std::string serialise(const BuildingResult& result) {
 // Parses one journal line; false when it is damaged (a run killed in the middle of a write).
 bool parse(const std::string& line, BuildingResult& result) {
   const std::vector<std::string> f = split_tabs(line);
-  if (f.size() != 19 && f.size() != 23) return false;
+  if (f.size() != kReportFields + 1 && f.size() < kReportFields + 6) return false;
   try {
     BuildingReport& r = result.report;
     r.id = unescape(f[0]);
@@ -110,32 +156,27 @@ bool parse(const std::string& line, BuildingResult& result) {
     r.rmse = std::stod(f[15]);
     r.valid = f[16] == "1";
     r.seconds = std::stod(f[17]);
-    if (f.size() == 19) return f[18] == "-";
-    if (f[22] != "end") return false;
+    r.lods = unescape(f[18]);
+    r.lods_reconstructed = unescape(f[19]);
+    double* numbers[] = {&r.footprint_area, &r.point_density, &r.h_roof_50p, &r.h_roof_70p, &r.h_roof_min,
+                         &r.h_roof_max, &r.h_ridge};
+    for (std::size_t k = 0; k < 7; ++k) *numbers[k] = std::stod(f[20 + k]);
+    r.roof_type = unescape(f[27]);
+    double* more[] = {&r.volume_lod12, &r.volume_lod13, &r.volume_lod22, &r.rmse_lod12, &r.rmse_lod13, &r.rmse_lod22};
+    for (std::size_t k = 0; k < 6; ++k) *more[k] = std::stod(f[28 + k]);
+    r.validity_found = unescape(f[34]);
+    r.repairs = unescape(f[35]);
+    if (f.size() == kReportFields + 1) return f[kReportFields] == "-";
+    if (f.back() != "end") return false;
     BuildingModel m;
-    m.id = r.id;
-    std::istringstream origin(f[18]), vertices(f[19]), faces(f[20]), surfaces(f[21]);
-    if (!(origin >> m.origin.x >> m.origin.y >> m.origin.z)) return false;
-    std::size_t n = 0;
-    if (!(vertices >> n)) return false;
-    m.mesh.vertices.resize(n);
-    for (Point3& p : m.mesh.vertices)
-      if (!(vertices >> p.x >> p.y >> p.z)) return false;
-    if (!(faces >> n)) return false;
-    m.mesh.faces.resize(n);
-    for (auto& face : m.mesh.faces) {
-      std::size_t k = 0;
-      if (!(faces >> k)) return false;
-      face.resize(k);
-      for (std::uint32_t& v : face)
-        if (!(faces >> v) || v >= m.mesh.vertices.size()) return false;
-    }
-    if (!(surfaces >> n)) return false;
-    m.surfaces.resize(n);
-    for (SurfaceType& t : m.surfaces) {
-      int v = 0;
-      if (!(surfaces >> v) || v < 0 || v > 2) return false;
-      t = static_cast<SurfaceType>(v);
+    if (!parse_model(f, kReportFields, r.id, m)) return false;
+    const std::size_t lods = std::stoull(f[kReportFields + 4]);
+    if (f.size() != kReportFields + 5 + 5 * lods + 1) return false;
+    for (std::size_t k = 0; k < lods; ++k) {
+      LodModel lod;
+      lod.lod = unescape(f[kReportFields + 5 + 5 * k]);
+      if (!parse_model(f, kReportFields + 6 + 5 * k, r.id, lod.model)) return false;
+      result.lods.push_back(std::move(lod));
     }
     result.model = std::move(m);
     return true;

@@ -1,4 +1,5 @@
-// The per-building report of a batch run, as CSV (one row per input footprint) and JSON.
+// The per-building report of a batch run, as CSV (one row per input footprint) and JSON, and the
+// attributes each building carries into CityJSON and the GeoPackage.
 #pragma once
 
 #include <string>
@@ -13,5 +14,15 @@ void write_report_csv(const std::string& path, const std::vector<BuildingReport>
 
 /// Writes the JSON report ({"summary": ..., "buildings": [...]}), atomically. Throws IoError.
 void write_report_json(const std::string& path, const std::vector<BuildingReport>& rows, const BatchSummary& summary);
+
+/// A building's own attributes (README, "Attributes"): 3DBAG's names where 3DBAG has the quantity
+/// (b3_h_dak_70p, b3_dak_type, b3_volume_lod22, b3_rmse_lod22, ...), city3d's otherwise; numbers
+/// rounded to what they mean (heights to the millimetre, volumes to 0.01 m3, RMSE to 0.1 mm); NaN
+/// and unknown values are null. "seconds" only with `timings` (it differs from run to run).
+Attributes building_attributes(const BuildingReport& report, bool timings);
+
+/// The footprint's attributes (names and types as in the source; a name city3d uses itself gets the
+/// prefix "footprint_"), then building_attributes().
+Attributes output_attributes(const BuildingReport& report, const Attributes& footprint, bool timings);
 
 }  // namespace city3d::detail
