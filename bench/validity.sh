@@ -13,20 +13,31 @@ data="$here/../../shared/data"
 out="$(mktemp -d)"
 trap 'rm -rf "$out"' EXIT
 status=0
-for set in $sets; do
-  case "$set" in
-    dev) "$build/city3d" reconstruct "$data"/city3d_dev/*.ply -j "$jobs" --no-progress -q --no-resume --no-cityjson -o "$out/$set" ;;
-    dev_large) "$build/city3d" reconstruct "$data"/city3d_dev_large/*.ply -j "$jobs" --no-progress -q --no-resume --no-cityjson -o "$out/$set" ;;
-    delft) "$build/city3d" reconstruct "$data"/ahn3_delft/ahn3_cropped_1.las "$data"/ahn3_delft/ahn3_cropped_2.las \
-             --footprints "$data"/ahn3_delft/footprints/bgt_pand_laz_area.gpkg --id-field gml_id -j "$jobs" \
-             --no-progress -q --no-resume -o "$out/$set" ;;
-    *) echo "validity.sh: unknown set $set" >&2; exit 2 ;;
+# Every cloud folder of a set is one run (ids are file names, unique within a folder).
+runs_of() {
+  case "$1" in
+    dev) ls -d "$data"/city3d_dev/*/ ;;
+    dev_large) ls -d "$data"/city3d_dev_large/*/ ;;
+    delft) echo delft ;;
+    *) echo "validity.sh: unknown set $1" >&2; exit 2 ;;
   esac
+}
+for set in $sets; do
+  for run in $(runs_of "$set"); do
+    name="$set-$(basename "$run")"
+    if [ "$run" = delft ]; then
+      "$build/city3d" reconstruct "$data"/ahn3_delft/ahn3_cropped_1.las "$data"/ahn3_delft/ahn3_cropped_2.las \
+        --footprints "$data"/ahn3_delft/footprints/bgt_pand_laz_area.gpkg --id-field gml_id -j "$jobs" \
+        --no-progress -q --no-resume -o "$out/$name"
+    else
+      "$build/city3d" reconstruct "$run" -j "$jobs" --no-progress -q --no-resume --no-cityjson --no-html -o "$out/$name"
+    fi
+  done
   echo "== $set"
-  "$build/bench/bench_validity" "$out/$set/models" | tail -n 20 || status=1
-  python3 - "$out/$set/report.csv" <<'PY'
+  "$build/bench/bench_validity" "$out/$set"-*/models | tail -n 20 || status=1
+  python3 - "$out/$set"-*/report.csv <<'PY'
 import csv, sys
-rows = list(csv.DictReader(open(sys.argv[1])))
+rows = [row for f in sys.argv[1:] for row in csv.DictReader(open(f))]
 found = [r for r in rows if r.get("validity_found")]
 print(f"{len(rows)} buildings: {sum(r['status'] == 'ok' for r in rows)} ok, {sum(r['status'] == 'fallback' for r in rows)} fallback, "
       f"{sum(r['status'] == 'failed' for r in rows)} failed; {len(found)} had an invalid model as built "

@@ -21,6 +21,8 @@ packages=(
 
 # The tests validate CityJSON output with ajv-cli from the npm registry: they need node and npm.
 if [ "$mode" = test ] && ! command -v npm >/dev/null 2>&1; then packages+=(nodejs npm); fi
+# The tests render report.html in headless Chromium (a screenshot, no console errors).
+if [ "$mode" = test ]; then packages+=(chromium); fi
 
 missing=()
 for p in "${packages[@]}"; do

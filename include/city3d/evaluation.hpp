@@ -96,7 +96,7 @@ void round_to_grid(BuildingModel& model, double grid);
 /// What validate_as_written() found and did.
 struct WrittenValidity {
   std::vector<ValidityError> found;      ///< errors of the model as rounded, before any repair
-  std::vector<ValidityError> remaining;  ///< errors left after repair: empty = the model is valid
+  std::vector<ValidityError> remaining;  ///< errors left (of the model as rounded when the repair failed)
   std::string repairs;                   ///< what was repaired ("removed 2 spikes; split 1 face"), or empty
 };
 

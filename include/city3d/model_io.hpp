@@ -46,7 +46,7 @@ void write_models(const std::string& path, const std::vector<BuildingModel>& mod
 /// vertices or faces, and when the file holds no face.
 BuildingModel read_obj_model(const std::string& path);
 
-/// One geometry of a city object: a level of detail and its model (one Solid per edge-connected part).
+/// One geometry of a city object: a level of detail and its model.
 struct CityGeometry {
   std::string lod = "2.2";  ///< CityJSON LoD string ("1.2", "1.3", "2.2")
   BuildingModel model;
@@ -73,9 +73,10 @@ struct CityJsonOptions {
 /// near-vertical wall, otherwise roof).
 std::vector<SurfaceType> surface_types(const BuildingModel& model);
 
-/// Writes one CityJSON 2.0 file holding every object as a `Building` with one geometry per level
-/// of detail: a `Solid`, or a `MultiSolid` (one Solid per part) for a model of several parts, with
-/// semantic surfaces (RoofSurface, WallSurface, GroundSurface). Vertices are quantised with the
+/// Writes one CityJSON 2.0 file holding every object as a `Building` with one `Solid` per level of
+/// detail, with semantic surfaces (RoofSurface, WallSurface, GroundSurface); a level whose model
+/// has several edge-connected parts gives one child `BuildingPart` "<id>-<lod>-<k>" per part
+/// (CityJSON's Building has no MultiSolid, and a Solid has one exterior shell). Vertices are quantised with the
 /// given transform and shared per building. Atomic write; throws IoError naming the path.
 void write_cityjson(const std::string& path, const std::vector<CityObject>& objects, const CityJsonOptions& options);
 

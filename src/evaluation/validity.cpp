@@ -779,8 +779,9 @@ void clean_model(BuildingModel& model) {
 }
 
 // Cuts zero-width spikes off every face: a vertex whose two edges fold back onto each other (the
-// same neighbour on both sides, or collinear edges pointing the same way). Returns how many.
-std::size_t remove_spikes(BuildingModel& model) {
+// same neighbour on both sides, or edges pointing the same way with the shorter one's end within
+// `tolerance` of the longer one's line). Returns how many.
+std::size_t remove_spikes(BuildingModel& model, double tolerance) {
   std::size_t removed = 0;
   for (auto& face : model.mesh.faces) {
     for (bool changed = true; changed && face.size() >= 3;) {
@@ -793,7 +794,8 @@ std::size_t remove_spikes(BuildingModel& model) {
         const Vec ba = sub(a, b), bc = sub(c, b);
         const double lab = norm(ba), lbc = norm(bc);
         const bool same = face[(k + n - 1) % n] == face[(k + 1) % n];
-        const bool folded = lab > 0 && lbc > 0 && dot(ba, bc) > 0 && norm(cross(ba, bc)) <= 1e-9 * lab * lbc;
+        // |ba x bc| / longer edge = distance of the shorter edge's end from the longer edge's line.
+        const bool folded = lab > 0 && lbc > 0 && dot(ba, bc) > 0 && norm(cross(ba, bc)) <= tolerance * std::max(lab, lbc);
         if (!same && !folded) continue;
         face.erase(face.begin() + static_cast<std::ptrdiff_t>(k));
         if (same) face.erase(face.begin() + static_cast<std::ptrdiff_t>(k % face.size()));  // a, b, a -> a
@@ -820,25 +822,45 @@ std::vector<int> face_codes(const BuildingModel& model, std::size_t f, const Val
 }  // namespace
 
 void round_to_grid(BuildingModel& model, double grid) {
-  if (grid > 0) {
-    std::map<std::array<long long, 3>, std::uint32_t> index_of;
-    std::vector<std::uint32_t> remap(model.mesh.vertices.size());
-    std::vector<Point3> vertices;
-    for (std::size_t i = 0; i < model.mesh.vertices.size(); ++i) {
-      const Point3& p = model.mesh.vertices[i];
-      const std::array<long long, 3> q{std::llround((p.x + model.origin.x) / grid),
-                                        std::llround((p.y + model.origin.y) / grid),
-                                        std::llround((p.z + model.origin.z) / grid)};
-      const auto [it, fresh] = index_of.emplace(q, static_cast<std::uint32_t>(vertices.size()));
-      if (fresh)
-        vertices.push_back({q[0] * grid - model.origin.x, q[1] * grid - model.origin.y, q[2] * grid - model.origin.z});
-      remap[i] = it->second;
+  // Vertices that round to the same grid point become one, within each edge-connected part only:
+  // detached parts (the blocks of a multipolygon touching at a corner) are separate Solids in
+  // CityJSON and must stay separate here.
+  std::vector<std::size_t> parent(model.mesh.faces.size());
+  std::iota(parent.begin(), parent.end(), std::size_t{0});
+  const auto find = [&parent](std::size_t f) {
+    while (parent[f] != f) f = parent[f] = parent[parent[f]];
+    return f;
+  };
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> first_face_of_edge;
+  for (std::size_t f = 0; f < model.mesh.faces.size(); ++f) {
+    const auto& face = model.mesh.faces[f];
+    for (std::size_t k = 0; k < face.size(); ++k) {
+      const auto [it, fresh] = first_face_of_edge.emplace(std::minmax(face[k], face[(k + 1) % face.size()]), f);
+      if (!fresh) parent[find(f)] = find(it->second);
     }
-    model.mesh.vertices = std::move(vertices);
-    for (auto& face : model.mesh.faces)
-      for (std::uint32_t& i : face)
-        if (i < remap.size()) i = remap[i];
   }
+  std::map<std::pair<std::size_t, std::array<long long, 3>>, std::uint32_t> index_of;
+  std::vector<Point3> vertices;
+  for (std::size_t f = 0; f < model.mesh.faces.size(); ++f) {
+    const std::size_t part = find(f);
+    for (std::uint32_t& i : model.mesh.faces[f]) {
+      if (i >= model.mesh.vertices.size()) continue;
+      const Point3& p = model.mesh.vertices[i];
+      std::array<long long, 3> q;
+      Point3 rounded = p;
+      if (grid > 0) {
+        q = {std::llround((p.x + model.origin.x) / grid), std::llround((p.y + model.origin.y) / grid),
+             std::llround((p.z + model.origin.z) / grid)};
+        rounded = {q[0] * grid - model.origin.x, q[1] * grid - model.origin.y, q[2] * grid - model.origin.z};
+      } else {
+        q = {static_cast<long long>(i), 0, 0};  // no rounding: keep vertices apart
+      }
+      const auto [it, fresh] = index_of.emplace(std::make_pair(part, q), static_cast<std::uint32_t>(vertices.size()));
+      if (fresh) vertices.push_back(rounded);
+      i = it->second;
+    }
+  }
+  model.mesh.vertices = std::move(vertices);
   clean_model(model);
 }
 
@@ -849,8 +871,9 @@ WrittenValidity validate_as_written(BuildingModel& model, double grid, const Val
   result.remaining = result.found;
   if (result.found.empty()) return result;
 
+  const BuildingModel as_built = model;
   std::string repairs;
-  const std::size_t spikes = remove_spikes(model);
+  const std::size_t spikes = remove_spikes(model, std::max(params.snap_tolerance, grid));
   if (spikes) {
     round_to_grid(model, grid);
     repairs = "cut " + std::to_string(spikes) + " zero-width spike" + (spikes > 1 ? "s" : "");
@@ -884,8 +907,11 @@ WrittenValidity validate_as_written(BuildingModel& model, double grid, const Val
     repairs += (repairs.empty() ? "" : "; ") + std::string("split ") + std::to_string(split) + " face" +
                (split > 1 ? "s" : "") + " into triangles";
   }
-  result.repairs = repairs;
   result.remaining = repairs.empty() ? result.found : validate_model(model.mesh, params);
+  if (result.remaining.empty())
+    result.repairs = repairs;
+  else
+    model = as_built;  // the repair did not help: keep the model as built (rounded), e.g. for --debug
   return result;
 }
 

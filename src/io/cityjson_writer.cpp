@@ -1,5 +1,5 @@
-// CityJSON 2.0 and CityJSONSeq writers: Buildings with one geometry per level of detail (a Solid, or a
-// MultiSolid for a model of several parts), semantic surfaces, the run's quantising transform and
+// CityJSON 2.0 and CityJSONSeq writers: Buildings with one Solid per level of detail (BuildingParts
+// for a level whose model has several parts), semantic surfaces, the run's quantising transform and
 // attributes. Output is byte-deterministic (fixed key order, shortest round-trip number formatting).
 #include <algorithm>
 #include <charconv>
@@ -100,56 +100,37 @@ std::vector<std::vector<std::size_t>> model_parts(const BuildingModel& m) {
   return parts;
 }
 
-// Appends one geometry object: a Solid for a model of one part, else a MultiSolid of one Solid per
-// part (CityJSON's Solid has a single exterior shell), with semantic surfaces of the types used, in
-// the order ground, wall, roof. Vertices are quantised into the building's shared list.
-void append_geometry(std::string& out, const CityGeometry& g, const Point3& translate, double scale,
-                     std::vector<Quantised>& vertices, std::map<Quantised, std::size_t>& index_of) {
+// Appends one Solid of the given faces of a geometry's model, with semantic surfaces of the types
+// those faces use, in the order ground, wall, roof. `remap` takes model vertices to the building's
+// shared vertex list.
+void append_solid(std::string& out, const CityGeometry& g, const std::vector<std::size_t>& faces,
+                  const std::vector<SurfaceType>& types, const std::vector<std::size_t>& remap) {
   const BuildingModel& m = g.model;
-  std::vector<std::size_t> remap(m.mesh.vertices.size());
-  for (std::size_t i = 0; i < m.mesh.vertices.size(); ++i) {
-    const Point3& p = m.mesh.vertices[i];
-    const Quantised q{std::llround((p.x + m.origin.x - translate.x) / scale),
-                      std::llround((p.y + m.origin.y - translate.y) / scale),
-                      std::llround((p.z + m.origin.z - translate.z) / scale)};
-    const auto [it, inserted] = index_of.emplace(q, vertices.size());
-    if (inserted) vertices.push_back(q);
-    remap[i] = it->second;
-  }
-  const std::vector<SurfaceType> types = surface_types(m);
-  const std::vector<std::vector<std::size_t>> parts = model_parts(m);
   bool used[3] = {false, false, false};
-  for (SurfaceType t : types) used[static_cast<int>(t)] = true;
+  for (std::size_t f : faces) used[static_cast<int>(types[f])] = true;
   int surface_index[3] = {-1, -1, -1};
   int n_surfaces = 0;
   for (int t = 0; t < 3; ++t)
     if (used[t]) surface_index[t] = n_surfaces++;
-  const bool multi = parts.size() > 1;
-
-  out += multi ? "{\"type\":\"MultiSolid\",\"lod\":" : "{\"type\":\"Solid\",\"lod\":";
+  out += "{\"type\":\"Solid\",\"lod\":";
   append_json_string(out, g.lod);
-  out += ",\"boundaries\":[";
-  for (std::size_t p = 0; p < parts.size(); ++p) {
-    if (p) out += ',';
-    out += multi ? "[[" : "[";
-    for (std::size_t i = 0; i < parts[p].size(); ++i) {
-      if (i) out += ',';
-      out += "[[";
-      bool first = true;
-      std::size_t previous = static_cast<std::size_t>(-1);
-      for (std::uint32_t v : m.mesh.faces[parts[p][i]]) {
-        const std::size_t q = remap[v];
-        if (q == previous) continue;  // consecutive vertices merged by quantisation
-        if (!first) out += ',';
-        out += std::to_string(q);
-        first = false;
-        previous = q;
-      }
-      out += "]]";
+  out += ",\"boundaries\":[[";
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    if (i) out += ',';
+    out += "[[";
+    bool first = true;
+    std::size_t previous = static_cast<std::size_t>(-1);
+    for (std::uint32_t v : m.mesh.faces[faces[i]]) {
+      const std::size_t q = remap[v];
+      if (q == previous) continue;  // consecutive vertices merged by quantisation
+      if (!first) out += ',';
+      out += std::to_string(q);
+      first = false;
+      previous = q;
     }
-    out += multi ? "]]" : "]";
+    out += "]]";
   }
-  out += "],\"semantics\":{\"surfaces\":[";
+  out += "]],\"semantics\":{\"surfaces\":[";
   for (int t = 0, k = 0; t < 3; ++t) {
     if (!used[t]) continue;
     if (k++) out += ',';
@@ -157,24 +138,49 @@ void append_geometry(std::string& out, const CityGeometry& g, const Point3& tran
     out += surface_name(static_cast<SurfaceType>(t));
     out += "\"}";
   }
-  out += "],\"values\":[";
-  for (std::size_t p = 0; p < parts.size(); ++p) {
-    if (p) out += ',';
-    out += multi ? "[[" : "[";
-    for (std::size_t i = 0; i < parts[p].size(); ++i) {
-      if (i) out += ',';
-      out += std::to_string(surface_index[static_cast<int>(types[parts[p][i]])]);
-    }
-    out += multi ? "]]" : "]";
+  out += "],\"values\":[[";
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    if (i) out += ',';
+    out += std::to_string(surface_index[static_cast<int>(types[faces[i]])]);
   }
-  out += "]}}";
+  out += "]]}}";
 }
 
-// Appends the CityObject member `"id":{...}`: a Building with its attributes and one geometry per
-// level of detail, vertices shared across its levels.
+// Appends the CityObject member `"id":{...}`: a Building with its attributes and one Solid per level
+// of detail, vertices shared across its levels. A level whose model has several parts (detached
+// blocks of a multipolygon footprint) cannot be one Solid (one exterior shell) and a Building has no
+// MultiSolid: each part becomes a child BuildingPart "<id>-<lod>-<k>" with that level's Solid, so
+// every Solid written is valid on its own.
 void append_city_object(std::string& out, const CityObject& object, const Point3& translate, double scale,
                         std::vector<Quantised>& vertices) {
   std::map<Quantised, std::size_t> index_of;
+  std::string geometry;
+  std::vector<std::pair<std::string, std::string>> parts;  // id, geometry
+  for (const CityGeometry& g : object.geometries) {
+    const BuildingModel& m = g.model;
+    std::vector<std::size_t> remap(m.mesh.vertices.size());
+    for (std::size_t i = 0; i < m.mesh.vertices.size(); ++i) {
+      const Point3& p = m.mesh.vertices[i];
+      const Quantised q{std::llround((p.x + m.origin.x - translate.x) / scale),
+                        std::llround((p.y + m.origin.y - translate.y) / scale),
+                        std::llround((p.z + m.origin.z - translate.z) / scale)};
+      const auto [it, inserted] = index_of.emplace(q, vertices.size());
+      if (inserted) vertices.push_back(q);
+      remap[i] = it->second;
+    }
+    const std::vector<SurfaceType> types = surface_types(m);
+    const std::vector<std::vector<std::size_t>> model_faces = model_parts(m);
+    if (model_faces.size() == 1) {
+      if (!geometry.empty()) geometry += ',';
+      append_solid(geometry, g, model_faces.front(), types, remap);
+      continue;
+    }
+    for (std::size_t k = 0; k < model_faces.size(); ++k) {
+      std::string solid;
+      append_solid(solid, g, model_faces[k], types, remap);
+      parts.emplace_back(object.id + "-" + g.lod + "-" + std::to_string(k + 1), std::move(solid));
+    }
+  }
   append_json_string(out, object.id);
   out += ":{\"type\":\"Building\",\"attributes\":{";
   for (std::size_t a = 0; a < object.attributes.size(); ++a) {
@@ -183,12 +189,23 @@ void append_city_object(std::string& out, const CityObject& object, const Point3
     out += ':';
     append_value(out, object.attributes[a].second);
   }
-  out += "},\"geometry\":[";
-  for (std::size_t g = 0; g < object.geometries.size(); ++g) {
-    if (g) out += ',';
-    append_geometry(out, object.geometries[g], translate, scale, vertices, index_of);
+  out += "},\"geometry\":[" + geometry + "]";
+  if (!parts.empty()) {
+    out += ",\"children\":[";
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      if (k) out += ',';
+      append_json_string(out, parts[k].first);
+    }
+    out += ']';
   }
-  out += "]}";
+  out += '}';
+  for (const auto& [id, solid] : parts) {
+    out += ',';
+    append_json_string(out, id);
+    out += ":{\"type\":\"BuildingPart\",\"parents\":[";
+    append_json_string(out, object.id);
+    out += "],\"geometry\":[" + solid + "]}";
+  }
 }
 
 void append_vertices(std::string& out, const std::vector<Quantised>& vertices) {

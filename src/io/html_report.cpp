@@ -399,6 +399,7 @@ resize();
 const first = worst.find((i) => B[i].m >= 0);
 const start = first !== undefined ? first : B.findIndex((b) => b.m >= 0);
 if (start >= 0) select(start);
+console.log("city3d report ready");
 </script>
 </body>
 </html>
