@@ -16,7 +16,7 @@ packages=(
   libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libboost-dev
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   libglpk-dev coinor-libcbc-dev
-  libgtest-dev
+  libgtest-dev nlohmann-json3-dev
 )
 
 # The tests validate CityJSON output with ajv-cli from the npm registry: they need node and npm.

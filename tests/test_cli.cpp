@@ -390,13 +390,14 @@ TEST_F(Reconstruct, run_killed_halfway_resumes_to_the_same_output) {
   const fs::path whole = dir_ / "whole", resumed = dir_ / "resumed";
   ASSERT_EQ(run("reconstruct " + sample_args() + " -o " + whole.string()).exit_code, 0);
   // A kill in the middle of writing: the journal holds the header, some finished buildings and half
-  // a line; no other output exists yet.
+  // a line, the models folder the models of those buildings; no other output exists yet.
   const std::string journal = read_file(whole / "resume.journal");
   const auto lines = lines_of(journal);
   ASSERT_EQ(lines.size(), 16u);  // header + 15 buildings
   std::size_t cut = 0;
   for (int i = 0; i < 7; ++i) cut = journal.find('\n', cut) + 1;  // header + 6 buildings
   fs::create_directories(resumed);
+  fs::copy(whole / "models", resumed / "models");
   std::ofstream(resumed / "resume.journal", std::ios::binary) << journal.substr(0, cut + 40);
   const Result r = run("reconstruct " + sample_args() + " -v -o " + resumed.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;

@@ -198,16 +198,15 @@ TEST_F(ModelWriter, writes_cityjson_matching_reference) {
   CityObject object = one_lod(box_model("b1", {84916.9491, 447413.3, 5.977}), "1.2",
                               {{"status", std::string("ok")}, {"rmse", 0.125}, {"points", std::int64_t{1234}},
                                {"note", AttributeValue{}}, {"strict", false}});
-  write_cityjson(out.string(), {object}, {"EPSG:28992", 0.001, {84916, 447413, 5}, ""});
+  write_cityjson(out.string(), {object}, {"EPSG:28992", 0.001, ""}, {84916, 447413, 5});
   EXPECT_EQ(read_text(out), reference("box.city.json"));
 }
 
 TEST_F(ModelWriter, cityjson_uses_the_transform_it_is_given) {
   // Scale 0.0001 (the default) and a given translation: 84916.9491 - 84900 = 16.9491 m = 169491 units.
   const fs::path out = dir_ / "t.city.json";
-  CityJsonOptions options;
-  options.translate = {84900, 447400, 0};
-  write_cityjson(out.string(), {one_lod(box_model("b1", {84916.9491, 447413.3, 5.977}), "2.2")}, options);
+  write_cityjson(out.string(), {one_lod(box_model("b1", {84916.9491, 447413.3, 5.977}), "2.2")}, CityJsonOptions{},
+                 {84900, 447400, 0});
   const std::string text = read_text(out);
   EXPECT_NE(text.find("\"transform\":{\"scale\":[0.0001,0.0001,0.0001],\"translate\":[84900,447400,0]}"),
             std::string::npos)
@@ -218,7 +217,7 @@ TEST_F(ModelWriter, cityjson_uses_the_transform_it_is_given) {
 TEST_F(ModelWriter, cityjson_shares_vertices_and_labels_faces_by_normal) {
   const fs::path out = dir_ / "two.city.json";
   write_cityjson(out.string(), {one_lod(box_model("a", {0, 0, 0}), "2.2"), one_lod(box_model("b", {10, 0, 0}), "2.2")},
-                 {"", 0.001, {0, 0, 0}, ""});
+                 {"", 0.001, ""}, {0, 0, 0});
   const std::string text = read_text(out);
   // 8 distinct vertices per building, none shared across buildings: 16 in all.
   std::size_t vertices = 0;
@@ -244,7 +243,7 @@ TEST_F(ModelWriter, cityjson_building_with_three_lods_and_two_parts_validates) {
   const BuildingModel one = box_model("b", {85000, 447000, 0});
   CityObject object{"b", {{"1.2", one}, {"1.3", one}, {"2.2", two}}, {{"status", std::string("ok")}}};
   const fs::path out = dir_ / "lods.city.json";
-  write_cityjson(out.string(), {object}, {"EPSG:28992", 0.0001, {84999, 446999, 0}, ""});
+  write_cityjson(out.string(), {object}, {"EPSG:28992", 0.0001, ""}, {84999, 446999, 0});
   const std::string text = read_text(out);
   EXPECT_NE(text.find("\"b\":{\"type\":\"Building\",\"attributes\":{\"status\":\"ok\"},\"geometry\":[{\"type\":\"Solid\",\"lod\":\"1.2\""),
             std::string::npos)
@@ -285,7 +284,7 @@ TEST(SurfaceTypes, uses_given_semantics_when_present) {
 TEST_F(ModelWriter, cityjsonseq_writes_header_then_one_feature_per_line) {
   const fs::path out = dir_ / "all.city.jsonl";
   {
-    CityJsonSeqWriter writer(out.string(), {"EPSG:28992", 0.001, {84000, 447000, 0}, ""});
+    CityJsonSeqWriter writer(out.string(), {"EPSG:28992", 0.001, ""}, {84000, 447000, 0});
     writer.add(one_lod(box_model("a", {84001, 447002, 1}), "2.2", {{"status", std::string("ok")}}));
     writer.add(one_lod(box_model("b", {84010, 447002, 1}), "2.2"));
     EXPECT_FALSE(fs::exists(out));  // only under its final name once closed
@@ -308,7 +307,7 @@ TEST_F(ModelWriter, cityjsonseq_writes_header_then_one_feature_per_line) {
 TEST_F(ModelWriter, cityjsonseq_leaves_nothing_when_not_closed) {
   const fs::path out = dir_ / "partial.city.jsonl";
   {
-    CityJsonSeqWriter writer(out.string(), {"", 0.001, {0, 0, 0}, ""});
+    CityJsonSeqWriter writer(out.string(), {"", 0.001, ""}, {0, 0, 0});
     writer.add(one_lod(box_model("a", {0, 0, 0}), "2.2"));
   }
   EXPECT_TRUE(fs::is_empty(dir_));

@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -56,7 +58,8 @@ bool have(const char* program) { return run_shell(std::string("command -v ") + p
 class Outputs : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = fs::temp_directory_path() / "city3d_outputs_test";
+    // One folder per process: CTest runs each test of this suite as its own process, in parallel.
+    dir_ = fs::temp_directory_path() / ("city3d_outputs_test_" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     const std::string d = CITY3D_SAMPLE_DATA;

@@ -39,6 +39,15 @@ int run_reconstruct(const city3d::RunOptions& options) {
   return options.strict && s.failed > 0 ? city3d::kExitStrict : city3d::kExitOk;
 }
 
+int run_merge(const city3d::RunOptions& options) {
+  const city3d::BatchSummary s = city3d::merge_shards({options.inputs, options.batch.output_dir});
+  if (options.verbosity > 0)
+    std::fprintf(stderr, "city3d: merged %zu shard folders: %zu buildings: %zu ok, %zu fallback, %zu skipped, "
+                 "%zu failed; report %s\n",
+                 options.inputs.size(), s.buildings, s.ok, s.fallback, s.skipped, s.failed, s.report_path.c_str());
+  return options.strict && s.failed > 0 ? city3d::kExitStrict : city3d::kExitOk;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -61,6 +70,7 @@ int main(int argc, char** argv) {
   try {
     if (options.command == "info") return run_info(options);
     if (options.command == "reconstruct") return run_reconstruct(options);
+    if (options.command == "merge") return run_merge(options);
     if (options.command == "evaluate") {
       std::cout << city3d::evaluate_model(options.inputs[0], options.inputs[1], options.residuals);
       return city3d::kExitOk;

@@ -43,6 +43,12 @@ struct BatchOptions {
   /// Skip buildings a previous run with the same inputs and parameters finished (resume.journal in
   /// the output folder); false recomputes everything.
   bool resume = true;
+  /// Do only shard `shard` of `shards` (1-based) into output_dir, for merge_shards() to combine:
+  /// the blocks (of block_size; for single-building clouds, the clouds) are dealt out to the shards
+  /// largest first (by footprint area, or cloud file size), each to the shard with the least so far,
+  /// so every shard computes the same split from the inputs alone. 0 / 0: the whole run.
+  int shard = 0;
+  int shards = 0;
 };
 
 /// Counts of one batch run.
@@ -52,8 +58,21 @@ struct BatchSummary {
   std::string report_path;
 };
 
-/// Runs the whole job. Throws IoError / ConfigError only when the run itself cannot go on
-/// (unreadable footprints or point clouds, unwritable output); a bad building never stops it.
+/// Runs the whole job (or one shard of it). Throws IoError / ConfigError only when the run itself
+/// cannot go on (unreadable footprints or point clouds, unwritable output); a bad building never
+/// stops it. A shard's folder holds its models, journal, report and, once it is finished, run.json.
 BatchSummary run_batch(const BatchOptions& options);
+
+/// What merge_shards() needs.
+struct MergeOptions {
+  std::vector<std::string> shard_dirs;  ///< output folders of `reconstruct --shard K/N` runs
+  std::string output_dir;               ///< where the merged outputs go
+};
+
+/// Combines the folders of every shard of one run into the outputs one process would have written
+/// (byte-identical CityJSON, CityJSONSeq, models and models.<ext>; the report differs only in its
+/// timings). Throws Error naming the folder when a shard is missing, incomplete (no run.json) or of
+/// other inputs or parameters, or a record or model file is damaged.
+BatchSummary merge_shards(const MergeOptions& options);
 
 }  // namespace city3d

@@ -4,6 +4,9 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
+#include <memory>
+#include <utility>
 #include <optional>
 #include <string>
 #include <vector>
@@ -48,5 +51,32 @@ FootprintSet read_footprints(const std::string& path, const FootprintReadOptions
 
 /// Names of the layers of an OGR source (one entry "obj" for an OBJ file). Throws IoError.
 std::vector<std::string> list_footprint_layers(const std::string& path);
+
+/// A footprint source read block by block, for sources too large to hold in memory (a country's
+/// footprints): scan() reads every feature once and numbers the footprints it keeps, without keeping
+/// their geometry; read_box() then reads the kept footprints of a region through an OGR spatial
+/// filter (the driver's index: GeoPackage R-tree, Shapefile .qix, SpatiaLite). A source whose
+/// features have no unique feature ids (FID), and an OBJ file, are held in memory instead.
+class FootprintSource {
+ public:
+  FootprintSource(std::string path, FootprintReadOptions options);
+  ~FootprintSource();
+  FootprintSource(const FootprintSource&) = delete;
+  FootprintSource& operator=(const FootprintSource&) = delete;
+
+  /// Reads every feature once, with the filters, rules and messages of read_footprints(), and calls
+  /// `kept` for each footprint read_footprints() would keep, with its number (0, 1, ... in the order
+  /// read_footprints() returns them). Returns the source's description and skipped features (no
+  /// footprints). Call once, before read_box(). Throws IoError as read_footprints() does.
+  FootprintSet scan(const std::function<void(std::size_t number, const Footprint& footprint)>& kept);
+
+  /// The kept footprints (as scan() numbered them) whose polygons may meet `box`: every one whose
+  /// polygon meets it, and possibly others whose bounding box does; sorted by number. Throws IoError.
+  std::vector<std::pair<std::size_t, Footprint>> read_box(const Box2& box) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace city3d

@@ -1,7 +1,8 @@
 // Face hypothesis (paper section 3.3): candidate faces of one building from its roof planes, its
 // vertical planes and its floor, and the integer program (SelectionProblem) that selects among them.
 //
-// Construction: a 2.5D arrangement, built in the local xy frame.
+// Construction: a 2.5D arrangement, built in the local xy frame. The code is in src/hypothesis/, one
+// file per step (src/hypothesis/steps.hpp lists them); only the 2D arrangement uses CGAL.
 //
 //  1. A 2D arrangement (CGAL Arrangement_2, exact predicates and constructions; coordinates are
 //     rounded to double only at the end) of

@@ -60,12 +60,11 @@ struct CityObject {
   std::vector<std::pair<std::string, AttributeValue>> attributes;
 };
 
-/// The transform and metadata of a CityJSON file. One run writes buildings.city.json and
-/// buildings.city.jsonl with the same options, so both carry the same transform.
+/// The scale and metadata of a CityJSON file (the translation is given with each call: one run
+/// writes buildings.city.json and buildings.city.jsonl with the same transform).
 struct CityJsonOptions {
   std::string crs;             ///< "EPSG:28992" (written as an OGC CRS URL), or empty when unknown
   double scale = 0.0001;       ///< transform scale in metres: 0.0001 keeps 0.1 mm, 0.001 millimetres
-  Point3 translate;            ///< transform translation, metres; a whole number keeps the grid exact
   std::string reference_date;  ///< metadata referenceDate (YYYY-MM-DD), or empty
 };
 
@@ -76,21 +75,54 @@ std::vector<SurfaceType> surface_types(const BuildingModel& model);
 /// Writes one CityJSON 2.0 file holding every object as a `Building` with one `Solid` per level of
 /// detail, with semantic surfaces (RoofSurface, WallSurface, GroundSurface); a level whose model
 /// has several edge-connected parts gives one child `BuildingPart` "<id>-<lod>-<k>" per part
-/// (CityJSON's Building has no MultiSolid, and a Solid has one exterior shell). Vertices are quantised with the
+/// (CityJSON's Building has no MultiSolid, and a Solid has one exterior shell). The translation is
+/// the minimum corner of all vertices, in whole metres. Vertices are quantised with the
 /// given transform and shared per building. Atomic write; throws IoError naming the path.
 void write_cityjson(const std::string& path, const std::vector<CityObject>& objects, const CityJsonOptions& options);
+
+/// The same with the transform's translation given (a whole number of metres keeps the grid exact).
+void write_cityjson(const std::string& path, const std::vector<CityObject>& objects, const CityJsonOptions& options,
+                    const Point3& translate);
 
 /// Streams CityJSONSeq (CityJSON Text Sequences): a first line with the CityJSON header and
 /// transform, then one CityJSONFeature line per building, written in the order add() is called.
 /// The file appears under its final name only after close() (atomic).
 class CityJsonSeqWriter {
  public:
-  /// The header carries options' transform, which every feature line uses.
-  CityJsonSeqWriter(const std::string& path, const CityJsonOptions& options);
+  /// `translate` is the transform's translation for the whole file (e.g. the footprints' minimum corner).
+  CityJsonSeqWriter(const std::string& path, const CityJsonOptions& options, const Point3& translate);
   ~CityJsonSeqWriter();
   CityJsonSeqWriter(const CityJsonSeqWriter&) = delete;
   CityJsonSeqWriter& operator=(const CityJsonSeqWriter&) = delete;
   void add(const CityObject& object);
+  void close();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// The CityJSONFeature text of one object (one line of CityJSONSeq, without its newline), its
+/// vertices quantised with `options.scale` and `translate`. Throws IoError when the scale is invalid.
+std::string cityjson_feature(const CityObject& object, const CityJsonOptions& options, const Point3& translate);
+
+/// The first line of a CityJSONSeq file (without its newline): the CityJSON header with the transform.
+std::string cityjson_seq_header(const CityJsonOptions& options, const Point3& translate);
+
+/// Builds one CityJSON file from CityJSONFeature texts (as cityjson_feature() makes them, with the
+/// same options and translate), in the order add() is called: every feature's CityObjects members
+/// are copied byte for byte, its vertices appended to the file's vertex list and its vertex indices
+/// moved accordingly. The result equals write_cityjson() of the same objects with that transform,
+/// and holds whatever the features hold. Memory stays small (vertices are spooled to a temporary
+/// file). The file appears under its final name only after close() (atomic). Throws IoError naming
+/// the path, or the feature's position when a text is not a CityJSONFeature.
+class CityJsonAssembler {
+ public:
+  CityJsonAssembler(const std::string& path, const CityJsonOptions& options, const Point3& translate);
+  ~CityJsonAssembler();
+  CityJsonAssembler(const CityJsonAssembler&) = delete;
+  CityJsonAssembler& operator=(const CityJsonAssembler&) = delete;
+  void add(const std::string& feature);
   void close();
 
  private:

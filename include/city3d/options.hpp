@@ -20,10 +20,10 @@ enum ExitCode : int {
 
 /// Everything one invocation of `city3d` can set, with its defaults.
 struct RunOptions {
-  std::string command;               ///< "info" or "reconstruct"; empty with --help / --version
+  std::string command;               ///< "info", "reconstruct", "evaluate" or "merge"; empty with --help / --version
   bool help = false;
   bool version = false;
-  std::vector<std::string> inputs;   ///< positional arguments: files for `info`, point clouds for `reconstruct`
+  std::vector<std::string> inputs;   ///< positional arguments: files for `info`, point clouds for `reconstruct`, shard folders for `merge`
   BatchOptions batch;                ///< footprints, stage parameters, outputs, threads
   std::string format = "obj";        ///< obj, ply, ply-ascii (parsed into batch.format)
   bool strict = false;               ///< exit non-zero when any building failed

@@ -74,6 +74,23 @@ std::vector<std::uint8_t> parse_classes(const std::string& flag, const std::stri
   return classes;
 }
 
+void parse_shard(const std::string& text, int& shard, int& shards) {
+  const std::size_t slash = text.find('/');
+  int k = 0, n = 0;
+  try {
+    if (slash != std::string::npos) {
+      k = parse_int("--shard", text.substr(0, slash), 1);
+      n = parse_int("--shard", text.substr(slash + 1), 1);
+    }
+  } catch (const ConfigError&) {
+    k = n = 0;
+  }
+  if (k < 1 || n < 1 || k > n)
+    throw ConfigError("option --shard: expected K/N with 1 <= K <= N, got '" + text + "'");
+  shard = k;
+  shards = n;
+}
+
 std::string classes_text(const std::vector<std::uint8_t>& classes) {
   std::string s;
   for (std::uint8_t c : classes) s += (s.empty() ? "" : ",") + std::to_string(c);
@@ -238,6 +255,10 @@ const std::vector<OptionSpec>& option_table() {
        "(0 = all at once; the output is the same)",
        [](const O& o) { return number_text(o.batch.block_size); },
        [](O& o, V v) { o.batch.block_size = parse_double("--block-size", v); }},
+      {"--shard", nullptr, "K/N",
+       "reconstruct only shard K of N (blocks dealt out by footprint area) into the output folder; "
+       "`city3d merge` combines the N folders",
+       nullptr, [](O& o, V v) { parse_shard(v, o.batch.shard, o.batch.shards); }},
       {"--strict", nullptr, nullptr, "exit with code 4 when any building failed", nullptr,
        [](O& o, V) { o.strict = true; }},
       {"--residuals", nullptr, "PATH", "evaluate: also write every point's distance to the model as CSV (x,y,z,distance)",
@@ -258,6 +279,7 @@ const char* const kCommands[][2] = {
     {"reconstruct", "CLOUD... [-f FOOTPRINTS]  models of every footprint (or of every single-building cloud)"},
     {"evaluate", "MODEL.obj POINTS         RMSE of points to a model, face count, validity"},
     {"info", "FILE...                        what point-cloud files (LAS, LAZ, PLY) and footprint sources hold"},
+    {"merge", "SHARD_DIR... -o DIR            combine the folders of every shard (--shard K/N) of a run"},
 };
 
 }  // namespace
@@ -310,7 +332,7 @@ RunOptions parse_command_line(int argc, const char* const* argv) {
       bool known = false;
       for (const auto& c : kCommands) known = known || arg == c[0];
       if (!known)
-        problems.push_back("unknown command '" + arg + "' (commands: reconstruct, evaluate, info; see city3d --help)");
+        problems.push_back("unknown command '" + arg + "' (commands: reconstruct, evaluate, info, merge; see city3d --help)");
       options.command = arg;
     } else {
       options.inputs.push_back(arg);
@@ -325,6 +347,9 @@ RunOptions parse_command_line(int argc, const char* const* argv) {
       problems.push_back("option --residuals belongs to the evaluate command");
     if (options.command == "reconstruct" && options.inputs.empty())
       problems.push_back("reconstruct: no point-cloud file or folder given");
+    if (options.command == "merge" && options.inputs.empty()) problems.push_back("merge: no shard folder given");
+    if (options.command != "reconstruct" && options.batch.shards > 0)
+      problems.push_back("option --shard belongs to the reconstruct command");
   }
   if (!problems.empty()) {
     std::string message;

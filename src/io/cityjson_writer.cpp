@@ -1,9 +1,12 @@
 // CityJSON 2.0 and CityJSONSeq writers: Buildings with one Solid per level of detail (BuildingParts
 // for a level whose model has several parts), semantic surfaces, the run's quantising transform and
-// attributes. Output is byte-deterministic (fixed key order, shortest round-trip number formatting).
+// attributes. Output is
+// byte-deterministic (fixed key order, shortest round-trip number formatting).
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstring>
+#include <memory>
 #include <map>
 #include <string>
 #include <tuple>
@@ -223,8 +226,7 @@ void append_vertices(std::string& out, const std::vector<Quantised>& vertices) {
   out += ']';
 }
 
-void append_header_fields(std::string& out, const CityJsonOptions& options) {
-  const Point3& translate = options.translate;
+void append_header_fields(std::string& out, const CityJsonOptions& options, const Point3& translate) {
   out += "\"type\":\"CityJSON\",\"version\":\"2.0\",\"transform\":{\"scale\":[";
   for (int i = 0; i < 3; ++i) {
     if (i) out += ',';
@@ -285,14 +287,29 @@ std::vector<SurfaceType> surface_types(const BuildingModel& model) {
 }
 
 void write_cityjson(const std::string& path, const std::vector<CityObject>& objects, const CityJsonOptions& options) {
+  Point3 translate{0, 0, 0};
+  Box3 box;
+  for (const CityObject& o : objects)
+    for (const CityGeometry& g : o.geometries)
+      for (const Point3& p : g.model.mesh.vertices)
+        box.add({p.x + g.model.origin.x, p.y + g.model.origin.y, p.z + g.model.origin.z});
+  if (!box.empty()) {
+    // A translation on the scale's grid keeps quantised coordinates exact multiples of the scale.
+    translate = {std::floor(box.min.x), std::floor(box.min.y), std::floor(box.min.z)};
+  }
+  write_cityjson(path, objects, options, translate);
+}
+
+void write_cityjson(const std::string& path, const std::vector<CityObject>& objects, const CityJsonOptions& options,
+                    const Point3& translate) {
   check_options(options, path);
   std::string out = "{";
-  append_header_fields(out, options);
+  append_header_fields(out, options, translate);
   out += ",\"CityObjects\":{";
   std::vector<Quantised> vertices;
   for (std::size_t i = 0; i < objects.size(); ++i) {
     if (i) out += ',';
-    append_city_object(out, objects[i], options.translate, options.scale, vertices);
+    append_city_object(out, objects[i], translate, options.scale, vertices);
   }
   out += "},";
   append_vertices(out, vertices);
@@ -305,36 +322,324 @@ void write_cityjson(const std::string& path, const std::vector<CityObject>& obje
 struct CityJsonSeqWriter::Impl {
   std::string path;
   CityJsonOptions options;
+  Point3 translate;
   std::unique_ptr<detail::AtomicFile> file;
 };
 
-CityJsonSeqWriter::CityJsonSeqWriter(const std::string& path, const CityJsonOptions& options)
-    : impl_(new Impl{path, options, nullptr}) {
+CityJsonSeqWriter::CityJsonSeqWriter(const std::string& path, const CityJsonOptions& options,
+                                     const Point3& translate)
+    : impl_(new Impl{path, options, translate, nullptr}) {
   check_options(options, path);
   impl_->file = std::make_unique<detail::AtomicFile>(path);
-  std::string header = "{";
-  append_header_fields(header, options);
-  header += ",\"CityObjects\":{},\"vertices\":[]}\n";
-  write_all(impl_->file->file(), header);
+  write_all(impl_->file->file(), cityjson_seq_header(options, translate) + "\n");
 }
 
 CityJsonSeqWriter::~CityJsonSeqWriter() = default;
 
 void CityJsonSeqWriter::add(const CityObject& object) {
   if (!impl_->file) throw IoError("cityjson: " + impl_->path + " is already closed");
-  std::string line = "{\"type\":\"CityJSONFeature\",\"id\":";
-  append_json_string(line, object.id);
-  line += ",\"CityObjects\":{";
-  std::vector<Quantised> vertices;
-  append_city_object(line, object, impl_->options.translate, impl_->options.scale, vertices);
-  line += "},";
-  append_vertices(line, vertices);
-  line += "}\n";
-  write_all(impl_->file->file(), line);
+  write_all(impl_->file->file(), cityjson_feature(object, impl_->options, impl_->translate) + "\n");
 }
 
 void CityJsonSeqWriter::close() {
   if (!impl_->file) return;
+  impl_->file->commit();
+  impl_->file.reset();
+}
+
+std::string cityjson_feature(const CityObject& object, const CityJsonOptions& options, const Point3& translate) {
+  check_options(options, object.id);
+  std::string line = "{\"type\":\"CityJSONFeature\",\"id\":";
+  append_json_string(line, object.id);
+  line += ",\"CityObjects\":{";
+  std::vector<Quantised> vertices;
+  append_city_object(line, object, translate, options.scale, vertices);
+  line += "},";
+  append_vertices(line, vertices);
+  line += "}";
+  return line;
+}
+
+std::string cityjson_seq_header(const CityJsonOptions& options, const Point3& translate) {
+  std::string header = "{";
+  append_header_fields(header, options, translate);
+  header += ",\"CityObjects\":{},\"vertices\":[]}";
+  return header;
+}
+
+namespace {
+
+// A byte-preserving walk over one CityJSONFeature text: copies its CityObjects members and its
+// vertices unchanged, except that every integer inside a "boundaries" value (the only place CityJSON
+// refers to the vertex list) is moved by the number of vertices already in the file. Nothing is
+// re-serialised, so whatever a feature holds (attributes, several geometries, LoDs) reaches the
+// CityJSON file byte for byte.
+class FeatureSplicer {
+ public:
+  FeatureSplicer(const std::string& text, std::size_t feature_number, std::uint64_t offset)
+      : s_(text), feature_(feature_number), offset_(offset) {}
+
+  /// Appends the feature's CityObjects members to `objects` and its vertices to `vertices` (both
+  /// without brackets; empty when there are none); returns the number of vertices.
+  std::uint64_t split(std::string& objects, std::string& vertices) {
+    std::uint64_t count = 0;
+    bool seen_objects = false, seen_vertices = false;
+    skip_ws();
+    expect('{');
+    skip_ws();
+    if (peek() == '}') fail("no CityObjects");
+    for (;;) {
+      skip_ws();
+      const std::string key = read_key();
+      skip_ws();
+      expect(':');
+      skip_ws();
+      if (key == "CityObjects") {
+        seen_objects = true;
+        expect('{');
+        copy_members(objects, false);
+      } else if (key == "vertices") {
+        seen_vertices = true;
+        expect('[');
+        skip_ws();
+        if (peek() == ']') {
+          ++p_;
+        } else {
+          for (;;) {
+            skip_ws();
+            const std::size_t begin = p_;
+            skip_value(0);
+            vertices.append(s_, begin, p_ - begin);
+            ++count;
+            skip_ws();
+            if (peek() == ']') {
+              ++p_;
+              break;
+            }
+            expect(',');
+            vertices += ',';
+          }
+        }
+      } else {
+        skip_value(0);
+      }
+      skip_ws();
+      if (peek() == '}') {
+        ++p_;
+        break;
+      }
+      expect(',');
+    }
+    skip_ws();
+    if (p_ != s_.size()) fail("text after the feature");
+    if (!seen_objects || !seen_vertices) fail(seen_objects ? "no vertices" : "no CityObjects");
+    return count;
+  }
+
+ private:
+  static constexpr int kMaxDepth = 64;
+
+  [[noreturn]] void fail(const std::string& what) const {
+    throw IoError("cityjson: feature " + std::to_string(feature_) + " is not a CityJSONFeature: " + what +
+                  " at byte " + std::to_string(p_));
+  }
+  char peek() const {
+    if (p_ >= s_.size()) fail("unexpected end");
+    return s_[p_];
+  }
+  void expect(char c) {
+    if (peek() != c) fail(std::string("expected '") + c + "'");
+    ++p_;
+  }
+  void skip_ws() {
+    while (p_ < s_.size() && (s_[p_] == ' ' || s_[p_] == '\t' || s_[p_] == '\n' || s_[p_] == '\r')) ++p_;
+  }
+  // A string token starting at p_ (the quote); returns its raw text without the quotes.
+  std::string read_string_raw() {
+    expect('"');
+    const std::size_t begin = p_;
+    while (peek() != '"') p_ += peek() == '\\' ? 2 : 1;
+    const std::string raw = s_.substr(begin, p_ - begin);
+    ++p_;
+    return raw;
+  }
+  std::string read_key() { return read_string_raw(); }
+  void skip_number() {
+    const std::size_t begin = p_;
+    while (p_ < s_.size() && std::strchr("+-0123456789.eE", s_[p_]) != nullptr) ++p_;
+    if (p_ == begin) fail("unexpected character");
+  }
+  void skip_value(int depth) {
+    if (depth > kMaxDepth) fail("nested too deeply");
+    const char c = peek();
+    if (c == '"') {
+      read_string_raw();
+    } else if (c == '{' || c == '[') {
+      const char close = c == '{' ? '}' : ']';
+      ++p_;
+      skip_ws();
+      if (peek() == close) {
+        ++p_;
+        return;
+      }
+      for (;;) {
+        skip_ws();
+        if (c == '{') {
+          read_string_raw();
+          skip_ws();
+          expect(':');
+          skip_ws();
+        }
+        skip_value(depth + 1);
+        skip_ws();
+        if (peek() == close) {
+          ++p_;
+          return;
+        }
+        expect(',');
+      }
+    } else if (s_.compare(p_, 4, "true") == 0 || s_.compare(p_, 4, "null") == 0) {
+      p_ += 4;
+    } else if (s_.compare(p_, 5, "false") == 0) {
+      p_ += 5;
+    } else {
+      skip_number();
+    }
+  }
+  // Copies a value, moving vertex indices when `shift` (inside "boundaries").
+  void copy_value(std::string& out, bool shift, int depth) {
+    if (depth > kMaxDepth) fail("nested too deeply");
+    const char c = peek();
+    if (c == '{') {
+      ++p_;
+      out += '{';
+      copy_members(out, shift, depth + 1);
+      out += '}';
+    } else if (c == '[') {
+      ++p_;
+      out += '[';
+      skip_ws();
+      if (peek() == ']') {
+        ++p_;
+        out += ']';
+        return;
+      }
+      for (;;) {
+        skip_ws();
+        copy_value(out, shift, depth + 1);
+        skip_ws();
+        if (peek() == ']') {
+          ++p_;
+          out += ']';
+          return;
+        }
+        expect(',');
+        out += ',';
+      }
+    } else if (shift && ((c >= '0' && c <= '9'))) {
+      const std::size_t begin = p_;
+      skip_number();
+      std::uint64_t v = 0;
+      const auto r = std::from_chars(s_.data() + begin, s_.data() + p_, v);
+      if (r.ec != std::errc() || r.ptr != s_.data() + p_) fail("a vertex index that is not an integer");
+      out += std::to_string(v + offset_);
+    } else {
+      const std::size_t begin = p_;
+      skip_value(depth + 1);
+      out.append(s_, begin, p_ - begin);
+    }
+  }
+  // Copies the members of an object whose '{' has been consumed, up to and including its '}'
+  // (which is not copied).
+  void copy_members(std::string& out, bool shift, int depth = 1) {
+    skip_ws();
+    if (peek() == '}') {
+      ++p_;
+      return;
+    }
+    for (;;) {
+      skip_ws();
+      const std::size_t begin = p_;
+      const std::string key = read_key();
+      out.append(s_, begin, p_ - begin);
+      skip_ws();
+      expect(':');
+      out += ':';
+      skip_ws();
+      copy_value(out, shift || key == "boundaries", depth + 1);
+      skip_ws();
+      if (peek() == '}') {
+        ++p_;
+        return;
+      }
+      expect(',');
+      out += ',';
+    }
+  }
+
+  const std::string& s_;
+  std::size_t feature_;
+  std::uint64_t offset_;
+  std::size_t p_ = 0;
+};
+
+}  // namespace
+
+struct CityJsonAssembler::Impl {
+  std::string path;
+  std::unique_ptr<detail::AtomicFile> file;
+  std::FILE* vertices = nullptr;  // the vertex list, spooled to an anonymous temporary file
+  std::uint64_t vertex_count = 0;
+  std::size_t features = 0;
+  bool any_object = false;
+  ~Impl() {
+    if (vertices) std::fclose(vertices);
+  }
+};
+
+CityJsonAssembler::CityJsonAssembler(const std::string& path, const CityJsonOptions& options,
+                                     const Point3& translate)
+    : impl_(new Impl) {
+  check_options(options, path);
+  impl_->path = path;
+  impl_->file = std::make_unique<detail::AtomicFile>(path);
+  impl_->vertices = std::tmpfile();
+  if (!impl_->vertices) throw IoError("cityjson: cannot create a temporary file for the vertices of " + path);
+  std::string header = "{";
+  append_header_fields(header, options, translate);
+  header += ",\"CityObjects\":{";
+  write_all(impl_->file->file(), header);
+}
+
+CityJsonAssembler::~CityJsonAssembler() = default;
+
+void CityJsonAssembler::add(const std::string& feature) {
+  if (!impl_->file) throw IoError("cityjson: " + impl_->path + " is already closed");
+  std::string objects, vertices;
+  FeatureSplicer splicer(feature, ++impl_->features, impl_->vertex_count);
+  const std::uint64_t n = splicer.split(objects, vertices);
+  if (!objects.empty()) {
+    if (impl_->any_object) objects.insert(objects.begin(), ',');
+    impl_->any_object = true;
+    write_all(impl_->file->file(), objects);
+  }
+  if (n > 0) {
+    if (impl_->vertex_count > 0) vertices.insert(vertices.begin(), ',');
+    write_all(impl_->vertices, vertices);
+    impl_->vertex_count += n;
+  }
+}
+
+void CityJsonAssembler::close() {
+  if (!impl_->file) return;
+  std::FILE* out = impl_->file->file();
+  write_all(out, "},\"vertices\":[");
+  if (std::fflush(impl_->vertices) != 0 || std::fseek(impl_->vertices, 0, SEEK_SET) != 0)
+    throw IoError("cityjson: cannot read back the vertices spooled for " + impl_->path);
+  char buffer[1 << 16];
+  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, impl_->vertices)) > 0;) std::fwrite(buffer, 1, n, out);
+  if (std::ferror(impl_->vertices)) throw IoError("cityjson: cannot read back the vertices spooled for " + impl_->path);
+  write_all(out, "]}\n");
   impl_->file->commit();
   impl_->file.reset();
 }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -13,8 +14,20 @@
 
 namespace city3d::detail {
 
+/// How read_ogr_footprints() hands out what it reads: kept in the returned set (no sink), or each
+/// kept footprint passed to `sink` and not kept (a source too large to hold); `quiet` turns the
+/// per-feature warnings and the summary into debug messages (a second read of the same features);
+/// `keep_duplicates` keeps a footprint whose id an earlier one has (a read of a region, where the
+/// earlier holder may be outside it or come later in the spatial index's order).
+struct FootprintReadMode {
+  const std::function<void(Footprint&&)>* sink = nullptr;
+  bool quiet = false;
+  bool keep_duplicates = false;
+};
+
 /// Reads an OGR vector source (see read_footprints). Throws IoError.
-FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOptions& options);
+FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOptions& options,
+                                 const FootprintReadMode& mode = {});
 
 /// Layer names of an OGR vector source. Throws IoError.
 std::vector<std::string> list_ogr_layers(const std::string& path);

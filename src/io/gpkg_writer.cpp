@@ -94,7 +94,7 @@ struct DatasetCloser {
 
 }  // namespace
 
-void write_gpkg(const std::string& path, const std::vector<BuildingRecord>& records, const std::string& crs) {
+void write_gpkg(const std::string& path, const std::vector<OverviewRecord>& records, const std::string& crs) {
   GDALAllRegister();
   GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GPKG");
   if (!driver) throw IoError("gpkg: GDAL has no GPKG driver; cannot write " + path);
@@ -124,7 +124,7 @@ void write_gpkg(const std::string& path, const std::vector<BuildingRecord>& reco
   std::vector<Attributes> attributes;
   std::vector<std::string> names;
   std::map<std::string, Kind> kinds;
-  for (const BuildingRecord& r : records) {
+  for (const OverviewRecord& r : records) {
     attributes.push_back(detail::output_attributes(r.report, r.footprint_attributes, false));
     for (const auto& [name, value] : attributes.back()) {
       const auto [it, fresh] = kinds.emplace(name, Kind::none);
@@ -175,7 +175,7 @@ void write_gpkg(const std::string& path, const std::vector<BuildingRecord>& reco
     if (roofs->CreateField(&field) != OGRERR_NONE) fail(std::string("cannot create field ") + name);
   }
   if (ds->StartTransaction() != OGRERR_NONE) fail("cannot start a transaction");
-  for (const BuildingRecord& r : records) {
+  for (const OverviewRecord& r : records) {
     for (const CityGeometry& g : r.lods) {
       if (g.lod != "2.2") continue;
       const BuildingModel& m = g.model;

@@ -407,31 +407,10 @@ console.log("city3d report ready");
 
 }  // namespace
 
-std::vector<BuildingRecord> building_records(const std::vector<BuildingReport>& rows,
-                                             const std::vector<Footprint>* footprints,
-                                             const std::vector<CityObject>& objects) {
-  std::map<BuildingId, const CityObject*> by_id;
-  for (const CityObject& o : objects) by_id.emplace(o.id, &o);
-  std::vector<BuildingRecord> records;
-  records.reserve(rows.size());
-  for (std::size_t k = 0; k < rows.size(); ++k) {
-    BuildingRecord r;
-    r.report = rows[k];
-    if (footprints && k < footprints->size() && (*footprints)[k].id == rows[k].id) {
-      r.footprint = (*footprints)[k].polygons;
-      r.footprint_attributes = (*footprints)[k].attributes;
-    }
-    const auto it = by_id.find(rows[k].id);
-    if (it != by_id.end()) r.lods = it->second->geometries;
-    records.push_back(std::move(r));
-  }
-  return records;
-}
-
-void write_report_html(const std::string& path, const std::vector<BuildingRecord>& records, const std::string& crs) {
+void write_report_html(const std::string& path, const std::vector<OverviewRecord>& records, const std::string& crs) {
   // Footprints (or, for clouds, the models' floors) relative to the run's corner, in centimetres.
   Box2 extent;
-  for (const BuildingRecord& r : records)
+  for (const OverviewRecord& r : records)
     for (const Polygon2& p : r.footprint)
       for (const Point2& v : p.outer) extent.add(v);
   const bool have_footprints = !extent.empty();
@@ -454,7 +433,7 @@ void write_report_html(const std::string& path, const std::vector<BuildingRecord
   });
   std::vector<long> model_of(records.size(), -1);
   for (std::size_t i : order) {
-    const BuildingRecord& r = records[i];
+    const OverviewRecord& r = records[i];
     if (r.lods.empty()) continue;
     const BuildingModel& m = r.lods.back().model;
     if (m.mesh.vertices.size() > vertex_budget) continue;
@@ -492,7 +471,7 @@ void write_report_html(const std::string& path, const std::vector<BuildingRecord
   models += ']';
 
   for (std::size_t i = 0; i < records.size(); ++i) {
-    const BuildingRecord& r = records[i];
+    const OverviewRecord& r = records[i];
     const BuildingReport& b = r.report;
     if (i) data += ',';
     data += "\n{\"id\":";

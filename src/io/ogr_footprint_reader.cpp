@@ -279,7 +279,9 @@ std::vector<std::string> list_ogr_layers(const std::string& path) {
   return layer_names(*dataset);
 }
 
-FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOptions& options) {
+FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOptions& options,
+                                 const FootprintReadMode& mode) {
+  const auto warn = [&mode](const std::string& message) { mode.quiet ? log_debug(message) : log_warning(message); };
   QuietGdalErrors quiet;
   GDALDatasetUniquePtr dataset = open_vector(path);
   OGRLayer& layer = select_layer(*dataset, path, options.layer);
@@ -356,7 +358,7 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
   std::unordered_map<BuildingId, std::int64_t> first_fid_of_id;
   std::size_t polygon_features = 0;
   auto skip = [&](const BuildingId& id, const std::string& reason) {
-    log_warning(kModule + std::string("skipped ") + id + " in " + where + ": " + reason);
+    warn(kModule + std::string("skipped ") + id + " in " + where + ": " + reason);
     set.skipped.push_back({id, reason});
   };
 
@@ -407,7 +409,8 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
 
     // The first feature with an id owns it, even when that feature is skipped for its geometry:
     // a later feature silently taking its place would hide the problem.
-    const auto [first, inserted] = first_fid_of_id.emplace(id, fid);
+    const auto [first, inserted] =
+        mode.keep_duplicates ? std::make_pair(first_fid_of_id.end(), true) : first_fid_of_id.emplace(id, fid);
     if (!inserted) {
       skip(id,
            "duplicated id (first at fid " + std::to_string(first->second) + ", this is " + fid_text + ")");
@@ -421,7 +424,7 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
     }
     if (!outcome.repair_note.empty()) {
       ++set.repaired;
-      log_warning(kModule + std::string("repaired ") + id + " in " + where + ": " + outcome.repair_note);
+      warn(kModule + std::string("repaired ") + id + " in " + where + ": " + outcome.repair_note);
     }
     Footprint footprint;
     footprint.id = std::move(id);
@@ -452,7 +455,10 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
     const bool has_hole = std::any_of(footprint.polygons.begin(), footprint.polygons.end(),
                                       [](const Polygon2& p) { return !p.holes.empty(); });
     if (has_hole) ++set.with_holes;
-    set.footprints.push_back(std::move(footprint));
+    if (mode.sink)
+      (*mode.sink)(std::move(footprint));
+    else
+      set.footprints.push_back(std::move(footprint));
   }
 
   // No polygon at all: an error when the unfiltered layer has none either; an empty selection
@@ -464,8 +470,10 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
       throw IoError(kModule + where + " has no polygon features");
     }
   }
-  log_info(kModule + std::to_string(set.footprints.size()) + " footprints from " + where + " (" +
-           std::to_string(set.skipped.size()) + " skipped, " + std::to_string(set.repaired) + " repaired)");
+  const std::string summary = kModule + std::to_string(set.feature_count - set.skipped.size()) +
+                              " footprints from " + where + " (" + std::to_string(set.skipped.size()) + " skipped, " +
+                              std::to_string(set.repaired) + " repaired)";
+  mode.quiet ? log_debug(summary) : log_info(summary);
   return set;
 }
 

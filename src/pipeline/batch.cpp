@@ -1,5 +1,10 @@
-// The batch job (run_batch): footprints, tiles, cropping block by block, buildings reconstructed in
-// parallel (reconstruct_building, pipeline.cpp), output written in input order, resume, report.
+// The batch job (run_batch) and the merge of shards (merge_shards). A run is planned before any
+// building is reconstructed, from what every shard can compute alike: the footprints are scanned once
+// (no geometry kept) and grouped into square blocks, and the blocks are dealt out to the shards. Each
+// block's footprints are then read through an OGR spatial filter, its tiles cropped, its buildings
+// reconstructed in parallel (reconstruct_building, pipeline.cpp), and each finished building's
+// outputs (model file, CityJSONFeature, report rows) recorded in the journal. The run-level files are
+// assembled from the journal records alone (finalise.cpp), by a single run and a merge alike.
 #include "city3d/batch.hpp"
 
 #include <algorithm>
@@ -10,10 +15,13 @@
 #include <exception>
 #include <filesystem>
 #include <functional>
+#include <fstream>
+#include <iterator>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <numeric>
-#include <sstream>
+#include <set>
 #include <thread>
 
 #include "city3d/error.hpp"
@@ -21,6 +29,8 @@
 #include "city3d/model_io.hpp"
 #include "city3d/point_cloud_io.hpp"
 #include "city3d/run_outputs.hpp"
+#include "io/atomic_file.hpp"
+#include "pipeline/finalise.hpp"
 #include "pipeline/journal.hpp"
 #include "pipeline/report.hpp"
 
@@ -69,17 +79,33 @@ std::vector<Point3> read_all_points(const std::string& path) {
   return std::move(cloud.points);
 }
 
-// Streams every tile that overlaps the footprints into the cropper.
-void crop_tiles(const std::vector<std::string>& files, const std::vector<Footprint>& footprints,
-                const CropParams& params, unsigned threads, Cropper& cropper) {
-  Box2 extent;
-  for (const Footprint& f : footprints)
-    for (const Polygon2& p : f.polygons)
-      for (const Point2& v : p.outer) extent.add(v);
-  // The cropper's wide ground buffer, and a metre to spare.
-  const double margin = params.ground_buffer * params.wide_buffer_factor + 1.0;
-  extent.min = {extent.min.x - margin, extent.min.y - margin};
-  extent.max = {extent.max.x + margin, extent.max.y + margin};
+Box2 bounds(const Footprint& f) {
+  Box2 box;
+  for (const Polygon2& p : f.polygons)
+    for (const Point2& v : p.outer) box.add(v);
+  return box;
+}
+
+double ring_area(const Ring2& ring) {
+  if (ring.size() < 3) return 0.0;
+  double sum = 0.0;
+  for (std::size_t i = 1; i + 1 < ring.size(); ++i)
+    sum += (ring[i].x - ring[0].x) * (ring[i + 1].y - ring[0].y) - (ring[i + 1].x - ring[0].x) * (ring[i].y - ring[0].y);
+  return std::abs(sum) / 2;
+}
+
+double area(const Footprint& f) {
+  double a = 0.0;
+  for (const Polygon2& p : f.polygons) {
+    a += ring_area(p.outer);
+    for (const Ring2& h : p.holes) a -= ring_area(h);
+  }
+  return std::max(a, 0.0);
+}
+
+// Streams every tile that overlaps `extent` (a block's footprints and their ground buffers) into the
+// cropper.
+void crop_tiles(const std::vector<std::string>& files, const Box2& extent, unsigned threads, Cropper& cropper) {
   for (const std::string& file : files) {
     // Cropping runs between reconstructions, so every thread can decode LAZ chunks meanwhile.
     auto reader = open_point_cloud(file, kFieldClassification, threads);
@@ -89,7 +115,7 @@ void crop_tiles(const std::vector<std::string>& files, const std::vector<Footpri
       tile.add({info.bounds.min.x, info.bounds.min.y});
       tile.add({info.bounds.max.x, info.bounds.max.y});
       if (!tile.intersects(extent)) {
-        log_info("crop: " + file + " does not overlap the footprints, skipped");
+        log_debug("crop: " + file + " does not overlap the block, skipped");
         continue;
       }
     }
@@ -106,77 +132,49 @@ void crop_tiles(const std::vector<std::string>& files, const std::vector<Footpri
   }
 }
 
-// Writes each building's outputs as soon as it and every building before it are done, so output
-// order (and bytes) never depend on the thread count, and finished work is on disk early.
-class OrderedWriter {
- public:
-  OrderedWriter(const BatchOptions& options, std::size_t total, const CityJsonOptions& cityjson,
-                const std::vector<Footprint>* footprints)
-      : options_(options), cityjson_(cityjson), footprints_(footprints), results_(total), ready_(total, false) {
-    if (options.per_building_files) fs::create_directories(fs::path(options.output_dir) / "models");
-    if (options.cityjson_seq)
-      seq_ = std::make_unique<CityJsonSeqWriter>((fs::path(options.output_dir) / "buildings.city.jsonl").string(),
-                                                 cityjson_);
+// A finished building's record: its model file is written now (and hashed as written), its
+// CityJSONFeature and report rows made now, so that the run-level files need nothing but records.
+// What a building's CityJSON holds is decided here (and in cityjson_writer.cpp).
+detail::BuildingRecord make_record(std::uint64_t index, BuildingResult result, const BatchOptions& o,
+                                   const detail::RunLayout& layout, const Attributes& footprint_attributes) {
+  detail::BuildingRecord record;
+  record.index = index;
+  record.id = result.report.id;
+  record.status = result.report.status;
+  record.report_csv = detail::report_csv_row(result.report);
+  record.report_json = detail::report_json_row(result.report);
+  if (!result.model) return record;
+  if (o.per_building_files) {
+    record.model_file = model_file_name(result.model->id, o.format);
+    const std::string path = (fs::path(o.output_dir) / "models" / record.model_file).string();
+    write_model(path, *result.model, {o.format, o.local_coordinates});
+    record.model_hash = detail::file_hash(path);
+    if (record.model_hash.empty()) throw IoError("write: cannot read back " + path);
   }
+  // Every level of detail made, with the footprint's attributes and the report's (report.cpp).
+  CityObject object{result.model->id, {},
+                    detail::output_attributes(result.report, footprint_attributes, o.timings_in_cityjson)};
+  for (const LodModel& lod : result.lods) object.geometries.push_back({lod.lod, lod.model});
+  if (object.geometries.empty()) object.geometries.push_back({cityjson_lod(result.report.level), *result.model});
+  record.feature = cityjson_feature(object, {layout.crs, layout.scale, ""}, layout.translate);
+  if (o.merged_file) record.mesh = std::move(*result.model);
+  return record;
+}
 
-  void submit(std::size_t index, BuildingResult result) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    results_[index] = std::move(result);
-    ready_[index] = true;
-    while (next_ < results_.size() && ready_[next_]) write(next_, results_[next_]), ++next_;
-  }
-
-  void finish() {
-    if (seq_) seq_->close();
-    const fs::path out(options_.output_dir);
-    if (options_.cityjson) write_cityjson((out / "buildings.city.json").string(), objects_, cityjson_);
-    if (options_.merged_file) {
-      std::vector<BuildingModel> models;
-      for (CityObject& o : objects_) models.push_back(o.geometries.back().model);
-      write_models((out / ("models" + mesh_extension(options_.format))).string(), models,
-                   {options_.format, options_.local_coordinates});
-    }
-  }
-
-  std::vector<BuildingReport> reports() const {
-    std::vector<BuildingReport> rows;
-    for (const BuildingResult& r : results_) rows.push_back(r.report);
-    return rows;
-  }
-
-  /// The written buildings' city objects, in input order (kept when a run-level output needs them).
-  const std::vector<CityObject>& objects() const { return objects_; }
-
- private:
-  void write(std::size_t index, BuildingResult& result) {
-    if (!result.model) return;
-    if (options_.per_building_files) {
-      const fs::path file = fs::path(options_.output_dir) / "models" / model_file_name(result.model->id, options_.format);
-      write_model(file.string(), *result.model, {options_.format, options_.local_coordinates});
-    }
-    CityObject object{result.model->id, {},
-                      detail::output_attributes(result.report, footprints_ && index < footprints_->size()
-                                                                   ? (*footprints_)[index].attributes
-                                                                   : Attributes{},
-                                                options_.timings_in_cityjson)};
-    for (LodModel& lod : result.lods) object.geometries.push_back({lod.lod, std::move(lod.model)});
-    if (object.geometries.empty()) object.geometries.push_back({cityjson_lod(result.report.level), *result.model});
-    result.model.reset();
-    result.lods.clear();
-    if (seq_) seq_->add(object);
-    if (options_.cityjson || options_.merged_file || options_.gpkg || options_.html) objects_.push_back(std::move(object));
-  }
-
-  const BatchOptions& options_;
-  CityJsonOptions cityjson_;
-  const std::vector<Footprint>* footprints_;
-  std::mutex mutex_;
-  std::vector<BuildingResult> results_;
-  std::vector<bool> ready_;
-  std::size_t next_ = 0;
-  std::unique_ptr<CityJsonSeqWriter> seq_;
-  std::vector<CityObject> objects_;
-};
+detail::BuildingRecord skipped_record(std::uint64_t index, const SkippedFootprint& s) {
+  BuildingReport row;
+  row.id = s.id;
+  row.status = BuildingStatus::skipped;
+  row.stage = "footprints";
+  row.reason = s.reason;
+  detail::BuildingRecord record;
+  record.index = index;
+  record.id = s.id;
+  record.status = row.status;
+  record.report_csv = detail::report_csv_row(row);
+  record.report_json = detail::report_json_row(row);
+  return record;
+}
 
 void print_progress(std::size_t done, std::size_t total, Clock::time_point start) {
   const double elapsed = seconds_since(start);
@@ -187,51 +185,64 @@ void print_progress(std::size_t done, std::size_t total, Clock::time_point start
   std::fflush(stderr);
 }
 
-}  // namespace
-
-namespace {
+// What a run does, known before any building is reconstructed and the same in every shard: the
+// buildings (in output order), their blocks, and the footprints that were not kept.
+struct Plan {
+  detail::RunLayout layout;
+  std::uint64_t buildings = 0;
+  std::vector<Box2> boxes;                          ///< per building (footprints): bounding box
+  std::vector<std::vector<std::uint64_t>> blocks;   ///< building indices per block, row-major
+  std::vector<double> weights;                      ///< per block: footprint area, or cloud file size
+  std::vector<SkippedFootprint> skipped;            ///< indices buildings, buildings + 1, ...
+  std::string crs;
+};
 
 // Footprints grouped into square blocks of `extent` metres by their bounding-box centres, blocks in
 // row-major order, footprints in input order within a block. extent <= 0: one block.
-std::vector<std::vector<std::size_t>> spatial_blocks(const std::vector<Footprint>& footprints, double extent) {
-  std::map<std::pair<long long, long long>, std::vector<std::size_t>> cells;
-  for (std::size_t i = 0; i < footprints.size(); ++i) {
-    Box2 box;
-    for (const Polygon2& p : footprints[i].polygons)
-      for (const Point2& v : p.outer) box.add(v);
+void make_blocks(Plan& plan, const std::vector<double>& areas, double extent) {
+  std::map<std::pair<long long, long long>, std::vector<std::uint64_t>> cells;
+  for (std::uint64_t i = 0; i < plan.boxes.size(); ++i) {
+    const Box2& box = plan.boxes[i];
     std::pair<long long, long long> key{0, 0};
     if (extent > 0 && !box.empty())
       key = {static_cast<long long>(std::floor((box.min.y + box.max.y) / 2 / extent)),
              static_cast<long long>(std::floor((box.min.x + box.max.x) / 2 / extent))};
     cells[key].push_back(i);
   }
-  std::vector<std::vector<std::size_t>> blocks;
-  for (auto& [key, indices] : cells) blocks.push_back(std::move(indices));
-  return blocks;
+  for (auto& [key, indices] : cells) {
+    double weight = 0.0;
+    for (std::uint64_t i : indices) weight += areas[i];
+    plan.blocks.push_back(std::move(indices));
+    plan.weights.push_back(weight);
+  }
 }
 
-// The footprints a block must crop with: its own, and every other footprint that can reach into
-// their ground buffers (ground points inside any footprint never count as ground), so that a
-// building's input does not depend on how footprints are blocked.
-std::vector<std::size_t> with_neighbours(const std::vector<Footprint>& footprints, const std::vector<std::size_t>& block,
-                                         double reach) {
-  Box2 extent;
-  for (std::size_t i : block)
-    for (const Polygon2& p : footprints[i].polygons)
-      for (const Point2& v : p.outer) extent.add(v);
-  extent.min = {extent.min.x - reach, extent.min.y - reach};
-  extent.max = {extent.max.x + reach, extent.max.y + reach};
-  std::vector<bool> in_block(footprints.size(), false);
-  for (std::size_t i : block) in_block[i] = true;
-  std::vector<std::size_t> result = block;
-  for (std::size_t i = 0; i < footprints.size(); ++i) {
-    if (in_block[i]) continue;
-    Box2 box;
-    for (const Polygon2& p : footprints[i].polygons)
-      for (const Point2& v : p.outer) box.add(v);
-    if (!box.empty() && box.intersects(extent)) result.push_back(i);
+// Blocks dealt out to the shards largest first, each to the shard with the least weight so far (the
+// lowest-numbered on ties): a deterministic, balanced split every shard computes alike.
+std::vector<int> assign_shards(const std::vector<double>& weights, int shards) {
+  std::vector<std::size_t> order(weights.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return weights[a] > weights[b]; });
+  std::vector<double> load(static_cast<std::size_t>(shards), 0.0);
+  std::vector<int> owner(weights.size(), 0);
+  for (std::size_t block : order) {
+    const auto least = std::min_element(load.begin(), load.end()) - load.begin();
+    owner[block] = static_cast<int>(least);
+    load[static_cast<std::size_t>(least)] += weights[block];
   }
-  return result;
+  return owner;
+}
+
+detail::RunLayout layout_of(const BatchOptions& o) {
+  detail::RunLayout l;
+  l.cityjson = o.cityjson;
+  l.cityjson_seq = o.cityjson_seq;
+  l.merged_file = o.merged_file;
+  l.per_building_files = o.per_building_files;
+  l.local_coordinates = o.local_coordinates;
+  l.format = o.format;
+  l.scale = o.reconstruction.output_grid;  // the grid every model was rounded to and checked on
+  return l;
 }
 
 }  // namespace
@@ -241,49 +252,87 @@ BatchSummary run_batch(const BatchOptions& options) {
   options.reconstruction.validate();
   options.crop.validate();
   if (options.threads < 1) throw ConfigError("batch: threads must be at least 1");
+  const bool sharded = options.shards > 0 || options.shard > 0;
+  if (sharded && !(options.shards >= 1 && options.shard >= 1 && options.shard <= options.shards))
+    throw ConfigError("batch: shard " + std::to_string(options.shard) + "/" + std::to_string(options.shards) +
+                      " does not exist (K/N with 1 <= K <= N)");
   const std::vector<std::string> files = expand_inputs(options.point_clouds);
   log_info("parameters:\n" + parameters_text(options.reconstruction));
-  fs::create_directories(options.output_dir);
-  detail::Journal journal((fs::path(options.output_dir) / "resume.journal").string(),
-                          detail::batch_fingerprint(options, files), options.resume);
+  detail::OutputFolder folder(options.output_dir);
 
-  // What to reconstruct: the footprints (cropped from the tiles block by block), or one building
-  // per single-building cloud (read when its turn comes).
-  FootprintSet set;
-  std::vector<BuildingReport> skipped_rows;
-  std::string crs;
+  // The plan: every building of the run, in output order, and its block.
+  Plan plan;
+  plan.layout = layout_of(options);
+  std::unique_ptr<FootprintSource> source;
   Box2 extent;
   if (!options.footprints.empty()) {
-    set = read_footprints(options.footprints, options.footprint);
-    crs = set.srs.rfind("EPSG:", 0) == 0 ? set.srs : "";
-    for (const SkippedFootprint& s : set.skipped) {
-      BuildingReport row;
-      row.id = s.id;
-      row.status = BuildingStatus::skipped;
-      row.stage = "footprints";
-      row.reason = s.reason;
-      skipped_rows.push_back(row);
+    source = std::make_unique<FootprintSource>(options.footprints, options.footprint);
+    std::vector<double> areas;
+    const FootprintSet set = source->scan([&](std::size_t, const Footprint& f) {
+      plan.boxes.push_back(bounds(f));
+      areas.push_back(area(f));
+      extent.add(plan.boxes.back().min);
+      extent.add(plan.boxes.back().max);
+    });
+    plan.layout.crs = set.srs.rfind("EPSG:", 0) == 0 ? set.srs : "";
+    plan.skipped = set.skipped;
+    plan.buildings = plan.boxes.size();
+    make_blocks(plan, areas, options.block_size);
+  } else {
+    // Single-building clouds: each cloud is its own block.
+    plan.buildings = files.size();
+    for (std::uint64_t i = 0; i < files.size(); ++i) {
+      std::error_code ec;
+      const auto size = fs::file_size(files[i], ec);
+      plan.blocks.push_back({i});
+      plan.weights.push_back(ec ? 0.0 : static_cast<double>(size));
     }
-    for (const Footprint& f : set.footprints)
-      for (const Polygon2& p : f.polygons)
-        for (const Point2& v : p.outer) extent.add(v);
-  }
-  const std::size_t total = options.footprints.empty() ? files.size() : set.footprints.size();
-  // One transform for the run, known before the first building (CityJSONSeq streams): the
-  // footprints' corner, or for clouds their first header's corner, in whole metres; both CityJSON
-  // files use it.
-  CityJsonOptions cityjson{crs, options.reconstruction.output_grid, {0, 0, 0}, ""};
-  if (options.footprints.empty() && !files.empty()) {
     const PointCloudInfo info = read_point_cloud_info(files.front());
     if (!info.bounds.empty()) extent.add({info.bounds.min.x, info.bounds.min.y});
   }
-  if (!extent.empty()) cityjson.translate = {std::floor(extent.min.x), std::floor(extent.min.y), 0.0};
-  OrderedWriter writer(options, total, cityjson, options.footprints.empty() ? nullptr : &set.footprints);
+  // One transform for every building of the run, in the CityJSON file and the CityJSONSeq alike,
+  // from what every shard knows: the footprints' corner (or the first cloud's), z = 0.
+  if (!extent.empty()) plan.layout.translate = {std::floor(extent.min.x), std::floor(extent.min.y), 0.0};
+  plan.layout.records = plan.buildings + plan.skipped.size();
 
-  // Reconstructs buildings `indices` (global, input order) in parallel; make_input(k) gives the
-  // input of indices[k] and is called by the worker that reconstructs it.
-  std::atomic<std::size_t> done{0};
-  auto reconstruct_all = [&](const std::vector<std::size_t>& indices,
+  // This process's part: every block, or the blocks of its shard.
+  std::vector<std::size_t> my_blocks;
+  const std::vector<int> owner =
+      sharded ? assign_shards(plan.weights, options.shards) : std::vector<int>(plan.blocks.size(), 0);
+  for (std::size_t b = 0; b < plan.blocks.size(); ++b)
+    if (owner[b] == (sharded ? options.shard - 1 : 0)) my_blocks.push_back(b);
+  const bool owns_skipped = !sharded || options.shard == 1;
+  detail::JournalHeader header;
+  header.fingerprint = detail::batch_fingerprint(options, files);
+  header.shard = sharded ? options.shard : 0;
+  header.shards = sharded ? options.shards : 0;
+  header.block_size = sharded ? options.block_size : 0.0;
+  header.layout = plan.layout;
+  for (std::size_t b : my_blocks) header.expected += plan.blocks[b].size();
+  if (owns_skipped) header.expected += plan.skipped.size();
+  if (sharded)
+    log_info("shard " + std::to_string(options.shard) + "/" + std::to_string(options.shards) + ": " +
+             std::to_string(my_blocks.size()) + " of " + std::to_string(plan.blocks.size()) + " blocks, " +
+             std::to_string(header.expected) + " of " + std::to_string(plan.layout.records) + " buildings");
+
+  if (options.per_building_files) {
+    std::error_code ec;
+    fs::create_directories(fs::path(options.output_dir) / "models", ec);
+    if (ec) throw IoError("output: cannot create " + (fs::path(options.output_dir) / "models").string() + ": " + ec.message());
+  }
+  detail::Journal journal(options.output_dir, header, options.resume);
+  folder.remove_earlier_models(journal.earlier_models());
+
+  if (owns_skipped)
+    for (std::size_t j = 0; j < plan.skipped.size(); ++j)
+      if (!journal.find(plan.buildings + j)) journal.append(skipped_record(plan.buildings + j, plan.skipped[j]));
+
+  // Reconstructs buildings `indices` (global, output order) in parallel; id_of(k) and make_input(k)
+  // give the id and input of indices[k], the input made by the worker that reconstructs it.
+  std::atomic<std::size_t> done{journal.restored()};
+  const std::size_t total = header.expected;
+  auto reconstruct_all = [&](const std::vector<std::uint64_t>& indices,
+                             const std::function<BuildingId(std::size_t)>& id_of,
                              const std::function<BuildingInput(std::size_t)>& make_input) {
     std::atomic<std::size_t> next{0};
     std::exception_ptr failure;
@@ -297,16 +346,14 @@ BatchSummary run_batch(const BatchOptions& options) {
           if (failure) return;
         }
         try {
-          BuildingResult result;
-          const BuildingId& id = options.footprints.empty() ? fs::path(files[indices[k]]).stem().string()
-                                                            : set.footprints[indices[k]].id;
-          if (const BuildingResult* finished = journal.find(id)) {
-            result = *finished;
-          } else {
-            result = reconstruct_building(make_input(k), options.reconstruction);
-            journal.append(result);
+          if (const detail::RecordRef* finished = journal.find(indices[k])) {
+            if (finished->id == id_of(k)) continue;
+            log_warning("resume: record " + std::to_string(indices[k]) + " of " + journal.path() + " is for " +
+                        finished->id + ", not " + id_of(k) + "; recomputed");
           }
-          writer.submit(indices[k], std::move(result));
+          const BuildingInput input = make_input(k);
+          BuildingResult result = reconstruct_building(input, options.reconstruction);
+          journal.append(make_record(indices[k], std::move(result), options, plan.layout, input.footprint.attributes));
         } catch (...) {
           // Only input and output errors reach here (reconstruct_building never throws for a bad
           // building): the run cannot go on.
@@ -325,60 +372,218 @@ BatchSummary run_batch(const BatchOptions& options) {
     if (failure) std::rethrow_exception(failure);
   };
 
-  if (options.footprints.empty()) {
-    std::vector<std::size_t> indices(files.size());
-    std::iota(indices.begin(), indices.end(), 0);
-    reconstruct_all(indices, [&](std::size_t k) {
-      return building_from_cloud(fs::path(files[k]).stem().string(), read_all_points(files[k]), options.ground_z);
-    });
-  } else {
-    const double reach = options.crop.ground_buffer * options.crop.wide_buffer_factor + 1.0;
-    for (const std::vector<std::size_t>& block : spatial_blocks(set.footprints, options.block_size)) {
-      const bool all_done = std::all_of(block.begin(), block.end(),
-                                        [&](std::size_t i) { return journal.find(set.footprints[i].id) != nullptr; });
-      std::vector<BuildingInput> inputs;
-      if (!all_done) {
-        // Crop with the neighbours too; keep the block's own inputs (the first block.size()).
-        const std::vector<std::size_t> members = with_neighbours(set.footprints, block, reach);
-        std::vector<Footprint> footprints;
-        for (std::size_t i : members) footprints.push_back(set.footprints[i]);
-        Cropper cropper(footprints, options.crop);
-        crop_tiles(files, footprints, options.crop, static_cast<unsigned>(options.threads), cropper);
-        inputs = cropper.finish();
-        inputs.resize(block.size());
-        for (BuildingInput& in : inputs)
-          if (in.footprint.ground_z) {
-            // The footprint source knows the floor: it overrides the ground points.
-            in.ground_z = *in.footprint.ground_z - in.origin.z;
-            in.ground_method = "footprint attribute";
-            in.ground_measured = true;
-          }
+  const double reach = options.crop.ground_buffer * options.crop.wide_buffer_factor + 1.0;
+  for (std::size_t b : my_blocks) {
+    const std::vector<std::uint64_t>& block = plan.blocks[b];
+    const bool all_done =
+        std::all_of(block.begin(), block.end(), [&](std::uint64_t i) { return journal.find(i) != nullptr; });
+    if (all_done) continue;
+    if (!source) {
+      const std::string& file = files[block.front()];
+      const BuildingId id = fs::path(file).stem().string();
+      reconstruct_all(
+          block, [&](std::size_t) { return id; },
+          [&](std::size_t) { return building_from_cloud(id, read_all_points(file), options.ground_z); });
+      continue;
+    }
+    // The block's footprints and every other footprint that can reach into their ground buffers
+    // (ground points inside any footprint never count as ground), read through a spatial filter,
+    // so that a building's input does not depend on how footprints are blocked.
+    Box2 region;
+    for (std::uint64_t i : block) region.add(plan.boxes[i].min), region.add(plan.boxes[i].max);
+    region.min = {region.min.x - reach, region.min.y - reach};
+    region.max = {region.max.x + reach, region.max.y + reach};
+    std::vector<std::pair<std::size_t, Footprint>> found = source->read_box(region);
+    std::vector<Footprint> footprints;
+    std::vector<bool> taken(found.size(), false);
+    for (std::uint64_t i : block) {
+      const auto it = std::lower_bound(found.begin(), found.end(), i,
+                                       [](const auto& entry, std::uint64_t n) { return entry.first < n; });
+      if (it == found.end() || it->first != i)
+        throw IoError("footprints: footprint " + std::to_string(i) + " of " + options.footprints +
+                      " was not found again when its block was read (has the source changed?)");
+      taken[static_cast<std::size_t>(it - found.begin())] = true;
+      footprints.push_back(std::move(it->second));
+    }
+    for (std::size_t k = 0; k < found.size(); ++k)
+      if (!taken[k]) footprints.push_back(std::move(found[k].second));
+    Cropper cropper(std::move(footprints), options.crop);
+    crop_tiles(files, region, static_cast<unsigned>(options.threads), cropper);
+    // Keep only the block's own inputs (the first block.size()).
+    std::vector<BuildingInput> inputs = cropper.finish();
+    inputs.resize(block.size());
+    for (BuildingInput& in : inputs)
+      if (in.footprint.ground_z) {
+        // The footprint source knows the floor: it overrides the ground points.
+        in.ground_z = *in.footprint.ground_z - in.origin.z;
+        in.ground_method = "footprint attribute";
+        in.ground_measured = true;
       }
-      reconstruct_all(block, [&](std::size_t k) { return std::move(inputs[k]); });
+    reconstruct_all(
+        block, [&](std::size_t k) { return inputs[k].id; }, [&](std::size_t k) { return std::move(inputs[k]); });
+  }
+  journal.close();
+
+  // The run-level files, from the journal's records.
+  const detail::JournalReader reader(journal.path());
+  std::vector<detail::RecordSource> sources;
+  for (const detail::RecordRef& ref : reader.records()) sources.push_back({&reader, &ref});
+  std::sort(sources.begin(), sources.end(),
+            [](const detail::RecordSource& a, const detail::RecordSource& b) { return a.ref->index < b.ref->index; });
+  if (sources.size() != header.expected)
+    throw Error("batch: " + journal.path() + " holds " + std::to_string(sources.size()) + " records, " +
+                std::to_string(header.expected) + " expected");
+  detail::RunManifest manifest;
+  manifest.header = header;
+  manifest.records = sources.size();
+  const BatchSummary summary =
+      detail::finalise_run(options.output_dir, plan.layout, sources, seconds_since(start),
+                           sharded ? detail::FinaliseScope::shard : detail::FinaliseScope::whole_run, manifest.outputs);
+  if (!sharded && (options.gpkg || options.html)) {
+    // The overview outputs: the records, and the footprints read once more for their geometry.
+    std::vector<Footprint> footprints;
+    if (source && !extent.empty()) {
+      footprints.resize(plan.buildings);
+      for (auto& [number, f] : source->read_box(extent))
+        if (number < footprints.size()) footprints[number] = std::move(f);
+    }
+    std::vector<std::string> reports, features;
+    for (const detail::RecordSource& r : sources) {
+      detail::BuildingRecord record = r.journal->read(*r.ref);
+      reports.push_back(std::move(record.report_json));
+      features.push_back(std::move(record.feature));
+    }
+    const std::vector<OverviewRecord> overview =
+        overview_records(reports, features, footprints, plan.layout.scale, plan.layout.translate);
+    const fs::path out(options.output_dir);
+    if (options.gpkg) {
+      write_gpkg((out / "buildings.gpkg").string(), overview, plan.layout.crs);
+      manifest.outputs["buildings.gpkg"] = detail::file_stamp_of((out / "buildings.gpkg").string());
+    }
+    if (options.html) {
+      write_report_html((out / "report.html").string(), overview, plan.layout.crs);
+      manifest.outputs["report.html"] = detail::file_stamp_of((out / "report.html").string());
     }
   }
-  writer.finish();
+  manifest.seconds = seconds_since(start);
+  folder.write_manifest(manifest);
+  return summary;
+}
 
-  std::vector<BuildingReport> rows = writer.reports();
-  rows.insert(rows.end(), skipped_rows.begin(), skipped_rows.end());
-  BatchSummary summary;
-  summary.buildings = rows.size();
-  for (const BuildingReport& r : rows) {
-    summary.ok += r.status == BuildingStatus::ok;
-    summary.fallback += r.status == BuildingStatus::fallback;
-    summary.skipped += r.status == BuildingStatus::skipped;
-    summary.failed += r.status == BuildingStatus::failed;
+BatchSummary merge_shards(const MergeOptions& options) {
+  const auto start = Clock::now();
+  if (options.shard_dirs.empty()) throw ConfigError("merge: no shard folder given");
+  struct Shard {
+    std::string dir;
+    std::unique_ptr<detail::JournalReader> journal;
+    detail::RunManifest manifest;
+  };
+  std::vector<Shard> shards;
+  std::error_code ec;
+  const fs::path out_canonical = fs::weakly_canonical(options.output_dir, ec);
+  for (const std::string& dir : options.shard_dirs) {
+    Shard s;
+    s.dir = dir;
+    if (fs::weakly_canonical(dir, ec) == out_canonical)
+      throw ConfigError("merge: the output folder " + options.output_dir + " is one of the shard folders");
+    const fs::path journal = fs::path(dir) / "resume.journal";
+    if (!fs::exists(journal, ec))
+      throw IoError("merge: " + dir + " holds no resume.journal: not the output folder of `city3d reconstruct --shard`");
+    s.journal = std::make_unique<detail::JournalReader>(journal.string());
+    if (!s.journal->header_ok())
+      throw IoError("merge: the journal of " + dir + " is damaged or from another city3d version; run that shard again");
+    const detail::JournalHeader& h = s.journal->header();
+    const std::string name = "shard " + std::to_string(h.shard) + "/" + std::to_string(h.shards) + " (" + dir + ")";
+    if (h.shards == 0) throw ConfigError("merge: " + dir + " is the output of a whole run, not of a shard (--shard K/N)");
+    if (!s.journal->damaged().empty())
+      throw IoError("merge: " + name + " is damaged (line " + std::to_string(s.journal->damaged().front().first) +
+                    " of its journal); run that shard again, it recomputes what is damaged");
+    const bool complete = detail::read_manifest(dir, s.manifest) && s.manifest.header.fingerprint == h.fingerprint &&
+                          s.manifest.header.shard == h.shard && s.manifest.header.shards == h.shards &&
+                          s.manifest.records == h.expected && s.journal->records().size() == h.expected;
+    if (!complete)
+      throw IoError("merge: " + name + " is incomplete: " + std::to_string(s.journal->records().size()) + " of " +
+                    std::to_string(h.expected) + " buildings finished" +
+                    (fs::exists(fs::path(dir) / "run.json", ec) ? "" : ", no run.json") +
+                    "; run it again (it resumes where it stopped)");
+    shards.push_back(std::move(s));
   }
-  summary.seconds = seconds_since(start);
-  summary.report_path = (fs::path(options.output_dir) / "report.csv").string();
-  detail::write_report_csv(summary.report_path, rows);
-  detail::write_report_json((fs::path(options.output_dir) / "report.json").string(), rows, summary);
-  if (options.gpkg || options.html) {
-    const std::vector<BuildingRecord> records =
-        building_records(rows, options.footprints.empty() ? nullptr : &set.footprints, writer.objects());
-    if (options.gpkg) write_gpkg((fs::path(options.output_dir) / "buildings.gpkg").string(), records, crs);
-    if (options.html) write_report_html((fs::path(options.output_dir) / "report.html").string(), records, crs);
+  const detail::JournalHeader& first = shards.front().journal->header();
+  std::vector<const Shard*> by_number(static_cast<std::size_t>(first.shards) + 1, nullptr);
+  for (const Shard& s : shards) {
+    const detail::JournalHeader& h = s.journal->header();
+    detail::JournalHeader as_first = h;
+    as_first.shard = first.shard;
+    as_first.expected = first.expected;
+    if (!as_first.same_run(first))
+      throw ConfigError("merge: " + shards.front().dir + " and " + s.dir +
+                        " are shards of different runs (inputs, parameters, block size or shard count differ)");
+    if (by_number[static_cast<std::size_t>(h.shard)])
+      throw ConfigError("merge: shard " + std::to_string(h.shard) + "/" + std::to_string(h.shards) + " given twice: " +
+                        by_number[static_cast<std::size_t>(h.shard)]->dir + " and " + s.dir);
+    by_number[static_cast<std::size_t>(h.shard)] = &s;
   }
+  for (int k = 1; k <= first.shards; ++k)
+    if (!by_number[static_cast<std::size_t>(k)])
+      throw ConfigError("merge: shard " + std::to_string(k) + "/" + std::to_string(first.shards) +
+                        " is missing (give the folders of all " + std::to_string(first.shards) + " shards)");
+
+  const detail::RunLayout& layout = first.layout;
+  std::vector<detail::RecordSource> sources;
+  for (const Shard& s : shards)
+    for (const detail::RecordRef& ref : s.journal->records()) sources.push_back({s.journal.get(), &ref});
+  std::sort(sources.begin(), sources.end(),
+            [](const detail::RecordSource& a, const detail::RecordSource& b) { return a.ref->index < b.ref->index; });
+  for (std::size_t i = 0; i < sources.size(); ++i)
+    if (sources[i].ref->index != i || i >= layout.records)
+      throw IoError("merge: record " + std::to_string(i) + " is " +
+                    (sources[i].ref->index > i ? "in no shard" : "in two shards") + " (" +
+                    sources[i].journal->path() + ")");
+  if (sources.size() != layout.records)
+    throw IoError("merge: the shards hold " + std::to_string(sources.size()) + " of " +
+                  std::to_string(layout.records) + " buildings");
+
+  detail::OutputFolder folder(options.output_dir);
+  detail::JournalHeader whole = first;
+  whole.shard = whole.shards = 0;
+  whole.block_size = 0.0;
+  whole.expected = layout.records;
+  {
+    // What an earlier run left in the output folder's journal (other inputs or parameters).
+    detail::Journal previous(options.output_dir, whole, false);
+    folder.remove_earlier_models(previous.earlier_models());
+  }
+  // Model files, copied and checked against the hash their shard recorded.
+  if (layout.per_building_files) fs::create_directories(fs::path(options.output_dir) / "models");
+  std::vector<std::string> lines;
+  for (const detail::RecordSource& source : sources) {
+    lines.push_back(source.journal->line(*source.ref));
+    const detail::RecordRef& ref = *source.ref;
+    if (ref.model_file.empty()) continue;
+    const fs::path from = fs::path(source.journal->path()).parent_path() / "models" / ref.model_file;
+    std::ifstream in(from, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (!in.good() && !in.eof()) bytes.clear();
+    if (!in || detail::content_hash(bytes) != ref.model_hash)
+      throw IoError("merge: " + from.string() + " is missing or changed since its shard wrote it; run that shard again");
+    detail::AtomicFile copy((fs::path(options.output_dir) / "models" / ref.model_file).string());
+    std::fwrite(bytes.data(), 1, bytes.size(), copy.file());
+    copy.commit();
+  }
+  // The merged folder's journal, as one process would have left it: a later run of the same inputs
+  // and parameters into it resumes every building.
+  detail::write_journal((fs::path(options.output_dir) / "resume.journal").string(), whole, lines);
+  double seconds = 0.0;
+  for (const Shard& s : shards) seconds += s.manifest.seconds;
+  detail::RunManifest manifest;
+  manifest.header = whole;
+  manifest.records = sources.size();
+  const BatchSummary summary =
+      detail::finalise_run(options.output_dir, layout, sources, seconds, detail::FinaliseScope::whole_run, manifest.outputs);
+  manifest.seconds = seconds;
+  folder.write_manifest(manifest);
+  log_info("merge: " + std::to_string(shards.size()) + " shards, " + std::to_string(sources.size()) +
+           " buildings in " + std::to_string(seconds_since(start)) + " s");
   return summary;
 }
 

@@ -1,5 +1,6 @@
-// Resume journal: a line-oriented text file, tab-separated fields with \\, \t and \n escaped, doubles
-// printed with 17 significant digits so that restored models are bit-identical to computed ones.
+// Resume journal: JSON lines, each prefixed by the FNV-1a hash of its JSON text, read back with
+// nlohmann-json. Doubles of a kept mesh are written in nlohmann's shortest round-trip form, so a
+// restored model is bit-identical to the computed one.
 #include "pipeline/journal.hpp"
 
 #include <cerrno>
@@ -7,40 +8,153 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
 
 namespace city3d::detail {
 namespace fs = std::filesystem;
+using json = nlohmann::json;
+
 namespace {
 
-constexpr const char* kMagic = "city3d-journal 2";
+constexpr int kJournalVersion = 2;
+constexpr std::size_t kHashDigits = 16;
 
-std::string escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '\\') out += "\\\\";
-    else if (c == '\t') out += "\\t";
-    else if (c == '\n') out += "\\n";
-    else if (c == '\r') out += "\\r";
-    else out += c;
-  }
-  return out;
+std::string dump(const json& j) { return j.dump(-1, ' ', false, json::error_handler_t::replace); }
+
+// "<hash> <json>": the line of a JSON value.
+std::string make_line(const json& j) {
+  const std::string text = dump(j);
+  return content_hash(text) + " " + text;
 }
 
-std::string unescape(const std::string& s) {
-  std::string out;
-  for (std::size_t i = 0; i < s.size(); ++i) {
-    if (s[i] != '\\' || i + 1 == s.size()) {
-      out += s[i];
-      continue;
-    }
-    const char n = s[++i];
-    out += n == 't' ? '\t' : n == 'n' ? '\n' : n == 'r' ? '\r' : n;
+// The JSON text of a line whose hash matches, or nullopt.
+std::optional<std::string> checked_text(const std::string& line) {
+  if (line.size() < kHashDigits + 2 || line[kHashDigits] != ' ') return std::nullopt;
+  std::string text = line.substr(kHashDigits + 1);
+  if (content_hash(text) != line.substr(0, kHashDigits)) return std::nullopt;
+  return text;
+}
+
+const char* status_name(BuildingStatus s) { return to_string(s); }
+
+BuildingStatus parse_status(const std::string& s) {
+  for (BuildingStatus v : {BuildingStatus::ok, BuildingStatus::fallback, BuildingStatus::skipped, BuildingStatus::failed})
+    if (s == to_string(v)) return v;
+  throw std::runtime_error("unknown status " + s);
+}
+
+json layout_json(const RunLayout& l) {
+  return {{"crs", l.crs},
+          {"translate", {l.translate.x, l.translate.y, l.translate.z}},
+          {"scale", l.scale},
+          {"records", l.records},
+          {"cityjson", l.cityjson},
+          {"cityjson_seq", l.cityjson_seq},
+          {"merged_file", l.merged_file},
+          {"per_building_files", l.per_building_files},
+          {"local_coordinates", l.local_coordinates},
+          {"format", static_cast<int>(l.format)}};
+}
+
+RunLayout parse_layout(const json& j) {
+  RunLayout l;
+  l.crs = j.at("crs").get<std::string>();
+  const json& t = j.at("translate");
+  l.translate = {t.at(0).get<double>(), t.at(1).get<double>(), t.at(2).get<double>()};
+  l.scale = j.at("scale").get<double>();
+  l.records = j.at("records").get<std::uint64_t>();
+  l.cityjson = j.at("cityjson").get<bool>();
+  l.cityjson_seq = j.at("cityjson_seq").get<bool>();
+  l.merged_file = j.at("merged_file").get<bool>();
+  l.per_building_files = j.at("per_building_files").get<bool>();
+  l.local_coordinates = j.at("local_coordinates").get<bool>();
+  const int format = j.at("format").get<int>();
+  if (format < 0 || format > 2) throw std::runtime_error("bad format");
+  l.format = static_cast<MeshFormat>(format);
+  return l;
+}
+
+json header_json(const JournalHeader& h) {
+  return {{"city3d_journal", kJournalVersion}, {"version", CITY3D_VERSION}, {"fingerprint", h.fingerprint},
+          {"shard", h.shard},  {"shards", h.shards},  {"block_size", h.block_size},
+          {"expected", h.expected}, {"layout", layout_json(h.layout)}};
+}
+
+JournalHeader parse_header(const json& j) {
+  if (j.at("city3d_journal").get<int>() != kJournalVersion) throw std::runtime_error("other journal version");
+  JournalHeader h;
+  h.fingerprint = j.at("fingerprint").get<std::string>();
+  h.shard = j.at("shard").get<int>();
+  h.shards = j.at("shards").get<int>();
+  h.block_size = j.at("block_size").get<double>();
+  h.expected = j.at("expected").get<std::uint64_t>();
+  h.layout = parse_layout(j.at("layout"));
+  return h;
+}
+
+json record_json(const BuildingRecord& r) {
+  json j = {{"index", r.index},     {"id", r.id},           {"status", status_name(r.status)},
+            {"csv", r.report_csv},  {"json", r.report_json}, {"feature", r.feature},
+            {"model", r.model_file}, {"model_hash", r.model_hash}};
+  if (r.mesh) {
+    const BuildingModel& m = *r.mesh;
+    json vertices = json::array(), faces = json::array(), surfaces = json::array();
+    for (const Point3& p : m.mesh.vertices) vertices.push_back({p.x, p.y, p.z});
+    for (const auto& f : m.mesh.faces) faces.push_back(f);
+    for (SurfaceType t : m.surfaces) surfaces.push_back(static_cast<int>(t));
+    j["mesh"] = {{"origin", {m.origin.x, m.origin.y, m.origin.z}},
+                 {"vertices", vertices},
+                 {"faces", faces},
+                 {"surfaces", surfaces}};
   }
-  return out;
+  return j;
+}
+
+BuildingRecord parse_record(const json& j) {
+  BuildingRecord r;
+  r.index = j.at("index").get<std::uint64_t>();
+  r.id = j.at("id").get<std::string>();
+  r.status = parse_status(j.at("status").get<std::string>());
+  r.report_csv = j.at("csv").get<std::string>();
+  r.report_json = j.at("json").get<std::string>();
+  r.feature = j.at("feature").get<std::string>();
+  r.model_file = j.at("model").get<std::string>();
+  r.model_hash = j.at("model_hash").get<std::string>();
+  if (const auto it = j.find("mesh"); it != j.end()) {
+    BuildingModel m;
+    m.id = r.id;
+    const json& o = it->at("origin");
+    m.origin = {o.at(0).get<double>(), o.at(1).get<double>(), o.at(2).get<double>()};
+    for (const json& v : it->at("vertices"))
+      m.mesh.vertices.push_back({v.at(0).get<double>(), v.at(1).get<double>(), v.at(2).get<double>()});
+    for (const json& f : it->at("faces")) {
+      std::vector<std::uint32_t> face = f.get<std::vector<std::uint32_t>>();
+      for (std::uint32_t v : face)
+        if (v >= m.mesh.vertices.size()) throw std::runtime_error("face vertex out of range");
+      m.mesh.faces.push_back(std::move(face));
+    }
+    for (const json& s : it->at("surfaces")) {
+      const int t = s.get<int>();
+      if (t < 0 || t > 2) throw std::runtime_error("bad surface type");
+      m.surfaces.push_back(static_cast<SurfaceType>(t));
+    }
+    r.mesh = std::move(m);
+  }
+  return r;
+}
+
+// Path, size and modification time of an input: a changed file makes another run.
+std::string file_stamp(const std::string& path) {
+  std::error_code ec;
+  const fs::path canonical = fs::weakly_canonical(path, ec);
+  const std::string name = ec ? path : canonical.string();
+  const auto size = fs::file_size(path, ec);
+  const auto time = fs::last_write_time(path, ec).time_since_epoch().count();
+  return name + " " + std::to_string(ec ? 0 : size) + " " + std::to_string(ec ? 0 : time);
 }
 
 std::string num(double v) {
@@ -49,154 +163,37 @@ std::string num(double v) {
   return buf;
 }
 
-std::vector<std::string> split_tabs(const std::string& line) {
-  std::vector<std::string> fields;
-  std::size_t start = 0;
-  for (;;) {
-    const std::size_t tab = line.find('\t', start);
-    fields.push_back(line.substr(start, tab == std::string::npos ? std::string::npos : tab - start));
-    if (tab == std::string::npos) return fields;
-    start = tab + 1;
-  }
-}
-
-// A model as four fields: origin, vertices, faces, surface types.
-void serialise_model(std::ostringstream& out, const BuildingModel& m) {
-  out << num(m.origin.x) << ' ' << num(m.origin.y) << ' ' << num(m.origin.z) << '\t' << m.mesh.vertices.size();
-  for (const Point3& p : m.mesh.vertices) out << ' ' << num(p.x) << ' ' << num(p.y) << ' ' << num(p.z);
-  out << '\t' << m.mesh.faces.size();
-  for (const auto& f : m.mesh.faces) {
-    out << ' ' << f.size();
-    for (std::uint32_t v : f) out << ' ' << v;
-  }
-  out << '\t' << m.surfaces.size();
-  for (SurfaceType t : m.surfaces) out << ' ' << static_cast<int>(t);
-}
-
-bool parse_model(const std::vector<std::string>& f, std::size_t at, const BuildingId& id, BuildingModel& m) {
-  m.id = id;
-  std::istringstream origin(f[at]), vertices(f[at + 1]), faces(f[at + 2]), surfaces(f[at + 3]);
-  if (!(origin >> m.origin.x >> m.origin.y >> m.origin.z)) return false;
-  std::size_t n = 0;
-  if (!(vertices >> n)) return false;
-  m.mesh.vertices.resize(n);
-  for (Point3& p : m.mesh.vertices)
-    if (!(vertices >> p.x >> p.y >> p.z)) return false;
-  if (!(faces >> n)) return false;
-  m.mesh.faces.resize(n);
-  for (auto& face : m.mesh.faces) {
-    std::size_t k = 0;
-    if (!(faces >> k)) return false;
-    face.resize(k);
-    for (std::uint32_t& v : face)
-      if (!(faces >> v) || v >= m.mesh.vertices.size()) return false;
-  }
-  if (!(surfaces >> n)) return false;
-  m.surfaces.resize(n);
-  for (SurfaceType& t : m.surfaces) {
-    int v = 0;
-    if (!(surfaces >> v) || v < 0 || v > 2) return false;
-    t = static_cast<SurfaceType>(v);
-  }
-  return true;
-}
-
-// The report's 3DBAG-style fields, after the first 18.
-constexpr std::size_t kReportFields = 36;
-
-std::string serialise(const BuildingResult& result) {
-  const BuildingReport& r = result.report;
-  std::ostringstream out;
-  out << escape(r.id) << '\t' << static_cast<int>(r.status) << '\t' << static_cast<int>(r.level) << '\t'
-      << escape(r.stage) << '\t' << escape(r.reason) << '\t' << escape(r.note) << '\t' << r.points << '\t'
-      << r.ground_points << '\t' << num(r.ground_z) << '\t' << escape(r.ground_method) << '\t' << num(r.roof_z)
-      << '\t' << r.planes << '\t' << r.walls << '\t' << r.candidate_faces << '\t' << r.faces << '\t'
-      << num(r.rmse) << '\t' << (r.valid ? 1 : 0) << '\t' << num(r.seconds) << '\t';
-  out << escape(r.lods) << '\t' << escape(r.lods_reconstructed) << '\t' << num(r.footprint_area) << '\t'
-      << num(r.point_density) << '\t' << num(r.h_roof_50p) << '\t' << num(r.h_roof_70p) << '\t' << num(r.h_roof_min)
-      << '\t' << num(r.h_roof_max) << '\t' << num(r.h_ridge) << '\t' << escape(r.roof_type) << '\t'
-      << num(r.volume_lod12) << '\t' << num(r.volume_lod13) << '\t' << num(r.volume_lod22) << '\t'
-      << num(r.rmse_lod12) << '\t' << num(r.rmse_lod13) << '\t' << num(r.rmse_lod22) << '\t'
-      << escape(r.validity_found) << '\t' << escape(r.repairs) << '\t';
-  if (!result.model) {
-    out << "-\n";
-    return out.str();
-  }
-  serialise_model(out, *result.model);
-  out << '\t' << result.lods.size();
-  for (const LodModel& lod : result.lods) {
-    out << '\t' << escape(lod.lod) << '\t';
-    serialise_model(out, lod.model);
-  }
-  out << "\tend\n";
-  return out.str();
-}
-
-// Parses one journal line; false when it is damaged (a run killed in the middle of a write).
-bool parse(const std::string& line, BuildingResult& result) {
-  const std::vector<std::string> f = split_tabs(line);
-  if (f.size() != kReportFields + 1 && f.size() < kReportFields + 6) return false;
-  try {
-    BuildingReport& r = result.report;
-    r.id = unescape(f[0]);
-    r.status = static_cast<BuildingStatus>(std::stoi(f[1]));
-    r.level = static_cast<ModelLevel>(std::stoi(f[2]));
-    r.stage = unescape(f[3]);
-    r.reason = unescape(f[4]);
-    r.note = unescape(f[5]);
-    r.points = std::stoull(f[6]);
-    r.ground_points = std::stoull(f[7]);
-    r.ground_z = std::stod(f[8]);
-    r.ground_method = unescape(f[9]);
-    r.roof_z = std::stod(f[10]);
-    r.planes = std::stoull(f[11]);
-    r.walls = std::stoull(f[12]);
-    r.candidate_faces = std::stoull(f[13]);
-    r.faces = std::stoull(f[14]);
-    r.rmse = std::stod(f[15]);
-    r.valid = f[16] == "1";
-    r.seconds = std::stod(f[17]);
-    r.lods = unescape(f[18]);
-    r.lods_reconstructed = unescape(f[19]);
-    double* numbers[] = {&r.footprint_area, &r.point_density, &r.h_roof_50p, &r.h_roof_70p, &r.h_roof_min,
-                         &r.h_roof_max, &r.h_ridge};
-    for (std::size_t k = 0; k < 7; ++k) *numbers[k] = std::stod(f[20 + k]);
-    r.roof_type = unescape(f[27]);
-    double* more[] = {&r.volume_lod12, &r.volume_lod13, &r.volume_lod22, &r.rmse_lod12, &r.rmse_lod13, &r.rmse_lod22};
-    for (std::size_t k = 0; k < 6; ++k) *more[k] = std::stod(f[28 + k]);
-    r.validity_found = unescape(f[34]);
-    r.repairs = unescape(f[35]);
-    if (f.size() == kReportFields + 1) return f[kReportFields] == "-";
-    if (f.back() != "end") return false;
-    BuildingModel m;
-    if (!parse_model(f, kReportFields, r.id, m)) return false;
-    const std::size_t lods = std::stoull(f[kReportFields + 4]);
-    if (f.size() != kReportFields + 5 + 5 * lods + 1) return false;
-    for (std::size_t k = 0; k < lods; ++k) {
-      LodModel lod;
-      lod.lod = unescape(f[kReportFields + 5 + 5 * k]);
-      if (!parse_model(f, kReportFields + 6 + 5 * k, r.id, lod.model)) return false;
-      result.lods.push_back(std::move(lod));
-    }
-    result.model = std::move(m);
-    return true;
-  } catch (const std::exception&) {
-    return false;
-  }
-}
-
-std::string file_stamp(const std::string& path) {
-  std::error_code ec;
-  const auto size = fs::file_size(path, ec);
-  const auto time = fs::last_write_time(path, ec).time_since_epoch().count();
-  return path + " " + std::to_string(ec ? 0 : size) + " " + std::to_string(ec ? 0 : time);
-}
-
 }  // namespace
+
+bool JournalHeader::same_run(const JournalHeader& o) const {
+  return fingerprint == o.fingerprint && shard == o.shard && shards == o.shards &&
+         (shards == 0 || block_size == o.block_size) && expected == o.expected &&
+         layout_json(layout) == layout_json(o.layout);
+}
+
+std::string content_hash(const std::string& bytes) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  char buf[kHashDigits + 1];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+std::string file_hash(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return {};
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  if (in.bad()) return {};
+  return content_hash(bytes.str());
+}
 
 std::string batch_fingerprint(const BatchOptions& o, const std::vector<std::string>& files) {
   std::ostringstream s;
-  s << CITY3D_VERSION << '\n';
+  s << CITY3D_VERSION << " journal " << kJournalVersion << '\n';
   for (const std::string& f : files) s << file_stamp(f) << '\n';
   if (!o.footprints.empty()) s << file_stamp(o.footprints) << '\n';
   s << o.footprint.layer << '|' << o.footprint.id_field << '|' << o.footprint.attribute_filter << '|'
@@ -211,69 +208,163 @@ std::string batch_fingerprint(const BatchOptions& o, const std::vector<std::stri
     << '|' << o.crop.min_ground_points << '\n';
   s << parameters_text(o.reconstruction) << '\n';
   s << (o.ground_z ? num(*o.ground_z) : "-") << '\n';
-  // FNV-1a, 64 bits: enough to tell runs apart; the journal is not a security boundary.
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : s.str()) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
-  char buf[20];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-  return buf;
+  // What a building's record holds: its model file, its CityJSONFeature, its mesh for models.<ext>.
+  s << static_cast<int>(o.format) << '|' << o.local_coordinates << '|' << o.per_building_files << '|'
+    << o.merged_file << '|' << o.timings_in_cityjson << '\n';
+  return content_hash(s.str());
 }
 
-Journal::Journal(std::string path, const std::string& fingerprint, bool resume) : path_(std::move(path)) {
-  const std::string header = std::string(kMagic) + " " + fingerprint;
+JournalReader::JournalReader(std::string path) : path_(std::move(path)) {
+  std::ifstream in(path_, std::ios::binary);
+  if (!in) throw IoError("resume: cannot read " + path_ + ": " + std::strerror(errno));
+  std::string line;
+  std::uint64_t offset = 0;
+  std::size_t number = 0;
+  std::map<std::uint64_t, std::size_t> position_of_index;
+  while (std::getline(in, line)) {
+    const std::uint64_t line_offset = offset;
+    offset += line.size() + 1;
+    ++number;
+    // Only lines ending in a newline are complete: a run killed in the middle of a write leaves
+    // half a line, which is not counted as damage.
+    if (in.eof()) break;
+    const std::optional<std::string> text = checked_text(line);
+    if (number == 1) {
+      if (!text) return;
+      try {
+        header_ = parse_header(json::parse(*text));
+        header_ok_ = true;
+      } catch (const std::exception&) {
+        return;
+      }
+      continue;
+    }
+    std::string id;
+    if (text) {
+      try {
+        const json j = json::parse(*text);
+        RecordRef ref;
+        ref.index = j.at("index").get<std::uint64_t>();
+        ref.id = j.at("id").get<std::string>();
+        ref.status = parse_status(j.at("status").get<std::string>());
+        ref.model_file = j.at("model").get<std::string>();
+        ref.model_hash = j.at("model_hash").get<std::string>();
+        ref.offset = line_offset;
+        ref.length = line.size();
+        const auto [it, fresh] = position_of_index.emplace(ref.index, records_.size());
+        if (fresh)
+          records_.push_back(std::move(ref));
+        else
+          records_[it->second] = std::move(ref);
+        continue;
+      } catch (const std::exception&) {
+      }
+    } else {
+      // The id, when the damage left it readable, helps the user.
+      try {
+        const std::size_t brace = line.find('{');
+        if (brace != std::string::npos) id = json::parse(line.substr(brace)).at("id").get<std::string>();
+      } catch (const std::exception&) {
+      }
+    }
+    damaged_.emplace_back(number, id);
+  }
+}
+
+std::string JournalReader::line(const RecordRef& ref) const {
+  std::ifstream in(path_, std::ios::binary);
+  std::string text(ref.length, '\0');
+  if (!in.seekg(static_cast<std::streamoff>(ref.offset)) || !in.read(text.data(), static_cast<std::streamsize>(ref.length)))
+    throw IoError("resume: cannot read back record " + std::to_string(ref.index) + " of " + path_);
+  return text;
+}
+
+BuildingRecord JournalReader::read(const RecordRef& ref) const {
+  const std::optional<std::string> text = checked_text(line(ref));
+  if (!text) throw IoError("resume: record " + std::to_string(ref.index) + " (" + ref.id + ") of " + path_ +
+                           " changed while the run used it");
+  try {
+    return parse_record(json::parse(*text));
+  } catch (const std::exception& e) {
+    throw IoError("resume: record " + std::to_string(ref.index) + " of " + path_ + " is unreadable: " + e.what());
+  }
+}
+
+Journal::Journal(const std::string& output_dir, JournalHeader header, bool resume)
+    : path_((fs::path(output_dir) / "resume.journal").string()) {
   std::vector<std::string> kept;
-  if (resume) {
-    std::ifstream in(path_, std::ios::binary);
-    std::string first;
-    if (in && std::getline(in, first)) {
-      if (first == header) {
-        std::string content((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-        std::size_t start = 0;
-        // Only lines ending in a newline are complete.
-        for (std::size_t nl = content.find('\n'); nl != std::string::npos; nl = content.find('\n', start)) {
-          std::string line = content.substr(start, nl - start);
-          start = nl + 1;
-          BuildingResult result;
-          if (parse(line, result)) {
-            done_[result.report.id] = std::move(result);
-            kept.push_back(std::move(line));
+  std::error_code ec;
+  if (fs::exists(path_, ec)) {
+    const JournalReader old(path_);
+    const bool same = old.header_ok() && old.header().same_run(header);
+    if (same && resume) {
+      for (const auto& [number, id] : old.damaged())
+        log_warning("resume: line " + std::to_string(number) + " of " + path_ + (id.empty() ? "" : " (" + id + ")") +
+                    " is damaged (checksum mismatch); its building is recomputed");
+      for (const RecordRef& ref : old.records()) {
+        if (ref.index >= header.layout.records) continue;
+        if (!ref.model_file.empty()) {
+          const std::string model = (fs::path(output_dir) / "models" / ref.model_file).string();
+          if (file_hash(model) != ref.model_hash) {
+            log_warning("resume: " + model + " is missing or changed since it was written; building " + ref.id +
+                        " is recomputed");
+            continue;
           }
         }
-      } else {
-        log_warning("resume: " + path_ + " is from another run (inputs or parameters differ); starting afresh");
+        kept.push_back(old.line(ref));
+        done_[ref.index] = ref;
       }
+    } else {
+      if (!same)
+        log_warning("resume: " + path_ + (old.header_ok() ? " is from another run (inputs or parameters differ)"
+                                                          : " is damaged or from another city3d version") +
+                    "; starting afresh");
+      for (const RecordRef& ref : old.records())
+        if (!ref.model_file.empty()) earlier_models_.emplace_back(ref.model_file, ref.model_hash);
     }
   }
   // Rewrite the journal with its good lines only, then append to it.
-  const std::string temp = path_ + ".tmp";
-  std::FILE* f = std::fopen(temp.c_str(), "wb");
-  if (!f) throw IoError("resume: cannot write " + temp + ": " + std::strerror(errno));
-  std::fprintf(f, "%s\n", header.c_str());
-  for (const std::string& line : kept) std::fprintf(f, "%s\n", line.c_str());
-  if (std::fclose(f) != 0 || std::rename(temp.c_str(), path_.c_str()) != 0)
-    throw IoError("resume: cannot write " + path_ + ": " + std::strerror(errno));
+  write_journal(path_, header, kept);
   file_ = std::fopen(path_.c_str(), "ab");
   if (!file_) throw IoError("resume: cannot append to " + path_ + ": " + std::strerror(errno));
   if (!done_.empty()) log_info("resume: " + std::to_string(done_.size()) + " finished buildings in " + path_);
 }
 
-Journal::~Journal() {
+Journal::~Journal() { close(); }
+
+void Journal::close() {
+  std::lock_guard<std::mutex> lock(mutex_);
   if (file_) std::fclose(file_);
+  file_ = nullptr;
 }
 
-const BuildingResult* Journal::find(const BuildingId& id) const {
-  const auto it = done_.find(id);
+const RecordRef* Journal::find(std::uint64_t index) const {
+  const auto it = done_.find(index);
   return it == done_.end() ? nullptr : &it->second;
 }
 
-void Journal::append(const BuildingResult& result) {
-  const std::string line = serialise(result);
+void Journal::append(const BuildingRecord& record) {
+  const std::string line = make_line(record_json(record)) + "\n";
   std::lock_guard<std::mutex> lock(mutex_);
-  if (std::fwrite(line.data(), 1, line.size(), file_) != line.size() || std::fflush(file_) != 0)
+  if (!file_ || std::fwrite(line.data(), 1, line.size(), file_) != line.size() || std::fflush(file_) != 0)
     throw IoError("resume: cannot append to " + path_ + ": " + std::strerror(errno));
+}
+
+void write_journal(const std::string& path, const JournalHeader& header, const std::vector<std::string>& lines) {
+  // A fixed temporary name: only one run may write into a folder (the folder lock), and a stale one
+  // is removed when the next run starts.
+  const std::string temp = path + ".tmp";
+  std::FILE* f = std::fopen(temp.c_str(), "wb");
+  if (!f) throw IoError("resume: cannot write " + temp + ": " + std::strerror(errno));
+  const std::string first = make_line(header_json(header)) + "\n";
+  bool ok = std::fwrite(first.data(), 1, first.size(), f) == first.size();
+  for (const std::string& line : lines)
+    ok = ok && std::fwrite(line.data(), 1, line.size(), f) == line.size() && std::fputc('\n', f) != EOF;
+  if (std::fclose(f) != 0 || !ok || std::rename(temp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    std::remove(temp.c_str());
+    throw IoError("resume: cannot write " + path + ": " + std::strerror(err));
+  }
 }
 
 }  // namespace city3d::detail

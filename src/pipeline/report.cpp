@@ -87,30 +87,87 @@ const Extra kExtras[] = {
     {"repairs", -1, nullptr, &BuildingReport::repairs},
 };
 
+std::string csv_extras(const BuildingReport& r) {
+  std::string extra;
+  for (const Extra& e : kExtras) extra += "," + (e.text ? csv_field(r.*e.text) : csv_number(r.*e.number, e.decimals));
+  return extra;
+}
+
+std::string json_extras(const BuildingReport& r) {
+  std::string extra;
+  for (const Extra& e : kExtras)
+    extra += std::string(", \"") + e.name + "\": " + (e.text ? json_string(r.*e.text) : json_number(r.*e.number, e.decimals));
+  return extra;
+}
+
 }  // namespace
+
+std::string report_csv_header() {
+  std::string header =
+      "id,status,level,stage,reason,note,points,ground_points,ground_z,ground_method,roof_z,planes,walls,"
+      "candidate_faces,faces,rmse,valid";
+  for (const Extra& e : kExtras) header += std::string(",") + e.name;
+  return header + ",seconds";  // last: the only column that differs between identical runs
+}
+
+std::string report_csv_row(const BuildingReport& r) {
+  return csv_field(r.id) + "," + to_string(r.status) + "," + to_string(r.level) + "," + csv_field(r.stage) + "," +
+         csv_field(r.reason) + "," + csv_field(r.note) + "," + std::to_string(r.points) + "," +
+         std::to_string(r.ground_points) + "," + fixed(r.ground_z, 3) + "," + csv_field(r.ground_method) + "," +
+         fixed(r.roof_z, 3) + "," + std::to_string(r.planes) + "," + std::to_string(r.walls) + "," +
+         std::to_string(r.candidate_faces) + "," + std::to_string(r.faces) + "," +
+         (r.rmse >= 0 ? fixed(r.rmse, 4) : "") + "," + (r.valid ? "1" : "0") + csv_extras(r) + "," +
+         fixed(r.seconds, 4);
+}
+
+std::string report_json_row(const BuildingReport& r) {
+  return "{\"id\": " + json_string(r.id) + ", \"status\": \"" + to_string(r.status) + "\", \"level\": \"" +
+         to_string(r.level) + "\", \"stage\": " + json_string(r.stage) + ", \"reason\": " + json_string(r.reason) +
+         ", \"note\": " + json_string(r.note) + ", \"points\": " + std::to_string(r.points) +
+         ", \"ground_points\": " + std::to_string(r.ground_points) + ", \"ground_z\": " + fixed(r.ground_z, 3) +
+         ", \"ground_method\": " + json_string(r.ground_method) + ", \"roof_z\": " + fixed(r.roof_z, 3) +
+         ", \"planes\": " + std::to_string(r.planes) + ", \"walls\": " + std::to_string(r.walls) +
+         ", \"candidate_faces\": " + std::to_string(r.candidate_faces) + ", \"faces\": " + std::to_string(r.faces) +
+         ", \"rmse\": " + (r.rmse >= 0 ? fixed(r.rmse, 4) : "null") + ", \"valid\": " + (r.valid ? "true" : "false") +
+         json_extras(r) + ", \"seconds\": " + fixed(r.seconds, 4) + "}";
+}
+
+struct ReportWriter::Impl {
+  AtomicFile csv;
+  AtomicFile json;
+  std::size_t rows = 0;
+  Impl(const std::string& c, const std::string& j) : csv(c), json(j) {}
+};
+
+ReportWriter::ReportWriter(const std::string& csv_path, const std::string& json_path, const BatchSummary& summary)
+    : impl_(new Impl(csv_path, json_path)) {
+  std::fputs((report_csv_header() + "\n").c_str(), impl_->csv.file());
+  std::fprintf(impl_->json.file(),
+               "{\n  \"summary\": {\"buildings\": %zu, \"ok\": %zu, \"fallback\": %zu, \"skipped\": %zu, "
+               "\"failed\": %zu, \"seconds\": %s},\n  \"buildings\": [",
+               summary.buildings, summary.ok, summary.fallback, summary.skipped, summary.failed,
+               fixed(summary.seconds, 3).c_str());
+}
+
+ReportWriter::~ReportWriter() = default;
+
+void ReportWriter::add(const std::string& csv_row, const std::string& json_row) {
+  std::fputs(csv_row.c_str(), impl_->csv.file());
+  std::fputc('\n', impl_->csv.file());
+  std::fputs(impl_->rows++ ? ",\n    " : "\n    ", impl_->json.file());
+  std::fputs(json_row.c_str(), impl_->json.file());
+}
+
+void ReportWriter::close() {
+  std::fputs("\n  ]\n}\n", impl_->json.file());
+  impl_->csv.commit();
+  impl_->json.commit();
+}
 
 void write_report_csv(const std::string& path, const std::vector<BuildingReport>& rows) {
   AtomicFile file(path);
-  std::FILE* out = file.file();
-  std::fputs(
-      "id,status,level,stage,reason,note,points,ground_points,ground_z,ground_method,roof_z,planes,walls,"
-      "candidate_faces,faces,rmse,valid,seconds",
-      out);
-  for (const Extra& e : kExtras) std::fprintf(out, ",%s", e.name);
-  std::fputc('\n', out);
-  for (const BuildingReport& r : rows) {
-    const std::string line =
-        csv_field(r.id) + "," + to_string(r.status) + "," + to_string(r.level) + "," + csv_field(r.stage) + "," +
-        csv_field(r.reason) + "," + csv_field(r.note) + "," + std::to_string(r.points) + "," + std::to_string(r.ground_points) + "," +
-        fixed(r.ground_z, 3) + "," + csv_field(r.ground_method) + "," + fixed(r.roof_z, 3) + "," +
-        std::to_string(r.planes) + "," + std::to_string(r.walls) + "," + std::to_string(r.candidate_faces) + "," +
-        std::to_string(r.faces) + "," + (r.rmse >= 0 ? fixed(r.rmse, 4) : "") + "," + (r.valid ? "1" : "0") + "," +
-        fixed(r.seconds, 4);
-    std::string extra;
-    for (const Extra& e : kExtras)
-      extra += "," + (e.text ? csv_field(r.*e.text) : csv_number(r.*e.number, e.decimals));
-    std::fputs((line + extra + "\n").c_str(), out);
-  }
+  std::fputs((report_csv_header() + "\n").c_str(), file.file());
+  for (const BuildingReport& r : rows) std::fputs((report_csv_row(r) + "\n").c_str(), file.file());
   file.commit();
 }
 
@@ -122,23 +179,8 @@ void write_report_json(const std::string& path, const std::vector<BuildingReport
                "\"failed\": %zu, \"seconds\": %s},\n  \"buildings\": [",
                summary.buildings, summary.ok, summary.fallback, summary.skipped, summary.failed,
                fixed(summary.seconds, 3).c_str());
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    const BuildingReport& r = rows[i];
-    const std::string line =
-        std::string(i ? "," : "") + "\n    {\"id\": " + json_string(r.id) + ", \"status\": \"" + to_string(r.status) +
-        "\", \"level\": \"" + to_string(r.level) + "\", \"stage\": " + json_string(r.stage) +
-        ", \"reason\": " + json_string(r.reason) + ", \"note\": " + json_string(r.note) + ", \"points\": " + std::to_string(r.points) +
-        ", \"ground_points\": " + std::to_string(r.ground_points) + ", \"ground_z\": " + fixed(r.ground_z, 3) +
-        ", \"ground_method\": " + json_string(r.ground_method) + ", \"roof_z\": " + fixed(r.roof_z, 3) +
-        ", \"planes\": " + std::to_string(r.planes) + ", \"walls\": " + std::to_string(r.walls) +
-        ", \"candidate_faces\": " + std::to_string(r.candidate_faces) + ", \"faces\": " + std::to_string(r.faces) +
-        ", \"rmse\": " + (r.rmse >= 0 ? fixed(r.rmse, 4) : "null") + ", \"valid\": " + (r.valid ? "true" : "false") +
-        ", \"seconds\": " + fixed(r.seconds, 4);
-    std::string extra;
-    for (const Extra& e : kExtras)
-      extra += std::string(", \"") + e.name + "\": " + (e.text ? json_string(r.*e.text) : json_number(r.*e.number, e.decimals));
-    std::fputs((line + extra + "}").c_str(), out);
-  }
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    std::fputs(((i ? ",\n    " : "\n    ") + report_json_row(rows[i])).c_str(), out);
   std::fputs("\n  ]\n}\n", out);
   file.commit();
 }

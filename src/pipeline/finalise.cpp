@@ -1,0 +1,234 @@
+// Run-level output assembly and output-folder housekeeping (see finalise.hpp).
+#include "pipeline/finalise.hpp"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <regex>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "city3d/error.hpp"
+#include "city3d/log.hpp"
+#include "city3d/model_io.hpp"
+#include "io/atomic_file.hpp"
+#include "pipeline/report.hpp"
+
+namespace city3d::detail {
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+constexpr const char* kManifest = "run.json";
+
+// The names AtomicFile gives its temporary files ("<name>.tmp-<pid>-<n>"), and the journal's.
+bool temporary_name(const std::string& name, long& pid) {
+  static const std::regex pattern(R"(.+\.tmp-([0-9]+)-[0-9]+)");
+  std::smatch m;
+  if (std::regex_match(name, m, pattern)) {
+    pid = std::stol(m[1].str());
+    return true;
+  }
+  pid = 0;
+  return name == "resume.journal.tmp";
+}
+
+void remove_temporary_files(const fs::path& folder, bool locked) {
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) return;
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    const std::string name = entry.path().filename().string();
+    long pid = 0;
+    if (!entry.is_regular_file(ec) || !temporary_name(name, pid)) continue;
+    // With the folder locked no other city3d writes here, so every temporary file is stale.
+    // Without a lock (a file system without flock) only those of processes that are gone are.
+    if (!locked && pid > 0 && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM)) continue;
+    if (fs::remove(entry.path(), ec)) log_info("output: removed " + entry.path().string() + ", left by a killed run");
+  }
+}
+
+}  // namespace
+
+std::string file_stamp_of(const std::string& path) {
+  std::error_code ec;
+  const auto size = fs::file_size(path, ec);
+  if (ec) return {};
+  const auto time = fs::last_write_time(path, ec).time_since_epoch().count();
+  if (ec) return {};
+  return std::to_string(size) + " " + std::to_string(time);
+}
+
+bool read_manifest(const std::string& dir, RunManifest& manifest) {
+  std::ifstream in(fs::path(dir) / kManifest, std::ios::binary);
+  if (!in) return false;
+  try {
+    const json j = json::parse(in);
+    RunManifest m;
+    m.header.fingerprint = j.at("fingerprint").get<std::string>();
+    m.header.shard = j.at("shard").get<int>();
+    m.header.shards = j.at("shards").get<int>();
+    m.header.expected = j.at("expected").get<std::uint64_t>();
+    m.records = j.at("records").get<std::uint64_t>();
+    m.seconds = j.at("seconds").get<double>();
+    for (const auto& [name, stamp] : j.at("outputs").items()) m.outputs[name] = stamp.get<std::string>();
+    manifest = std::move(m);
+    return true;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+OutputFolder::OutputFolder(std::string dir) : dir_(std::move(dir)) {
+  std::error_code ec;
+  fs::create_directories(dir_, ec);
+  if (ec) throw IoError("output: cannot create " + dir_ + ": " + ec.message());
+  // An exclusive lock on the folder itself: two runs writing into one folder would mix their
+  // journals. A file system without flock (some cluster mounts) gets no lock, and a warning.
+  lock_fd_ = ::open(dir_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  bool locked = false;
+  if (lock_fd_ >= 0) {
+    if (::flock(lock_fd_, LOCK_EX | LOCK_NB) == 0) {
+      locked = true;
+    } else if (errno == EWOULDBLOCK) {
+      ::close(lock_fd_);
+      lock_fd_ = -1;
+      throw IoError("output: another city3d process is writing into " + dir_ + "; wait for it or choose another folder");
+    } else {
+      log_debug("output: cannot lock " + dir_ + ": " + std::strerror(errno));
+    }
+  }
+  remove_temporary_files(dir_, locked);
+  remove_temporary_files(fs::path(dir_) / "models", locked);
+
+  // The run-level files of the previous run here: this run rewrites those it writes; those it does
+  // not would describe other buildings than the models beside them.
+  RunManifest previous;
+  if (read_manifest(dir_, previous)) {
+    for (const auto& [name, stamp] : previous.outputs) {
+      const fs::path file = fs::path(dir_) / name;
+      if (name.find('/') != std::string::npos || name.find("..") != std::string::npos) continue;
+      if (!stamp.empty() && file_stamp_of(file.string()) == stamp && fs::remove(file, ec))
+        log_debug("output: removed " + file.string() + " of the previous run");
+    }
+  }
+  fs::remove(fs::path(dir_) / kManifest, ec);
+}
+
+OutputFolder::~OutputFolder() {
+  if (lock_fd_ >= 0) ::close(lock_fd_);
+}
+
+void OutputFolder::remove_earlier_models(const std::vector<std::pair<std::string, std::string>>& models) {
+  std::size_t removed = 0;
+  for (const auto& [name, hash] : models) {
+    if (name.empty() || name.find('/') != std::string::npos || name[0] == '.') continue;
+    const fs::path file = fs::path(dir_) / "models" / name;
+    std::error_code ec;
+    if (!hash.empty() && file_hash(file.string()) == hash && fs::remove(file, ec)) ++removed;
+  }
+  if (removed > 0)
+    log_info("output: removed " + std::to_string(removed) + " model files an earlier run of other inputs or "
+             "parameters wrote into " + (fs::path(dir_) / "models").string());
+}
+
+void OutputFolder::write_manifest(const RunManifest& m) {
+  json outputs = json::object();
+  for (const auto& [name, stamp] : m.outputs) outputs[name] = stamp;
+  const json j = {{"city3d", CITY3D_VERSION},
+                  {"fingerprint", m.header.fingerprint},
+                  {"shard", m.header.shard},
+                  {"shards", m.header.shards},
+                  {"expected", m.header.expected},
+                  {"records", m.records},
+                  {"seconds", m.seconds},
+                  {"outputs", outputs}};
+  AtomicFile file((fs::path(dir_) / kManifest).string());
+  const std::string text = j.dump(2, ' ', false, json::error_handler_t::replace) + "\n";
+  std::fwrite(text.data(), 1, text.size(), file.file());
+  file.commit();
+}
+
+BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const std::vector<RecordSource>& records,
+                          double seconds, FinaliseScope scope, std::map<std::string, std::string>& outputs) {
+  const fs::path out(dir);
+  const bool whole = scope == FinaliseScope::whole_run;
+  if (whole) {
+    // Every index exactly once: anything else is a bug in the caller, or a merge of the wrong shards.
+    if (records.size() != layout.records)
+      throw Error("finalise: " + std::to_string(records.size()) + " records for a run of " +
+                  std::to_string(layout.records));
+    for (std::size_t i = 0; i < records.size(); ++i)
+      if (records[i].ref->index != i) throw Error("finalise: record " + std::to_string(i) + " is missing");
+  }
+
+  BatchSummary summary;
+  summary.buildings = records.size();
+  for (const RecordSource& r : records) {
+    summary.ok += r.ref->status == BuildingStatus::ok;
+    summary.fallback += r.ref->status == BuildingStatus::fallback;
+    summary.skipped += r.ref->status == BuildingStatus::skipped;
+    summary.failed += r.ref->status == BuildingStatus::failed;
+  }
+  summary.seconds = seconds;
+  summary.report_path = (out / "report.csv").string();
+
+  const CityJsonOptions cityjson_options{layout.crs, layout.scale, ""};
+  std::unique_ptr<CityJsonAssembler> cityjson;
+  std::unique_ptr<AtomicFile> seq;
+  std::vector<BuildingModel> merged;
+  if (whole && layout.cityjson)
+    cityjson = std::make_unique<CityJsonAssembler>((out / "buildings.city.json").string(), cityjson_options,
+                                                   layout.translate);
+  if (whole && layout.cityjson_seq) {
+    seq = std::make_unique<AtomicFile>((out / "buildings.city.jsonl").string());
+    const std::string header = cityjson_seq_header(cityjson_options, layout.translate) + "\n";
+    std::fwrite(header.data(), 1, header.size(), seq->file());
+  }
+  ReportWriter report((out / "report.csv").string(), (out / "report.json").string(), summary);
+
+  for (const RecordSource& source : records) {
+    BuildingRecord r = source.journal->read(*source.ref);
+    report.add(r.report_csv, r.report_json);
+    if (r.feature.empty()) continue;
+    if (cityjson) cityjson->add(r.feature);
+    if (seq) {
+      std::fwrite(r.feature.data(), 1, r.feature.size(), seq->file());
+      std::fputc('\n', seq->file());
+    }
+    if (whole && layout.merged_file) {
+      if (!r.mesh) throw Error("finalise: record " + std::to_string(r.index) + " (" + r.id + ") holds no mesh");
+      merged.push_back(std::move(*r.mesh));
+    }
+  }
+
+  std::vector<std::string> written;
+  if (cityjson) {
+    cityjson->close();
+    written.push_back("buildings.city.json");
+  }
+  if (seq) {
+    seq->commit();
+    written.push_back("buildings.city.jsonl");
+  }
+  if (whole && layout.merged_file) {
+    const std::string name = "models" + mesh_extension(layout.format);
+    write_models((out / name).string(), merged, {layout.format, layout.local_coordinates});
+    written.push_back(name);
+  }
+  report.close();
+  written.push_back("report.csv");
+  written.push_back("report.json");
+  for (const std::string& name : written) outputs[name] = file_stamp_of((out / name).string());
+  return summary;
+}
+
+}  // namespace city3d::detail
