@@ -25,13 +25,18 @@ runs_of() {
 for set in $sets; do
   for run in $(runs_of "$set"); do
     name="$set-$(basename "$run")"
-    if [ "$run" = delft ]; then
-      "$build/city3d" reconstruct "$data"/ahn3_delft/ahn3_cropped_1.las "$data"/ahn3_delft/ahn3_cropped_2.las \
-        --footprints "$data"/ahn3_delft/footprints/bgt_pand_laz_area.gpkg --id-field gml_id -j "$jobs" \
-        --no-progress -q --no-resume -o "$out/$name"
-    else
-      "$build/city3d" reconstruct "$run" -j "$jobs" --no-progress -q --no-resume --no-cityjson --no-html -o "$out/$name"
-    fi
+    # A run that dies (a solver crash: see docs/BENCHMARKS.md) is resumed, up to three times: the
+    # journal keeps every finished building.
+    for attempt in 1 2 3; do
+      if [ "$run" = delft ]; then
+        "$build/city3d" reconstruct "$data"/ahn3_delft/ahn3_cropped_1.las "$data"/ahn3_delft/ahn3_cropped_2.las \
+          --footprints "$data"/ahn3_delft/footprints/bgt_pand_laz_area.gpkg --id-field gml_id -j "$jobs" \
+          --no-progress -q -o "$out/$name" && break
+      else
+        "$build/city3d" reconstruct "$run" -j "$jobs" --no-progress -q --no-cityjson --no-html -o "$out/$name" && break
+      fi
+      echo "validity.sh: $name: attempt $attempt ended with status $?; resuming" >&2
+    done
   done
   echo "== $set"
   "$build/bench/bench_validity" "$out/$set"-*/models | tail -n 20 || status=1
