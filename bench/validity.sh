@@ -25,9 +25,9 @@ runs_of() {
 for set in $sets; do
   for run in $(runs_of "$set"); do
     name="$set-$(basename "$run")"
-    # A run that dies (a solver crash: see docs/BENCHMARKS.md) is resumed, up to three times: the
+    # A run that dies (a solver crash: see docs/BENCHMARKS.md) is resumed, up to five times: the
     # journal keeps every finished building.
-    for attempt in 1 2 3; do
+    for attempt in 1 2 3 4 5; do
       if [ "$run" = delft ]; then
         "$build/city3d" reconstruct "$data"/ahn3_delft/ahn3_cropped_1.las "$data"/ahn3_delft/ahn3_cropped_2.las \
           --footprints "$data"/ahn3_delft/footprints/bgt_pand_laz_area.gpkg --id-field gml_id -j "$jobs" \
