@@ -309,3 +309,44 @@ TEST(Validity, validate_model_checks_each_part_as_a_solid) {
 
 }  // namespace
 }  // namespace city3d
+
+namespace city3d {
+namespace {
+
+// The 104 case: a face carrying a zero-width spike (out to a tip 0.8 m away and back along
+// the same line) on a closed, 2-manifold box, which a check of edges alone calls valid.
+BuildingModel box_with_spike() {
+  BuildingModel m;
+  m.id = "spike";
+  m.origin = {85000, 447000, 0};
+  m.mesh.vertices = {{0, 0, 0}, {10, 0, 0}, {10, 10, 0}, {0, 10, 0}, {0, 0, 10}, {10, 0, 10}, {10, 10, 10}, {0, 10, 10},
+                     {10, 5, 10}, {10.8, 5, 10}};
+  m.mesh.faces = {{0, 3, 2, 1}, {4, 5, 8, 9, 8, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 8, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+  return m;
+}
+
+TEST(ValidAsWritten, a_zero_width_spike_is_caught_as_104_and_cut) {
+  BuildingModel m = box_with_spike();
+  const WrittenValidity v = validate_as_written(m, 0.0001);
+  ASSERT_FALSE(v.found.empty());
+  EXPECT_EQ(validity_codes(v.found), "104");
+  EXPECT_TRUE(v.remaining.empty()) << validity_codes(v.remaining);
+  EXPECT_NE(v.repairs.find("cut 1 zero-width spike"), std::string::npos) << v.repairs;
+  EXPECT_TRUE(validate_model(m.mesh).empty());
+  EXPECT_EQ(m.mesh.vertices.size(), 9u);  // the tip is gone
+}
+
+TEST(ValidAsWritten, rounding_to_the_grid_is_what_is_checked) {
+  // A strip roof vertex 0.04 mm off its plane: within tolerance as computed, but the rounding to the
+  // 0.1 mm grid is what the writers write, so the model is checked (and stays valid) as rounded.
+  BuildingModel m;
+  m.origin = {85000, 447000, 0};
+  m.mesh.vertices = {{0, 0, 0}, {10, 0, 0}, {10, 10, 0}, {0, 10, 0}, {0, 0, 10}, {10, 0, 10}, {10, 10, 10}, {0, 10, 10.00004}};
+  m.mesh.faces = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+  const WrittenValidity v = validate_as_written(m, 0.0001);
+  EXPECT_TRUE(v.found.empty());
+  EXPECT_DOUBLE_EQ(m.mesh.vertices[7].z, 10.0);  // rounded to the grid
+}
+
+}  // namespace
+}  // namespace city3d

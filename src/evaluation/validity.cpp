@@ -783,22 +783,40 @@ void clean_model(BuildingModel& model) {
 // `tolerance` of the longer one's line). Returns how many.
 std::size_t remove_spikes(BuildingModel& model, double tolerance) {
   std::size_t removed = 0;
-  for (auto& face : model.mesh.faces) {
+  auto& faces = model.mesh.faces;
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    auto& face = faces[f];
     for (bool changed = true; changed && face.size() >= 3;) {
       changed = false;
       for (std::size_t k = 0; k < face.size() && face.size() >= 3; ++k) {
         const std::size_t n = face.size();
-        const Point3& a = model.mesh.vertices[face[(k + n - 1) % n]];
-        const Point3& b = model.mesh.vertices[face[k]];
-        const Point3& c = model.mesh.vertices[face[(k + 1) % n]];
+        const std::uint32_t ia = face[(k + n - 1) % n], ib = face[k], ic = face[(k + 1) % n];
+        const Point3& a = model.mesh.vertices[ia];
+        const Point3& b = model.mesh.vertices[ib];
+        const Point3& c = model.mesh.vertices[ic];
         const Vec ba = sub(a, b), bc = sub(c, b);
         const double lab = norm(ba), lbc = norm(bc);
-        const bool same = face[(k + n - 1) % n] == face[(k + 1) % n];
+        const bool same = ia == ic;
         // |ba x bc| / longer edge = distance of the shorter edge's end from the longer edge's line.
         const bool folded = lab > 0 && lbc > 0 && dot(ba, bc) > 0 && norm(cross(ba, bc)) <= tolerance * std::max(lab, lbc);
         if (!same && !folded) continue;
         face.erase(face.begin() + static_cast<std::ptrdiff_t>(k));
-        if (same) face.erase(face.begin() + static_cast<std::ptrdiff_t>(k % face.size()));  // a, b, a -> a
+        if (same) {
+          face.erase(face.begin() + static_cast<std::ptrdiff_t>(k % face.size()));  // a, b, a -> a
+        } else {
+          // The face across the spike runs c, b, a with b on its edge: it loses b too, so both
+          // faces keep sharing the edge a-c.
+          for (std::size_t g = 0; g < faces.size(); ++g) {
+            if (g == f) continue;
+            auto& other = faces[g];
+            const std::size_t m = other.size();
+            for (std::size_t j = 0; j < m; ++j)
+              if (other[j] == ic && other[(j + 1) % m] == ib && other[(j + 2) % m] == ia) {
+                other.erase(other.begin() + static_cast<std::ptrdiff_t>((j + 1) % m));
+                break;
+              }
+          }
+        }
         ++removed;
         changed = true;
         break;
@@ -864,21 +882,11 @@ void round_to_grid(BuildingModel& model, double grid) {
   clean_model(model);
 }
 
-WrittenValidity validate_as_written(BuildingModel& model, double grid, const ValidityParams& params) {
-  WrittenValidity result;
-  round_to_grid(model, grid);
-  result.found = validate_model(model.mesh, params);
-  result.remaining = result.found;
-  if (result.found.empty()) return result;
+namespace {
 
-  const BuildingModel as_built = model;
-  std::string repairs;
-  const std::size_t spikes = remove_spikes(model, std::max(params.snap_tolerance, grid));
-  if (spikes) {
-    round_to_grid(model, grid);
-    repairs = "cut " + std::to_string(spikes) + " zero-width spike" + (spikes > 1 ? "s" : "");
-  }
-  // Faces that are not planar as rounded, or not simple: split into triangles of their own vertices.
+// Faces that are not planar as rounded (203, 204), or not simple (104), split into triangles of their
+// own vertices. Returns how many faces were split.
+std::size_t split_bad_faces(BuildingModel& model, const ValidityParams& params) {
   std::vector<std::vector<std::uint32_t>> faces;
   std::vector<SurfaceType> surfaces;
   const bool typed = model.surfaces.size() == model.mesh.faces.size();
@@ -900,19 +908,66 @@ WrittenValidity validate_as_written(BuildingModel& model, double grid, const Val
     }
     ++split;
   }
-  if (split) {
-    model.mesh.faces = std::move(faces);
-    if (typed) model.surfaces = std::move(surfaces);
-    round_to_grid(model, grid);
-    repairs += (repairs.empty() ? "" : "; ") + std::string("split ") + std::to_string(split) + " face" +
-               (split > 1 ? "s" : "") + " into triangles";
+  model.mesh.faces = std::move(faces);
+  if (typed) model.surfaces = std::move(surfaces);
+  return split;
+}
+
+std::string plural(std::size_t n, const char* what) {
+  const std::string w = what;
+  return std::to_string(n) + " " + (n > 1 ? (w == "vertex" ? std::string("vertices") : w + "s") : w);
+}
+
+}  // namespace
+
+WrittenValidity validate_as_written(BuildingModel& model, double grid, const ValidityParams& params) {
+  WrittenValidity result;
+  round_to_grid(model, grid);
+  result.found = validate_model(model.mesh, params);
+  result.remaining = result.found;
+  if (result.found.empty()) return result;
+
+  // Repairs, mildest first; the first that leaves a valid model wins. (1) Split the faces the
+  // rounding bent (or that are not simple) into triangles of their own vertices: nothing moves.
+  // (2) Snap: vertices closer than the snap tolerance become one (what val3dity does before it
+  // checks, so that it finds no repeated point, 102), then split. (3) Cut zero-width spikes (a
+  // vertex whose edges fold back onto each other), then split.
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    BuildingModel repaired = model;
+    std::string repairs;
+    if (attempt == 1) {
+      const std::vector<std::uint32_t> to = snap_vertices(repaired.mesh.vertices, params.snap_tolerance);
+      std::size_t merged = 0;
+      for (std::uint32_t i = 0; i < to.size(); ++i) merged += to[i] != i;
+      if (merged == 0) continue;
+      for (auto& face : repaired.mesh.faces)
+        for (std::uint32_t& i : face)
+          if (i < to.size()) i = to[i];
+      round_to_grid(repaired, grid);
+      repairs = "snapped " + plural(merged, "vertex") + " onto a neighbour within " +
+                format(params.snap_tolerance * 1000, 1) + " mm";
+    }
+    if (attempt == 2) {
+      const std::size_t spikes = remove_spikes(repaired, std::max(params.snap_tolerance, grid));
+      if (spikes == 0) continue;
+      round_to_grid(repaired, grid);
+      repairs = "cut " + plural(spikes, "zero-width spike");
+    }
+    const std::size_t split = split_bad_faces(repaired, params);
+    if (split) {
+      round_to_grid(repaired, grid);
+      repairs += (repairs.empty() ? "" : "; ") + std::string("split ") + plural(split, "face") + " into triangles";
+    }
+    if (repairs.empty()) continue;
+    std::vector<ValidityError> remaining = validate_model(repaired.mesh, params);
+    if (remaining.empty()) {
+      model = std::move(repaired);
+      result.remaining.clear();
+      result.repairs = repairs;
+      return result;
+    }
   }
-  result.remaining = repairs.empty() ? result.found : validate_model(model.mesh, params);
-  if (result.remaining.empty())
-    result.repairs = repairs;
-  else
-    model = as_built;  // the repair did not help: keep the model as built (rounded), e.g. for --debug
-  return result;
+  return result;  // not repaired: the model stays as built (rounded), e.g. for --debug
 }
 
 }  // namespace city3d
