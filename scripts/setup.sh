@@ -23,6 +23,8 @@ packages=(
 if [ "$mode" = test ] && ! command -v npm >/dev/null 2>&1; then packages+=(nodejs npm); fi
 # The tests render report.html in headless Chromium (a screenshot, no console errors).
 if [ "$mode" = test ]; then packages+=(chromium); fi
+# The Slurm test starts a private single-node cluster (../shared/SLURM.md): the daemons and clients only.
+if [ "$mode" = test ]; then packages+=(slurmctld slurmd slurm-client); fi
 
 missing=()
 for p in "${packages[@]}"; do

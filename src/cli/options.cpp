@@ -251,12 +251,18 @@ const std::vector<OptionSpec>& option_table() {
        "recompute every building, even those an interrupted earlier run into the same folder finished", nullptr,
        [](O& o, V) { o.batch.resume = false; }},
       {"--block-size", nullptr, "M",
-       "footprints are processed in square blocks of this size, so memory follows one block's points "
-       "(0 = all at once; the output is the same)",
+       "footprints are processed in square blocks of this size: shards are made of them and cropping passes "
+       "group them (0 = all at once; the output is the same)",
        [](const O& o) { return number_text(o.batch.block_size); },
        [](O& o, V v) { o.batch.block_size = parse_double("--block-size", v); }},
+      {"--group-area", nullptr, "M2",
+       "blocks of one tile are cropped together, one read of the tile, up to this much footprint area "
+       "(memory follows it; 0 = one block at a time; the output is the same)",
+       [](const O& o) { return number_text(o.batch.group_area); },
+       [](O& o, V v) { o.batch.group_area = parse_double("--group-area", v); }},
       {"--shard", nullptr, "K/N",
-       "reconstruct only shard K of N (blocks dealt out by footprint area) into the output folder; "
+       "reconstruct only shard K of N (consecutive blocks in tile order, balanced by footprint area) into the "
+       "output folder; "
        "`city3d merge` combines the N folders",
        nullptr, [](O& o, V v) { parse_shard(v, o.batch.shard, o.batch.shards); }},
       {"--strict", nullptr, nullptr, "exit with code 4 when any building failed", nullptr,

@@ -1,6 +1,7 @@
 // The batch job (run_batch) and the merge of shards (merge_shards). A run is planned before any
 // building is reconstructed, from what every shard can compute alike: the footprints are scanned once
-// (no geometry kept) and grouped into square blocks, and the blocks are dealt out to the shards. Each
+// (no geometry kept) and grouped into square blocks, and the blocks, in the order of their home tiles, are
+// cut into consecutive runs, one per shard. Blocks of one tile are cropped together (one stream of it). Each
 // block's footprints are then read through an OGR spatial filter, its tiles cropped, its buildings
 // reconstructed in parallel (reconstruct_building, pipeline.cpp), and each finished building's
 // outputs (model file, CityJSONFeature, report rows) recorded in the journal. The run-level files are
@@ -217,18 +218,29 @@ void make_blocks(Plan& plan, const std::vector<double>& areas, double extent) {
   }
 }
 
-// Blocks dealt out to the shards largest first, each to the shard with the least weight so far (the
-// lowest-numbered on ties): a deterministic, balanced split every shard computes alike.
-std::vector<int> assign_shards(const std::vector<double>& weights, int shards) {
-  std::vector<std::size_t> order(weights.size());
+// Blocks in the order of their home tiles (`home`: the tile holding a block's centre), row-major
+// within a tile, so that the blocks of one tile are neighbours in this order; the order is cut into
+// `shards` consecutive runs of about equal weight (a block goes to the shard its weight's midpoint
+// falls in). Every shard computes the same split from the inputs alone, and a shard's blocks share
+// few tiles, which its cropping passes read once for several blocks.
+std::vector<std::size_t> tile_order(const std::vector<std::size_t>& home) {
+  std::vector<std::size_t> order(home.size());
   std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return weights[a] > weights[b]; });
-  std::vector<double> load(static_cast<std::size_t>(shards), 0.0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return home[a] < home[b]; });
+  return order;
+}
+
+std::vector<int> assign_shards(const std::vector<std::size_t>& order, const std::vector<double>& weights, int shards) {
+  double total = 0.0;
+  for (double w : weights) total += w;
   std::vector<int> owner(weights.size(), 0);
-  for (std::size_t block : order) {
-    const auto least = std::min_element(load.begin(), load.end()) - load.begin();
-    owner[block] = static_cast<int>(least);
-    load[static_cast<std::size_t>(least)] += weights[block];
+  double before = 0.0;
+  for (std::size_t p = 0; p < order.size(); ++p) {
+    // Without weights (no footprint area at all), by position.
+    const double w = total > 0 ? weights[order[p]] : 1.0;
+    const double sum = total > 0 ? total : static_cast<double>(order.size());
+    owner[order[p]] = std::min(shards - 1, static_cast<int>(std::floor(shards * (before + w / 2) / sum)));
+    before += w;
   }
   return owner;
 }
@@ -258,7 +270,6 @@ BatchSummary run_batch(const BatchOptions& options) {
                       " does not exist (K/N with 1 <= K <= N)");
   const std::vector<std::string> files = expand_inputs(options.point_clouds);
   log_info("parameters:\n" + parameters_text(options.reconstruction));
-  detail::OutputFolder folder(options.output_dir);
 
   // The plan: every building of the run, in output order, and its block.
   Plan plan;
@@ -295,12 +306,49 @@ BatchSummary run_batch(const BatchOptions& options) {
   if (!extent.empty()) plan.layout.translate = {std::floor(extent.min.x), std::floor(extent.min.y), 0.0};
   plan.layout.records = plan.buildings + plan.skipped.size();
 
-  // This process's part: every block, or the blocks of its shard.
-  std::vector<std::size_t> my_blocks;
+  // Each block's home tile: the first tile whose header bounds hold the centre of the block's
+  // footprints (single-building clouds: each cloud its own).
+  std::vector<std::size_t> home(plan.blocks.size());
+  std::iota(home.begin(), home.end(), 0);
+  if (source) {
+    std::vector<Box2> tiles;
+    for (const std::string& file : files) {
+      const PointCloudInfo info = read_point_cloud_info(file);
+      Box2 box;
+      if (!info.bounds.empty()) box.add({info.bounds.min.x, info.bounds.min.y}), box.add({info.bounds.max.x, info.bounds.max.y});
+      tiles.push_back(box);
+    }
+    for (std::size_t b = 0; b < plan.blocks.size(); ++b) {
+      Box2 extent;
+      for (std::uint64_t i : plan.blocks[b]) extent.add(plan.boxes[i].min), extent.add(plan.boxes[i].max);
+      const Point2 centre{(extent.min.x + extent.max.x) / 2, (extent.min.y + extent.max.y) / 2};
+      home[b] = files.size();
+      for (std::size_t t = 0; t < tiles.size() && home[b] == files.size(); ++t)
+        if (!tiles[t].empty() && centre.x >= tiles[t].min.x && centre.x <= tiles[t].max.x &&
+            centre.y >= tiles[t].min.y && centre.y <= tiles[t].max.y)
+          home[b] = t;
+    }
+  }
+  // This process's part: every block, or the blocks of its shard, in tile order.
+  const std::vector<std::size_t> order = tile_order(home);
   const std::vector<int> owner =
-      sharded ? assign_shards(plan.weights, options.shards) : std::vector<int>(plan.blocks.size(), 0);
-  for (std::size_t b = 0; b < plan.blocks.size(); ++b)
+      sharded ? assign_shards(order, plan.weights, options.shards) : std::vector<int>(plan.blocks.size(), 0);
+  std::vector<std::size_t> my_blocks;
+  for (std::size_t b : order)
     if (owner[b] == (sharded ? options.shard - 1 : 0)) my_blocks.push_back(b);
+  // Cropping passes: consecutive blocks of one home tile, up to group_area of footprints, so that a
+  // tile is streamed once for several blocks while memory stays bounded.
+  std::vector<std::vector<std::size_t>> groups;
+  double group_weight = 0.0;
+  for (std::size_t b : my_blocks) {
+    if (groups.empty() || !source || home[b] != home[groups.back().front()] ||
+        group_weight + plan.weights[b] > options.group_area) {
+      groups.emplace_back();
+      group_weight = 0.0;
+    }
+    groups.back().push_back(b);
+    group_weight += plan.weights[b];
+  }
   const bool owns_skipped = !sharded || options.shard == 1;
   detail::JournalHeader header;
   header.fingerprint = detail::batch_fingerprint(options, files);
@@ -315,6 +363,9 @@ BatchSummary run_batch(const BatchOptions& options) {
              std::to_string(my_blocks.size()) + " of " + std::to_string(plan.blocks.size()) + " blocks, " +
              std::to_string(header.expected) + " of " + std::to_string(plan.layout.records) + " buildings");
 
+  // The output folder is touched only now that the inputs have been read: a run that cannot start
+  // leaves an earlier run's outputs as they were.
+  detail::OutputFolder folder(options.output_dir);
   if (options.per_building_files) {
     std::error_code ec;
     fs::create_directories(fs::path(options.output_dir) / "models", ec);
@@ -373,33 +424,46 @@ BatchSummary run_batch(const BatchOptions& options) {
   };
 
   const double reach = options.crop.ground_buffer * options.crop.wide_buffer_factor + 1.0;
-  for (std::size_t b : my_blocks) {
-    const std::vector<std::uint64_t>& block = plan.blocks[b];
+  for (const std::vector<std::size_t>& group : groups) {
+    std::vector<std::uint64_t> indices;
+    for (std::size_t b : group) indices.insert(indices.end(), plan.blocks[b].begin(), plan.blocks[b].end());
     const bool all_done =
-        std::all_of(block.begin(), block.end(), [&](std::uint64_t i) { return journal.find(i) != nullptr; });
+        std::all_of(indices.begin(), indices.end(), [&](std::uint64_t i) { return journal.find(i) != nullptr; });
     if (all_done) continue;
     if (!source) {
-      const std::string& file = files[block.front()];
+      const std::string& file = files[indices.front()];
       const BuildingId id = fs::path(file).stem().string();
       reconstruct_all(
-          block, [&](std::size_t) { return id; },
+          indices, [&](std::size_t) { return id; },
           [&](std::size_t) { return building_from_cloud(id, read_all_points(file), options.ground_z); });
       continue;
     }
-    // The block's footprints and every other footprint that can reach into their ground buffers
-    // (ground points inside any footprint never count as ground), read through a spatial filter,
-    // so that a building's input does not depend on how footprints are blocked.
-    Box2 region;
-    for (std::uint64_t i : block) region.add(plan.boxes[i].min), region.add(plan.boxes[i].max);
-    region.min = {region.min.x - reach, region.min.y - reach};
-    region.max = {region.max.x + reach, region.max.y + reach};
-    std::vector<std::pair<std::size_t, Footprint>> found = source->read_box(region);
+    // The group's footprints and every other footprint that can reach into their ground buffers
+    // (ground points inside any footprint never count as ground), read block by block through a
+    // spatial filter, so that a building's input does not depend on how footprints are blocked.
+    std::vector<std::pair<std::size_t, Footprint>> found;
+    Box2 extent;
+    for (std::size_t b : group) {
+      Box2 region;
+      for (std::uint64_t i : plan.blocks[b]) region.add(plan.boxes[i].min), region.add(plan.boxes[i].max);
+      region.min = {region.min.x - reach, region.min.y - reach};
+      region.max = {region.max.x + reach, region.max.y + reach};
+      extent.add(region.min), extent.add(region.max);
+      std::vector<std::pair<std::size_t, Footprint>> more = source->read_box(region);
+      std::vector<std::pair<std::size_t, Footprint>> merged;
+      std::merge(std::make_move_iterator(found.begin()), std::make_move_iterator(found.end()),
+                 std::make_move_iterator(more.begin()), std::make_move_iterator(more.end()), std::back_inserter(merged),
+                 [](const auto& a, const auto& c) { return a.first < c.first; });
+      merged.erase(std::unique(merged.begin(), merged.end(), [](const auto& a, const auto& c) { return a.first == c.first; }),
+                   merged.end());
+      found = std::move(merged);
+    }
     std::vector<Footprint> footprints;
     std::vector<bool> taken(found.size(), false);
-    for (std::uint64_t i : block) {
+    for (std::uint64_t i : indices) {
       const auto it = std::lower_bound(found.begin(), found.end(), i,
                                        [](const auto& entry, std::uint64_t n) { return entry.first < n; });
-      if (it == found.end() || it->first != i)
+      if (it == found.end() || it->first != i || taken[static_cast<std::size_t>(it - found.begin())])
         throw IoError("footprints: footprint " + std::to_string(i) + " of " + options.footprints +
                       " was not found again when its block was read (has the source changed?)");
       taken[static_cast<std::size_t>(it - found.begin())] = true;
@@ -408,10 +472,10 @@ BatchSummary run_batch(const BatchOptions& options) {
     for (std::size_t k = 0; k < found.size(); ++k)
       if (!taken[k]) footprints.push_back(std::move(found[k].second));
     Cropper cropper(std::move(footprints), options.crop);
-    crop_tiles(files, region, static_cast<unsigned>(options.threads), cropper);
-    // Keep only the block's own inputs (the first block.size()).
+    crop_tiles(files, extent, static_cast<unsigned>(options.threads), cropper);
+    // Keep only the group's own inputs (the first indices.size()).
     std::vector<BuildingInput> inputs = cropper.finish();
-    inputs.resize(block.size());
+    inputs.resize(indices.size());
     for (BuildingInput& in : inputs)
       if (in.footprint.ground_z) {
         // The footprint source knows the floor: it overrides the ground points.
@@ -420,7 +484,7 @@ BatchSummary run_batch(const BatchOptions& options) {
         in.ground_measured = true;
       }
     reconstruct_all(
-        block, [&](std::size_t k) { return inputs[k].id; }, [&](std::size_t k) { return std::move(inputs[k]); });
+        indices, [&](std::size_t k) { return inputs[k].id; }, [&](std::size_t k) { return std::move(inputs[k]); });
   }
   journal.close();
 

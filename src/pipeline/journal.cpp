@@ -272,9 +272,10 @@ JournalReader::JournalReader(std::string path) : path_(std::move(path)) {
 }
 
 std::string JournalReader::line(const RecordRef& ref) const {
-  std::ifstream in(path_, std::ios::binary);
+  if (!in_.is_open()) in_.open(path_, std::ios::binary);
+  in_.clear();
   std::string text(ref.length, '\0');
-  if (!in.seekg(static_cast<std::streamoff>(ref.offset)) || !in.read(text.data(), static_cast<std::streamsize>(ref.length)))
+  if (!in_.seekg(static_cast<std::streamoff>(ref.offset)) || !in_.read(text.data(), static_cast<std::streamsize>(ref.length)))
     throw IoError("resume: cannot read back record " + std::to_string(ref.index) + " of " + path_);
   return text;
 }

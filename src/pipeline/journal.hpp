@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <fstream>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -92,6 +93,7 @@ class JournalReader {
   JournalHeader header_;
   std::vector<RecordRef> records_;
   std::vector<std::pair<std::size_t, std::string>> damaged_;
+  mutable std::ifstream in_;  ///< kept open for read() and line()
 };
 
 /// The journal a run writes into its output folder.

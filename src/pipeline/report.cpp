@@ -164,27 +164,6 @@ void ReportWriter::close() {
   impl_->json.commit();
 }
 
-void write_report_csv(const std::string& path, const std::vector<BuildingReport>& rows) {
-  AtomicFile file(path);
-  std::fputs((report_csv_header() + "\n").c_str(), file.file());
-  for (const BuildingReport& r : rows) std::fputs((report_csv_row(r) + "\n").c_str(), file.file());
-  file.commit();
-}
-
-void write_report_json(const std::string& path, const std::vector<BuildingReport>& rows, const BatchSummary& summary) {
-  AtomicFile file(path);
-  std::FILE* out = file.file();
-  std::fprintf(out,
-               "{\n  \"summary\": {\"buildings\": %zu, \"ok\": %zu, \"fallback\": %zu, \"skipped\": %zu, "
-               "\"failed\": %zu, \"seconds\": %s},\n  \"buildings\": [",
-               summary.buildings, summary.ok, summary.fallback, summary.skipped, summary.failed,
-               fixed(summary.seconds, 3).c_str());
-  for (std::size_t i = 0; i < rows.size(); ++i)
-    std::fputs(((i ? ",\n    " : "\n    ") + report_json_row(rows[i])).c_str(), out);
-  std::fputs("\n  ]\n}\n", out);
-  file.commit();
-}
-
 Attributes building_attributes(const BuildingReport& r, bool timings) {
   const auto count = [](std::size_t n) { return AttributeValue{static_cast<std::int64_t>(n)}; };
   const bool written = !r.lods.empty();

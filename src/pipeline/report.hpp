@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <memory>
 #include <string>
-#include <vector>
 
 #include "city3d/batch.hpp"
 
@@ -35,12 +34,6 @@ class ReportWriter {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
-
-/// Writes the CSV report (header + one row per building), atomically. Throws IoError.
-void write_report_csv(const std::string& path, const std::vector<BuildingReport>& rows);
-
-/// Writes the JSON report ({"summary": ..., "buildings": [...]}), atomically. Throws IoError.
-void write_report_json(const std::string& path, const std::vector<BuildingReport>& rows, const BatchSummary& summary);
 
 /// A building's own attributes (README, "Attributes"): 3DBAG's names where 3DBAG has the quantity
 /// (b3_h_dak_70p, b3_dak_type, b3_volume_lod22, b3_rmse_lod22, ...), city3d's otherwise; numbers

@@ -1,0 +1,158 @@
+#!/usr/bin/env python3
+"""An AHN3-sized tile from the Delft block (issue 12): the two AHN3 tiles of ../shared/data/ahn3_delft
+replicated in a grid (default 6 x 5 copies: 25.5 M points, 4,800 footprints), the footprints shifted
+with their copy and their ids made unique; then `city3d reconstruct` on it and on the Delft block
+itself, under GNU time. Prints what the issue asks: points, footprints, wall and CPU time, peak
+memory, seconds per million points of both, and their ratio.
+
+    python3 bench/synthetic_tile.py --city3d build/city3d [--grid 6x5] [--jobs 2] [--runs 1] [--work build/synthetic_tile]
+
+The generated tile (about 0.7 GB of LAS) goes to --work (build/ by default), never into git. Needs
+python3 and ogr2ogr (gdal-bin) only.
+"""
+import argparse
+import array
+import os
+import shutil
+import struct
+import subprocess
+import sys
+import tempfile
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+DELFT = os.path.join(HERE, "..", "..", "shared", "data", "ahn3_delft")
+TILES = [os.path.join(DELFT, "ahn3_cropped_1.las"), os.path.join(DELFT, "ahn3_cropped_2.las")]
+FOOTPRINTS = os.path.join(DELFT, "footprints", "bgt_pand_laz_area.gpkg")
+# A copy every 300 m in x and 250 m in y: the block spans 264 x 229 m, so copies never overlap.
+STEP_X, STEP_Y = 300.0, 250.0
+
+
+def read_las(path):
+    with open(path, "rb") as f:
+        data = f.read()
+    if data[:4] != b"LASF":
+        sys.exit(f"{path}: not a LAS file")
+    offset = struct.unpack_from("<I", data, 96)[0]
+    fmt, length = struct.unpack_from("<BH", data, 104)
+    count = struct.unpack_from("<I", data, 107)[0]
+    by_return = struct.unpack_from("<5I", data, 111)
+    scale = struct.unpack_from("<3d", data, 131)
+    origin = struct.unpack_from("<3d", data, 155)
+    bounds = struct.unpack_from("<6d", data, 179)  # max x, min x, max y, min y, max z, min z
+    if fmt != 1 or length != 28:
+        sys.exit(f"{path}: expected point format 1 (28-byte records), got {fmt} ({length} bytes)")
+    points = data[offset:offset + count * length]
+    return dict(header=data[:offset], count=count, by_return=by_return, scale=scale, origin=origin,
+                bounds=bounds, points=points)
+
+
+def make_tile(work, nx, ny):
+    tiles = [read_las(p) for p in TILES]
+    if any(t["scale"] != tiles[0]["scale"] or t["origin"] != tiles[0]["origin"] for t in tiles):
+        sys.exit("the Delft tiles have different scales or offsets")
+    scale = tiles[0]["scale"]
+    dx_raw, dy_raw = round(STEP_X / scale[0]), round(STEP_Y / scale[1])
+    las = os.path.join(work, "tile.las")
+    total = sum(t["count"] for t in tiles) * nx * ny
+    if total >= 2**32:
+        sys.exit("too many points for a LAS 1.2 header")
+    header = bytearray(tiles[0]["header"])
+    struct.pack_into("<I", header, 107, total)
+    struct.pack_into("<5I", header, 111, *[sum(t["by_return"][i] for t in tiles) * nx * ny for i in range(5)])
+    max_x = max(t["bounds"][0] for t in tiles) + (nx - 1) * STEP_X
+    min_x = min(t["bounds"][1] for t in tiles)
+    max_y = max(t["bounds"][2] for t in tiles) + (ny - 1) * STEP_Y
+    min_y = min(t["bounds"][3] for t in tiles)
+    max_z = max(t["bounds"][4] for t in tiles)
+    min_z = min(t["bounds"][5] for t in tiles)
+    struct.pack_into("<6d", header, 179, max_x, min_x, max_y, min_y, max_z, min_z)
+    # Each 28-byte record is 7 little-endian 32-bit words; X and Y are words 0 and 1.
+    words = []
+    for t in tiles:
+        a = array.array("i")
+        a.frombytes(t["points"])
+        if sys.byteorder != "little":
+            a.byteswap()
+        words.append(a)
+    with open(las, "wb") as out:
+        out.write(header)
+        for row in range(ny):
+            for col in range(nx):
+                for a in words:
+                    b = array.array("i", a)
+                    b[0::7] = array.array("i", (v + col * dx_raw for v in a[0::7]))
+                    b[1::7] = array.array("i", (v + row * dy_raw for v in a[1::7]))
+                    if sys.byteorder != "little":
+                        b.byteswap()
+                    out.write(b.tobytes())
+    gpkg = os.path.join(work, "footprints.gpkg")
+    for row in range(ny):
+        for col in range(nx):
+            sql = (f"SELECT ST_Translate(GEOMETRY, {col * STEP_X}, {row * STEP_Y}, 0) AS geom, "
+                   f"gml_id || '_r{row}c{col}' AS gml_id FROM buildingpart")
+            subprocess.run(["ogr2ogr", "-f", "GPKG", gpkg, FOOTPRINTS, "-dialect", "SQLite", "-sql", sql,
+                            "-nln", "buildingpart"] + (["-append"] if row or col else []), check=True)
+    return las, gpkg, total, 160 * nx * ny
+
+
+def timed(command):
+    """(wall s, CPU s, peak RSS MB) of a command, by GNU time."""
+    with tempfile.NamedTemporaryFile("r") as t:
+        subprocess.run(["/usr/bin/time", "-f", "%e %U %S %M", "-o", t.name] + command, check=True)
+        wall, user, system, kb = t.read().split()
+    return float(wall), float(user) + float(system), int(kb) / 1024
+
+
+def median(values):
+    v = sorted(values)
+    return v[len(v) // 2] if len(v) % 2 else (v[len(v) // 2 - 1] + v[len(v) // 2]) / 2
+
+
+def report_counts(folder):
+    with open(os.path.join(folder, "report.csv")) as f:
+        rows = f.read().splitlines()[1:]
+    status = [r.split(",")[1] for r in rows]
+    return {s: status.count(s) for s in ("ok", "fallback", "skipped", "failed")}
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--city3d", default=os.path.join(HERE, "..", "build", "city3d"))
+    p.add_argument("--grid", default="6x5", help="copies in x and y (default 6x5: 25.5 M points)")
+    p.add_argument("--jobs", type=int, default=2)
+    p.add_argument("--runs", type=int, default=1, help="runs of each, medians reported")
+    p.add_argument("--work", default=os.path.join(HERE, "..", "build", "synthetic_tile"))
+    p.add_argument("--keep", action="store_true", help="keep the generated tile and outputs")
+    a = p.parse_args()
+    nx, ny = (int(v) for v in a.grid.lower().split("x"))
+    os.makedirs(a.work, exist_ok=True)
+    las, gpkg, points, footprints = make_tile(a.work, nx, ny)
+    print(f"synthetic tile: {points:,} points, {footprints:,} footprints ({nx} x {ny} copies of the Delft block), "
+          f"{os.path.getsize(las) / 2**20:.0f} MB LAS")
+    delft_points = sum(read_las(t)["count"] for t in TILES)
+    jobs = ["--id-field", "gml_id", "-j", str(a.jobs), "--no-progress", "-q", "--no-resume"]
+    results = {"tile": [], "delft": []}
+    for run in range(a.runs):
+        for name, cmd in (("delft", TILES + ["-f", FOOTPRINTS]), ("tile", [las, "-f", gpkg])):
+            out = os.path.join(a.work, "out_" + name)
+            shutil.rmtree(out, ignore_errors=True)
+            r = timed([a.city3d, "reconstruct"] + cmd + jobs + ["-o", out])
+            results[name].append(r)
+            print(f"run {run + 1} {name}: {r[0]:.1f} s wall, {r[1]:.1f} s CPU, {r[2]:.0f} MB peak; {report_counts(out)}",
+                  flush=True)
+    print()
+    for name, n, fp in (("delft", delft_points, 160), ("tile", points, footprints)):
+        wall = median([r[0] for r in results[name]])
+        cpu = median([r[1] for r in results[name]])
+        rss = median([r[2] for r in results[name]])
+        print(f"{name:5s}: {n / 1e6:.2f} M points, {fp} footprints, -j {a.jobs}: wall {wall:.1f} s, CPU {cpu:.1f} s, "
+              f"peak RSS {rss:.0f} MB; {wall / (n / 1e6):.2f} s wall and {cpu / (n / 1e6):.2f} s CPU per M points, "
+              f"{cpu / fp * 1000:.0f} ms CPU per footprint")
+    ratio = (median([r[0] for r in results["tile"]]) / points) / (median([r[0] for r in results["delft"]]) / delft_points)
+    print(f"tile / Delft block, wall time per M points: {ratio:.2f}")
+    if not a.keep:
+        shutil.rmtree(a.work, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
