@@ -24,6 +24,8 @@ packages=(
 if [ "$mode" = test ] && ! command -v npm >/dev/null 2>&1; then packages+=(nodejs npm); fi
 # The tests also run every fuzz harness briefly: clang 14 with libFuzzer and the sanitizer runtimes.
 if [ "$mode" = test ]; then packages+=(clang libclang-rt-14-dev); fi
+# The tests render report.html in headless Chromium (a screenshot, no console errors).
+if [ "$mode" = test ]; then packages+=(chromium); fi
 # The Slurm test starts a private single-node cluster (../shared/SLURM.md): the daemons and clients only.
 if [ "$mode" = test ]; then packages+=(slurmctld slurmd slurm-client); fi
 

@@ -3,11 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 
 #include "city3d/crop.hpp"
 #include "city3d/error.hpp"
+#include "city3d/evaluation.hpp"
 #include "city3d/lod1.hpp"
 #include "city3d/mesh_check.hpp"
 #include "city3d/point_cloud_io.hpp"
@@ -659,6 +661,78 @@ TEST(CropRealData, the_delft_block_gives_every_footprint_points_and_a_valid_bloc
   }
 }
 #endif
+
+}  // namespace
+}  // namespace city3d
+
+namespace city3d {
+namespace {
+
+// Roof faces only (all make_lod13_blocks reads of an LoD2 model): three flat 10 x 10 m parts, A at
+// 10 m, B east of A at 4 m, C north of A at 9 m.
+BuildingModel three_roof_parts() {
+  BuildingModel m;
+  m.id = "steps";
+  const auto square = [&m](double x, double y, double z) {
+    const auto b = static_cast<std::uint32_t>(m.mesh.vertices.size());
+    for (auto [dx, dy] : {std::pair{0.0, 0.0}, {10.0, 0.0}, {10.0, 10.0}, {0.0, 10.0}})
+      m.mesh.vertices.push_back({x + dx, y + dy, z});
+    m.mesh.faces.push_back({b, b + 1, b + 2, b + 3});
+    m.surfaces.push_back(SurfaceType::roof);
+  };
+  square(0, 0, 10);
+  square(10, 0, 4);
+  square(0, 10, 9);
+  return m;
+}
+
+TEST(Lod13, parts_within_the_step_height_become_one_block_and_a_step_wall_separates_the_others) {
+  const BuildingModel blocks = make_lod13_blocks(three_roof_parts(), {}, 0.0, 3.0);
+  EXPECT_TRUE(validate_model(blocks.mesh).empty()) << validity_codes(validate_model(blocks.mesh));
+  // A and C (1 m apart) are one cluster at their area-weighted mean height, B (5.5 m lower) another.
+  std::vector<double> roofs;
+  for (std::size_t f = 0; f < blocks.mesh.faces.size(); ++f)
+    if (blocks.surfaces[f] == SurfaceType::roof) roofs.push_back(blocks.mesh.vertices[blocks.mesh.faces[f][0]].z);
+  std::sort(roofs.begin(), roofs.end());
+  ASSERT_EQ(roofs.size(), 2u);  // A and C merged into one roof face
+  EXPECT_DOUBLE_EQ(roofs[0], 4.0);
+  EXPECT_DOUBLE_EQ(roofs[1], 9.5);
+  EXPECT_NEAR(check_mesh(blocks.mesh).signed_volume, 200 * 9.5 + 100 * 4.0, 1e-9);
+  // A step wall from 4 m to 9.5 m on x = 10 between A and B.
+  bool step = false;
+  for (std::size_t f = 0; f < blocks.mesh.faces.size(); ++f) {
+    if (blocks.surfaces[f] != SurfaceType::wall) continue;
+    double lo = 1e9, hi = -1e9, xmin = 1e9, xmax = -1e9;
+    for (auto v : blocks.mesh.faces[f]) {
+      const Point3& p = blocks.mesh.vertices[v];
+      lo = std::min(lo, p.z), hi = std::max(hi, p.z), xmin = std::min(xmin, p.x), xmax = std::max(xmax, p.x);
+    }
+    step = step || (lo == 4.0 && hi == 9.5 && xmin == 10.0 && xmax == 10.0);
+  }
+  EXPECT_TRUE(step);
+}
+
+TEST(Lod13, an_infinite_step_gives_one_block_the_lod12) {
+  const BuildingModel block = make_lod13_blocks(three_roof_parts(), {}, 0.0, std::numeric_limits<double>::infinity());
+  EXPECT_TRUE(validate_model(block.mesh).empty());
+  std::size_t roofs = 0, floors = 0;
+  for (SurfaceType t : block.surfaces) roofs += t == SurfaceType::roof, floors += t == SurfaceType::ground;
+  EXPECT_EQ(roofs, 1u);
+  EXPECT_EQ(floors, 1u);
+  EXPECT_NEAR(check_mesh(block.mesh).signed_volume, 300 * (10.0 + 4.0 + 9.0) / 3.0, 1e-9);
+}
+
+TEST(Lod13, part_heights_come_from_the_points_above_them) {
+  // Points over B at 6 m (its roof face says 4): B's block follows the points.
+  std::vector<Point3> points;
+  for (int i = 0; i < 10; ++i) points.push_back({12.0 + 0.5 * i, 5.0, 6.0});
+  const BuildingModel blocks = make_lod13_blocks(three_roof_parts(), points, 0.0, 3.0);
+  double b_roof = 0;
+  for (std::size_t f = 0; f < blocks.mesh.faces.size(); ++f)
+    if (blocks.surfaces[f] == SurfaceType::roof && blocks.mesh.vertices[blocks.mesh.faces[f][0]].x >= 10.0)
+      b_roof = blocks.mesh.vertices[blocks.mesh.faces[f][0]].z;
+  EXPECT_DOUBLE_EQ(b_roof, 6.0);
+}
 
 }  // namespace
 }  // namespace city3d

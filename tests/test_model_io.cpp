@@ -188,19 +188,36 @@ TEST(MeshFormatName, parses_known_names_and_rejects_others) {
   EXPECT_THROW(parse_mesh_format("stl"), ConfigError);
 }
 
+/// A city object of one geometry.
+CityObject one_lod(const BuildingModel& m, const std::string& lod, Attributes attributes = {}) {
+  return CityObject{m.id, {{lod, m}}, std::move(attributes)};
+}
+
 TEST_F(ModelWriter, writes_cityjson_matching_reference) {
   const fs::path out = dir_ / "box.city.json";
-  CityObject object{box_model("b1", {84916.9491, 447413.3, 5.977}), "1.2",
-                    {{"status", std::string("ok")}, {"rmse", 0.125}, {"points", std::int64_t{1234}},
-                     {"note", AttributeValue{}}, {"strict", false}}};
-  write_cityjson(out.string(), {object}, {"EPSG:28992", 0.001, ""});
+  CityObject object = one_lod(box_model("b1", {84916.9491, 447413.3, 5.977}), "1.2",
+                              {{"status", std::string("ok")}, {"rmse", 0.125}, {"points", std::int64_t{1234}},
+                               {"note", AttributeValue{}}, {"strict", false}});
+  write_cityjson(out.string(), {object}, {"EPSG:28992", 0.001, ""}, {84916, 447413, 5});
   EXPECT_EQ(read_text(out), reference("box.city.json"));
+}
+
+TEST_F(ModelWriter, cityjson_uses_the_transform_it_is_given) {
+  // Scale 0.0001 (the default) and a given translation: 84916.9491 - 84900 = 16.9491 m = 169491 units.
+  const fs::path out = dir_ / "t.city.json";
+  write_cityjson(out.string(), {one_lod(box_model("b1", {84916.9491, 447413.3, 5.977}), "2.2")}, CityJsonOptions{},
+                 {84900, 447400, 0});
+  const std::string text = read_text(out);
+  EXPECT_NE(text.find("\"transform\":{\"scale\":[0.0001,0.0001,0.0001],\"translate\":[84900,447400,0]}"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("\"vertices\":[[169491,133000,59770],"), std::string::npos) << text;
 }
 
 TEST_F(ModelWriter, cityjson_shares_vertices_and_labels_faces_by_normal) {
   const fs::path out = dir_ / "two.city.json";
-  write_cityjson(out.string(), {{box_model("a", {0, 0, 0}), "2.2", {}}, {box_model("b", {10, 0, 0}), "2.2", {}}},
-                 {"", 0.001, ""});
+  write_cityjson(out.string(), {one_lod(box_model("a", {0, 0, 0}), "2.2"), one_lod(box_model("b", {10, 0, 0}), "2.2")},
+                 {"", 0.001, ""}, {0, 0, 0});
   const std::string text = read_text(out);
   // 8 distinct vertices per building, none shared across buildings: 16 in all.
   std::size_t vertices = 0;
@@ -212,37 +229,38 @@ TEST_F(ModelWriter, cityjson_shares_vertices_and_labels_faces_by_normal) {
   EXPECT_EQ(text.find("referenceSystem"), std::string::npos);
 }
 
-TEST_F(ModelWriter, cityjson_model_of_two_shells_is_a_building_of_two_parts_that_validates) {
-  // Two detached blocks in one model (a multipolygon footprint, or a cloud of two parts): a Building's
-  // Solid has one exterior shell, so each block becomes a BuildingPart with its own Solid.
-  BuildingModel m = box_model("two", {85000, 447000, 0});
+TEST_F(ModelWriter, cityjson_building_with_three_lods_and_two_parts_validates) {
+  // Three levels of detail on one Building, sharing vertices; a level whose model has two detached
+  // blocks (a multipolygon footprint) gives two BuildingParts of one Solid each, since a Solid has
+  // one exterior shell and a Building has no MultiSolid.
+  BuildingModel two = box_model("b", {85000, 447000, 0});
   const BuildingModel other = box_model("", {0, 0, 0});
-  for (const Point3& p : other.mesh.vertices) m.mesh.vertices.push_back({p.x + 5, p.y, p.z});
+  for (const Point3& p : other.mesh.vertices) two.mesh.vertices.push_back({p.x + 5, p.y, p.z});
   for (auto face : other.mesh.faces) {
     for (auto& v : face) v += 8;
-    m.mesh.faces.push_back(face);
+    two.mesh.faces.push_back(face);
   }
-  const fs::path out = dir_ / "two_shells.city.json";
-  write_cityjson(out.string(), {{m, "2.2", {{"status", std::string("ok")}}}}, {"EPSG:28992", 0.001, ""});
+  const BuildingModel one = box_model("b", {85000, 447000, 0});
+  CityObject object{"b", {{"1.2", one}, {"1.3", one}, {"2.2", two}}, {{"status", std::string("ok")}}};
+  const fs::path out = dir_ / "lods.city.json";
+  write_cityjson(out.string(), {object}, {"EPSG:28992", 0.0001, ""}, {84999, 446999, 0});
   const std::string text = read_text(out);
-  EXPECT_NE(text.find("\"two\":{\"type\":\"Building\",\"attributes\":{\"status\":\"ok\"},"
-                      "\"children\":[\"two-part-1\",\"two-part-2\"]}"),
+  EXPECT_NE(text.find("\"b\":{\"type\":\"Building\",\"attributes\":{\"status\":\"ok\"},\"geometry\":[{\"type\":\"Solid\",\"lod\":\"1.2\""),
             std::string::npos)
       << text;
-  for (const char* part : {"\"two-part-1\":{\"type\":\"BuildingPart\",\"parents\":[\"two\"],\"geometry\":[{\"type\":\"Solid\"",
-                           "\"two-part-2\":{\"type\":\"BuildingPart\",\"parents\":[\"two\"],\"geometry\":[{\"type\":\"Solid\""})
-    EXPECT_NE(text.find(part), std::string::npos) << part << "\n" << text;
-  // 16 vertices, each part's faces on its own 8.
-  EXPECT_NE(text.find("\"boundaries\":[[[[8,11,10,9]]"), std::string::npos) << text;
-  // One shell stays a Building with a Solid.
-  write_cityjson(out.string(), {{box_model("one", {0, 0, 0}), "2.2", {}}}, {"", 0.001, ""});
-  EXPECT_NE(read_text(out).find("\"one\":{\"type\":\"Building\",\"attributes\":{},\"geometry\":[{\"type\":\"Solid\""),
+  EXPECT_NE(text.find("{\"type\":\"Solid\",\"lod\":\"1.3\",\"boundaries\":[[[[0,3,2,1]]"), std::string::npos) << text;
+  EXPECT_NE(text.find("\"children\":[\"b-2.2-1\",\"b-2.2-2\"]}"), std::string::npos) << text;
+  EXPECT_NE(text.find("\"b-2.2-2\":{\"type\":\"BuildingPart\",\"parents\":[\"b\"],\"geometry\":[{\"type\":\"Solid\",\"lod\":\"2.2\",\"boundaries\":[[[[8,11,10,9]]"),
             std::string::npos)
-      << read_text(out);
+      << text;
+  // 8 + 8 vertices: LoD1.2 and LoD1.3 reuse LoD2.2's first block.
+  std::size_t vertices = 0;
+  for (auto pos = text.find("\"vertices\":[[") + 12; pos < text.size(); ++pos)
+    if (text[pos] == '[') ++vertices;
+  EXPECT_EQ(vertices, 16u);
 
   const std::string schemas = CITY3D_SCHEMAS;
   if (!fs::exists(schemas) || !fs::exists(CITY3D_AJV)) GTEST_SKIP() << "no schemas or ajv-cli: not validated";
-  write_cityjson(out.string(), {{m, "2.2", {{"status", std::string("ok")}}}}, {"EPSG:28992", 0.001, ""});
   std::string command = std::string(CITY3D_AJV) + " validate --spec=draft7 --strict=false -s " + schemas +
                         "/cityjson.schema.json";
   for (const char* r : {"appearance", "cityobjects", "geomprimitives", "geomtemplates", "metadata"})
@@ -267,8 +285,8 @@ TEST_F(ModelWriter, cityjsonseq_writes_header_then_one_feature_per_line) {
   const fs::path out = dir_ / "all.city.jsonl";
   {
     CityJsonSeqWriter writer(out.string(), {"EPSG:28992", 0.001, ""}, {84000, 447000, 0});
-    writer.add({box_model("a", {84001, 447002, 1}), "2.2", {{"status", std::string("ok")}}});
-    writer.add({box_model("b", {84010, 447002, 1}), "2.2", {}});
+    writer.add(one_lod(box_model("a", {84001, 447002, 1}), "2.2", {{"status", std::string("ok")}}));
+    writer.add(one_lod(box_model("b", {84010, 447002, 1}), "2.2"));
     EXPECT_FALSE(fs::exists(out));  // only under its final name once closed
     writer.close();
   }
@@ -290,7 +308,7 @@ TEST_F(ModelWriter, cityjsonseq_leaves_nothing_when_not_closed) {
   const fs::path out = dir_ / "partial.city.jsonl";
   {
     CityJsonSeqWriter writer(out.string(), {"", 0.001, ""}, {0, 0, 0});
-    writer.add({box_model("a", {0, 0, 0}), "2.2", {}});
+    writer.add(one_lod(box_model("a", {0, 0, 0}), "2.2"));
   }
   EXPECT_TRUE(fs::is_empty(dir_));
 }

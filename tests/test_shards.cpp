@@ -330,7 +330,7 @@ TEST(CityJsonAssembly, features_spliced_into_one_file_equal_write_cityjson_of_th
       m.mesh.faces.push_back({b + 4, b + 5, b + 6, b + 7});
       for (std::uint32_t k = 0; k < 4; ++k) m.mesh.faces.push_back({b + k, b + (k + 1) % 4, b + 4 + (k + 1) % 4, b + 4 + k});
     }
-    return CityObject{m, "2.2", {{"name", std::string("a \"quoted\" id, with [brackets]")}, {"rmse", 0.0005}}};
+    return CityObject{m.id, {{"2.2", m}}, {{"name", std::string("a \"quoted\" id, with [brackets]")}, {"rmse", 0.0005}}};
   };
   const std::vector<CityObject> objects = {box("one", 0.0, 1.25, 7.5, 1), box("two", 40.0, 0.5, 4.0, 2)};
   const fs::path dir = fs::temp_directory_path() / "city3d_assembly";

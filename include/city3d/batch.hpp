@@ -30,6 +30,8 @@ struct BatchOptions {
   bool merged_file = false;         ///< models.<ext> with every building
   bool cityjson = true;             ///< buildings.city.json
   bool cityjson_seq = false;        ///< buildings.city.jsonl
+  bool gpkg = false;                ///< buildings.gpkg (footprints with the report, LoD2.2 roof parts)
+  bool html = true;                 ///< report.html, the run overview
   bool timings_in_cityjson = false; ///< add "seconds" to CityJSON attributes (breaks byte-identity)
   int threads = 1;
   /// Footprints are grouped into square blocks of this size (metres, by their bounding-box

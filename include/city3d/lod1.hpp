@@ -44,6 +44,18 @@ Lod1Heights lod1_heights(const BuildingInput& input, const Lod1Params& params = 
 PolygonMesh extrude_polygons(const std::vector<Polygon2>& polygons, double floor_z, double roof_z,
                              const BuildingId& id = {});
 
+/// Blocks per roof-height cluster from an LoD2 model (3DBAG's LoD1.3; LoD1.2 with an infinite
+/// step): the model's roof faces, projected to the ground, are the roof parts; each part's height is
+/// the `roof_percentile` of the building points above it (its vertices' mean height when none);
+/// adjacent parts whose heights differ by less than `step_height` metres are merged, smallest
+/// difference first, and each cluster is extruded from floor_z to its height (the percentile of all
+/// its points), at least `min_height` above the floor. The result is one closed solid per connected
+/// roof (step walls where clusters meet, no T-junctions), in the model's frame, with semantic
+/// surfaces. `lod22` should be rounded to the output grid (round_to_grid) so that vertices that are
+/// one place in plan view are equal. Throws ReconstructionError when the model has no roof face.
+BuildingModel make_lod13_blocks(const BuildingModel& lod22, const std::vector<Point3>& points, double floor_z,
+                                double step_height, double roof_percentile = 70.0, double min_height = 1.0);
+
 /// The LoD1 block of a building, in its local frame (model.origin = input.origin): the footprint
 /// extruded from input.ground_z to lod1_heights().roof_z. Throws as lod1_heights() and
 /// extrude_polygons() do.

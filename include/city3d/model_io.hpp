@@ -46,19 +46,25 @@ void write_models(const std::string& path, const std::vector<BuildingModel>& mod
 /// vertices or faces, and when the file holds no face.
 BuildingModel read_obj_model(const std::string& path);
 
-/// One attribute value of a city object: null, boolean, integer, number or text.
-using AttributeValue = std::variant<std::monostate, bool, std::int64_t, double, std::string>;
-
-/// A building as a CityJSON `Building`: its model, the LoD of its geometry and its attributes.
-struct CityObject {
+/// One geometry of a city object: a level of detail and its model.
+struct CityGeometry {
+  std::string lod = "2.2";  ///< CityJSON LoD string ("1.2", "1.3", "2.2")
   BuildingModel model;
-  std::string lod = "2.2";  ///< CityJSON LoD string of the geometry ("1.2", "2.2")
+};
+
+/// A building as a CityJSON `Building`: its id, its geometries (one per level of detail) and its
+/// attributes.
+struct CityObject {
+  BuildingId id;
+  std::vector<CityGeometry> geometries;
   std::vector<std::pair<std::string, AttributeValue>> attributes;
 };
 
+/// The scale and metadata of a CityJSON file (the translation is given with each call: one run
+/// writes buildings.city.json and buildings.city.jsonl with the same transform).
 struct CityJsonOptions {
   std::string crs;             ///< "EPSG:28992" (written as an OGC CRS URL), or empty when unknown
-  double scale = 0.001;        ///< transform scale in metres: 0.001 keeps millimetres
+  double scale = 0.0001;       ///< transform scale in metres: 0.0001 keeps 0.1 mm, 0.001 millimetres
   std::string reference_date;  ///< metadata referenceDate (YYYY-MM-DD), or empty
 };
 
@@ -66,11 +72,17 @@ struct CityJsonOptions {
 /// near-vertical wall, otherwise roof).
 std::vector<SurfaceType> surface_types(const BuildingModel& model);
 
-/// Writes one CityJSON 2.0 file holding every object as a `Building` whose geometry is a `Solid`
-/// with semantic surfaces (RoofSurface, WallSurface, GroundSurface). Vertices are quantised with
-/// the transform (scale, translate = the minimum corner of all vertices) and shared per building.
-/// Atomic write; throws IoError naming the path.
+/// Writes one CityJSON 2.0 file holding every object as a `Building` with one `Solid` per level of
+/// detail, with semantic surfaces (RoofSurface, WallSurface, GroundSurface); a level whose model
+/// has several edge-connected parts gives one child `BuildingPart` "<id>-<lod>-<k>" per part
+/// (CityJSON's Building has no MultiSolid, and a Solid has one exterior shell). The translation is
+/// the minimum corner of all vertices, in whole metres. Vertices are quantised with the
+/// given transform and shared per building. Atomic write; throws IoError naming the path.
 void write_cityjson(const std::string& path, const std::vector<CityObject>& objects, const CityJsonOptions& options);
+
+/// The same with the transform's translation given (a whole number of metres keeps the grid exact).
+void write_cityjson(const std::string& path, const std::vector<CityObject>& objects, const CityJsonOptions& options,
+                    const Point3& translate);
 
 /// Streams CityJSONSeq (CityJSON Text Sequences): a first line with the CityJSON header and
 /// transform, then one CityJSONFeature line per building, written in the order add() is called.

@@ -5,11 +5,13 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "city3d/crop.hpp"
+#include "city3d/evaluation.hpp"
 #include "city3d/footprint_io.hpp"
 #include "city3d/heightmap.hpp"
 #include "city3d/hypothesis.hpp"
@@ -41,6 +43,19 @@ enum class ModelLevel {
   lod12,                  ///< LoD1 block: footprint extruded to a robust roof height
 };
 
+/// Which levels of detail a run produces. CityJSON holds each per building; OBJ/PLY get the highest.
+struct LodSet {
+  bool lod12 = true;  ///< LoD1.2: one block, the outline extruded to the roof percentile
+  bool lod13 = true;  ///< LoD1.3: one block per roof-height cluster (3DBAG's definition)
+  bool lod22 = true;  ///< LoD2.2: the reconstructed roof
+  bool any() const { return lod12 || lod13 || lod22; }
+};
+
+/// Parses "1.2,1.3,2.2" (any non-empty subset, comma-separated; "all"); throws ConfigError.
+LodSet parse_lod_set(const std::string& text);
+/// "1.2,1.3,2.2" for a set.
+std::string lod_set_text(const LodSet& lods);
+
 /// Parameters of every per-building stage.
 struct ReconstructionParams {
   PlaneParams planes;
@@ -52,8 +67,19 @@ struct ReconstructionParams {
   SelectionParams selection;
   AssembleParams assemble;
   Lod1Params lod1;
+  /// Every model is rounded to this grid (metres) as the CityJSON transform and the OBJ/PLY
+  /// writers write it (0.0001 = 0.1 mm, the writers' default), and checked for validity as rounded.
+  double output_grid = 0.0001;
+  /// Tolerances of the validity check every model must pass (val3dity's defaults).
+  ValidityParams validity;
   /// Highest rung to try: lod22 (full), lod22_footprint_walls, or lod12 (LoD1 blocks only).
   ModelLevel max_level = ModelLevel::lod22;
+  /// Levels of detail to produce (LoD1.3 and LoD1.2 are derived from the LoD2.2 model when there is
+  /// one; with only LoD1.2 asked for, no LoD2 is attempted: set max_level to lod12).
+  LodSet lods;
+  /// LoD1.3: adjacent roof parts whose heights differ by less than this (metres) become one block,
+  /// as 3DBAG's lod13_step_height.
+  double lod13_step_height = 3.0;
   /// Wall-clock limit for one building's LoD2 attempts, seconds: the full rung gets 60% of it, the
   /// footprint-walls rung the rest, and each selection what is left of its rung's share.
   double time_limit = 20.0;
@@ -91,14 +117,43 @@ struct BuildingReport {
   std::size_t candidate_faces = 0;
   std::size_t faces = 0;
   double rmse = -1.0;     ///< metres, points to model; -1 when there is no model or no points
-  bool valid = false;     ///< closed, 2-manifold, outward
+  bool valid = false;     ///< the written model passes every val3dity rule (validate_as_written)
+  /// val3dity codes of the models the ladder built, as rounded, before repair ("104,204"), with the
+  /// rung they came from ("LoD2.2: 204"); empty when every model built was valid as it came.
+  std::string validity_found;
+  std::string repairs;    ///< what was repaired to make the written model valid, or empty
   double seconds = 0.0;
+
+  // 3DBAG-style attributes (see README, "Attributes"); world heights in metres, NaN when unknown.
+  std::string lods;                 ///< levels written, e.g. "1.2,1.3,2.2"
+  std::string lods_reconstructed;   ///< levels that are reconstructions of this building's points
+  double footprint_area = 0.0;      ///< square metres, plan view
+  double point_density = 0.0;       ///< building points per square metre of footprint
+  double h_roof_50p = std::numeric_limits<double>::quiet_NaN();  ///< median z of the building points
+  double h_roof_70p = std::numeric_limits<double>::quiet_NaN();  ///< 70th percentile (LoD1.2 roof)
+  double h_roof_min = std::numeric_limits<double>::quiet_NaN();
+  double h_roof_max = std::numeric_limits<double>::quiet_NaN();
+  double h_ridge = std::numeric_limits<double>::quiet_NaN();     ///< highest LoD2.2 roof vertex
+  std::string roof_type;            ///< "horizontal", "multiple horizontal", "slanted", "no points", "could not be detected"
+  double volume_lod12 = std::numeric_limits<double>::quiet_NaN();  ///< cubic metres
+  double volume_lod13 = std::numeric_limits<double>::quiet_NaN();
+  double volume_lod22 = std::numeric_limits<double>::quiet_NaN();
+  double rmse_lod12 = std::numeric_limits<double>::quiet_NaN();    ///< metres, points to the model
+  double rmse_lod13 = std::numeric_limits<double>::quiet_NaN();
+  double rmse_lod22 = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// One level of detail of a building's model.
+struct LodModel {
+  std::string lod;        ///< "1.2", "1.3", "2.2"
+  BuildingModel model;    ///< validated as written
 };
 
 /// A building's outcome: the report row and, unless skipped or failed, its model.
 struct BuildingResult {
   BuildingReport report;
-  std::optional<BuildingModel> model;
+  std::optional<BuildingModel> model;  ///< the highest level produced (OBJ/PLY write this one)
+  std::vector<LodModel> lods;          ///< every level produced, "1.2" < "1.3" < "2.2" (CityJSON)
 };
 
 /// Reconstructs one building, walking the ladder LoD2 -> LoD2 with footprint walls -> LoD1 until a

@@ -6,6 +6,8 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <utility>
+#include <variant>
 #include <vector>
 
 namespace city3d {
@@ -71,6 +73,12 @@ struct Polygon2 {
   std::vector<Ring2> holes;
 };
 
+/// One attribute value: null, boolean, integer (64-bit), number or text.
+using AttributeValue = std::variant<std::monostate, bool, std::int64_t, double, std::string>;
+
+/// Named attribute values, in the source's order.
+using Attributes = std::vector<std::pair<std::string, AttributeValue>>;
+
 /// One building footprint: one or more polygons (a multipolygon) with the building's id.
 struct Footprint {
   BuildingId id;                    ///< value of the id field (or the feature id as text)
@@ -78,6 +86,9 @@ struct Footprint {
   std::vector<Polygon2> polygons;   ///< world coordinates (the source's CRS), metres
   std::string note;                 ///< what the reader changed, e.g. "repaired with MakeValid: ..."; else empty
   std::optional<double> ground_z;   ///< floor height (world z) from the footprint source, when it has one
+  /// Every attribute of the source feature with its type (64-bit integers intact, dates as text),
+  /// carried over to the outputs.
+  Attributes attributes;
 };
 
 /// A polygonal surface mesh: faces are vertex-index loops (not triangulated), counter-clockwise seen

@@ -181,6 +181,7 @@ std::string evaluate_model(const std::string& model_path, const std::string& poi
   out << "planar: " << yes(v.planar) << " (max error " << fixed(v.max_planarity_error, 4) << " m)\n";
   out << "self-intersecting: " << (v.self_intersecting_checked ? yes(v.self_intersects) : "not checked") << "\n";
   out << "volume: " << fixed(v.volume, 3) << "\n";
+  out << "val3dity: " << (v.errors.empty() ? std::string("no error") : validity_codes(v.errors)) << "\n";
   out << "valid: " << yes(v.valid()) << "\n";
   if (!v.problem.empty()) out << "problems: " << v.problem << "\n";
   if (!residuals_path.empty()) {

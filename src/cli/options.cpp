@@ -144,15 +144,24 @@ const std::vector<OptionSpec>& option_table() {
        [](const O& o) { return number_text(o.batch.reconstruction.lod1.roof_percentile); },
        [](O& o, V v) { o.batch.reconstruction.lod1.roof_percentile = parse_double("--roof-percentile", v); }},
       // Reconstruction (the paper's parameters; see ../shared/spec/city3d_paper.tex).
-      {"--lod", nullptr, "2.2|1.2", "highest level to reconstruct: 2.2 (LoD2, falling back to LoD1) or 1.2 (blocks)",
-       [](const O& o) { return std::string(cityjson_lod(o.batch.reconstruction.max_level)); },
+      {"--lod", nullptr, "LIST",
+       "levels of detail, comma-separated: 1.2 (one block), 1.3 (a block per roof-height cluster), 2.2 (the "
+       "reconstructed roof); CityJSON holds each, OBJ/PLY the highest; 1.2 alone makes blocks without LoD2",
+       [](const O& o) { return lod_set_text(o.batch.reconstruction.lods); },
        [](O& o, V v) {
-         if (v == "2.2" || v == "2")
-           o.batch.reconstruction.max_level = ModelLevel::lod22;
-         else if (v == "1.2" || v == "1")
-           o.batch.reconstruction.max_level = ModelLevel::lod12;
-         else
-           throw ConfigError("option --lod: '" + v + "' is not 2.2 or 1.2");
+         o.batch.reconstruction.lods = parse_lod_set(v);
+         o.batch.reconstruction.max_level =
+             o.batch.reconstruction.lods.lod22 || o.batch.reconstruction.lods.lod13 ? ModelLevel::lod22 : ModelLevel::lod12;
+       }},
+      {"--scale", nullptr, "M",
+       "CityJSON transform scale, and the grid every model is rounded to and checked for validity on: 0.0001 "
+       "(0.1 mm, as OBJ/PLY) or 0.001 (millimetres)",
+       [](const O& o) { return number_text(o.batch.reconstruction.output_grid); },
+       [](O& o, V v) {
+         const double s = parse_double("--scale", v);
+         if (s != 0.0001 && s != 0.001 && s != 0.01)
+           throw ConfigError("option --scale: '" + v + "' is not 0.0001, 0.001 or 0.01");
+         o.batch.reconstruction.output_grid = s;
        }},
       {"--min-points", nullptr, "N", "region growing: points per roof plane",
        [](const O& o) { return std::to_string(o.batch.reconstruction.planes.min_points); },
@@ -232,6 +241,11 @@ const std::vector<OptionSpec>& option_table() {
        [](O& o, V) { o.batch.cityjson = false; }},
       {"--cityjsonseq", nullptr, nullptr, "also write buildings.city.jsonl (CityJSONSeq, one building per line)",
        [](const O& o) { return yes_no(o.batch.cityjson_seq); }, [](O& o, V) { o.batch.cityjson_seq = true; }},
+      {"--gpkg", nullptr, nullptr,
+       "also write buildings.gpkg: the footprints with every report attribute, and the LoD2.2 roof parts",
+       [](const O& o) { return yes_no(o.batch.gpkg); }, [](O& o, V) { o.batch.gpkg = true; }},
+      {"--no-html", nullptr, nullptr, "do not write report.html (the run overview)",
+       [](const O& o) { return yes_no(!o.batch.html); }, [](O& o, V) { o.batch.html = false; }},
       {"--timings", nullptr, nullptr, "add each building's seconds to its CityJSON attributes (output then differs "
        "from run to run)", [](const O& o) { return yes_no(o.batch.timings_in_cityjson); },
        [](O& o, V) { o.batch.timings_in_cityjson = true; }},

@@ -172,6 +172,17 @@ MeshValidity check_validity(const PolygonMesh& mesh, double planarity_tolerance)
   MeshValidity result;
   result.faces = mesh.faces.size();
   result.vertices = mesh.vertices.size();
+  {
+    // val3dity's rules on the mesh as one solid with one exterior shell (as val3dity reads an OBJ).
+    SolidGeometry solid;
+    solid.vertices = mesh.vertices;
+    solid.shells.emplace_back();
+    for (const auto& face : mesh.faces) solid.shells[0].push_back({face});
+    ValidityParams params;
+    params.planarity_distance = planarity_tolerance;
+    result.errors = validate_solid(solid, params);
+    for (const ValidityError& e : result.errors) append(result.problem, e.text());
+  }
 
   std::size_t bad_faces = 0;
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {

@@ -1,5 +1,6 @@
-// CityJSON 2.0 and CityJSONSeq writers: Buildings with a Solid geometry (or BuildingParts with one each,
-// for a model of several shells), semantic surfaces, a quantising transform and attributes. Output is
+// CityJSON 2.0 and CityJSONSeq writers: Buildings with one Solid per level of detail (BuildingParts
+// for a level whose model has several parts), semantic surfaces, the run's quantising transform and
+// attributes. Output is
 // byte-deterministic (fixed key order, shortest round-trip number formatting).
 #include <algorithm>
 #include <charconv>
@@ -76,27 +77,8 @@ const char* surface_name(SurfaceType t) {
 
 using Quantised = std::tuple<std::int64_t, std::int64_t, std::int64_t>;
 
-// Quantises a building's vertices into `vertices` (shared, deduplicated within the building) and
-// appends its CityObject member `"id":{...}` to `out`.
-void append_city_object(std::string& out, const CityObject& object, const Point3& translate, double scale,
-                        std::vector<Quantised>& vertices) {
-  const BuildingModel& m = object.model;
-  std::map<Quantised, std::size_t> index_of;
-  std::vector<std::size_t> remap(m.mesh.vertices.size());
-  for (std::size_t i = 0; i < m.mesh.vertices.size(); ++i) {
-    const Point3& p = m.mesh.vertices[i];
-    const Quantised q{std::llround((p.x + m.origin.x - translate.x) / scale),
-                      std::llround((p.y + m.origin.y - translate.y) / scale),
-                      std::llround((p.z + m.origin.z - translate.z) / scale)};
-    const auto [it, inserted] = index_of.emplace(q, vertices.size());
-    if (inserted) vertices.push_back(q);
-    remap[i] = it->second;
-  }
-  const std::vector<SurfaceType> types = surface_types(m);
-
-  // Shells: faces connected across shared edges. CityJSON gives a Building one Solid (one exterior
-  // shell); a model of several shells (a multipolygon's blocks, a cloud of detached parts) becomes a
-  // Building without geometry whose children are BuildingParts, one Solid each.
+// The faces of a model grouped into edge-connected parts, parts in order of their first face.
+std::vector<std::vector<std::size_t>> model_parts(const BuildingModel& m) {
   std::vector<std::size_t> parent(m.mesh.faces.size());
   for (std::size_t f = 0; f < parent.size(); ++f) parent[f] = f;
   const auto find = [&parent](std::size_t f) {
@@ -111,59 +93,98 @@ void append_city_object(std::string& out, const CityObject& object, const Point3
       if (!fresh) parent[find(f)] = find(it->second);
     }
   }
-  std::vector<std::vector<std::size_t>> shells;  // faces per shell, shells in order of their first face
-  std::map<std::size_t, std::size_t> shell_of_root;
+  std::vector<std::vector<std::size_t>> parts;
+  std::map<std::size_t, std::size_t> part_of_root;
   for (std::size_t f = 0; f < m.mesh.faces.size(); ++f) {
-    const auto [it, fresh] = shell_of_root.emplace(find(f), shells.size());
-    if (fresh) shells.emplace_back();
-    shells[it->second].push_back(f);
+    const auto [it, fresh] = part_of_root.emplace(find(f), parts.size());
+    if (fresh) parts.emplace_back();
+    parts[it->second].push_back(f);
   }
+  return parts;
+}
 
-  // `"geometry":[{Solid}]` of the given faces, with semantic surfaces of the types they use, in the
-  // order ground, wall, roof.
-  const auto append_solid = [&](const std::vector<std::size_t>& faces) {
-    bool used[3] = {false, false, false};
-    for (std::size_t f : faces) used[static_cast<int>(types[f])] = true;
-    int surface_index[3] = {-1, -1, -1};
-    int n_surfaces = 0;
-    for (int t = 0; t < 3; ++t)
-      if (used[t]) surface_index[t] = n_surfaces++;
-    out += "\"geometry\":[{\"type\":\"Solid\",\"lod\":";
-    append_json_string(out, object.lod);
-    out += ",\"boundaries\":[[";
-    for (std::size_t i = 0; i < faces.size(); ++i) {
-      if (i) out += ',';
-      out += "[[";
-      bool first = true;
-      std::size_t previous = static_cast<std::size_t>(-1);
-      for (std::uint32_t v : m.mesh.faces[faces[i]]) {
-        const std::size_t q = remap[v];
-        if (q == previous) continue;  // consecutive vertices merged by quantisation
-        if (!first) out += ',';
-        out += std::to_string(q);
-        first = false;
-        previous = q;
-      }
-      out += "]]";
+// Appends one Solid of the given faces of a geometry's model, with semantic surfaces of the types
+// those faces use, in the order ground, wall, roof. `remap` takes model vertices to the building's
+// shared vertex list.
+void append_solid(std::string& out, const CityGeometry& g, const std::vector<std::size_t>& faces,
+                  const std::vector<SurfaceType>& types, const std::vector<std::size_t>& remap) {
+  const BuildingModel& m = g.model;
+  bool used[3] = {false, false, false};
+  for (std::size_t f : faces) used[static_cast<int>(types[f])] = true;
+  int surface_index[3] = {-1, -1, -1};
+  int n_surfaces = 0;
+  for (int t = 0; t < 3; ++t)
+    if (used[t]) surface_index[t] = n_surfaces++;
+  out += "{\"type\":\"Solid\",\"lod\":";
+  append_json_string(out, g.lod);
+  out += ",\"boundaries\":[[";
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    if (i) out += ',';
+    out += "[[";
+    bool first = true;
+    std::size_t previous = static_cast<std::size_t>(-1);
+    for (std::uint32_t v : m.mesh.faces[faces[i]]) {
+      const std::size_t q = remap[v];
+      if (q == previous) continue;  // consecutive vertices merged by quantisation
+      if (!first) out += ',';
+      out += std::to_string(q);
+      first = false;
+      previous = q;
     }
-    out += "]],\"semantics\":{\"surfaces\":[";
-    for (int t = 0, k = 0; t < 3; ++t) {
-      if (!used[t]) continue;
-      if (k++) out += ',';
-      out += "{\"type\":\"";
-      out += surface_name(static_cast<SurfaceType>(t));
-      out += "\"}";
-    }
-    out += "],\"values\":[[";
-    for (std::size_t i = 0; i < faces.size(); ++i) {
-      if (i) out += ',';
-      out += std::to_string(surface_index[static_cast<int>(types[faces[i]])]);
-    }
-    out += "]]}}]";
-  };
-  const auto part_id = [&m](std::size_t k) { return m.id + "-part-" + std::to_string(k + 1); };
+    out += "]]";
+  }
+  out += "]],\"semantics\":{\"surfaces\":[";
+  for (int t = 0, k = 0; t < 3; ++t) {
+    if (!used[t]) continue;
+    if (k++) out += ',';
+    out += "{\"type\":\"";
+    out += surface_name(static_cast<SurfaceType>(t));
+    out += "\"}";
+  }
+  out += "],\"values\":[[";
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    if (i) out += ',';
+    out += std::to_string(surface_index[static_cast<int>(types[faces[i]])]);
+  }
+  out += "]]}}";
+}
 
-  append_json_string(out, m.id);
+// Appends the CityObject member `"id":{...}`: a Building with its attributes and one Solid per level
+// of detail, vertices shared across its levels. A level whose model has several parts (detached
+// blocks of a multipolygon footprint) cannot be one Solid (one exterior shell) and a Building has no
+// MultiSolid: each part becomes a child BuildingPart "<id>-<lod>-<k>" with that level's Solid, so
+// every Solid written is valid on its own.
+void append_city_object(std::string& out, const CityObject& object, const Point3& translate, double scale,
+                        std::vector<Quantised>& vertices) {
+  std::map<Quantised, std::size_t> index_of;
+  std::string geometry;
+  std::vector<std::pair<std::string, std::string>> parts;  // id, geometry
+  for (const CityGeometry& g : object.geometries) {
+    const BuildingModel& m = g.model;
+    std::vector<std::size_t> remap(m.mesh.vertices.size());
+    for (std::size_t i = 0; i < m.mesh.vertices.size(); ++i) {
+      const Point3& p = m.mesh.vertices[i];
+      const Quantised q{std::llround((p.x + m.origin.x - translate.x) / scale),
+                        std::llround((p.y + m.origin.y - translate.y) / scale),
+                        std::llround((p.z + m.origin.z - translate.z) / scale)};
+      const auto [it, inserted] = index_of.emplace(q, vertices.size());
+      if (inserted) vertices.push_back(q);
+      remap[i] = it->second;
+    }
+    const std::vector<SurfaceType> types = surface_types(m);
+    const std::vector<std::vector<std::size_t>> model_faces = model_parts(m);
+    if (model_faces.size() == 1) {
+      if (!geometry.empty()) geometry += ',';
+      append_solid(geometry, g, model_faces.front(), types, remap);
+      continue;
+    }
+    for (std::size_t k = 0; k < model_faces.size(); ++k) {
+      std::string solid;
+      append_solid(solid, g, model_faces[k], types, remap);
+      parts.emplace_back(object.id + "-" + g.lod + "-" + std::to_string(k + 1), std::move(solid));
+    }
+  }
+  append_json_string(out, object.id);
   out += ":{\"type\":\"Building\",\"attributes\":{";
   for (std::size_t a = 0; a < object.attributes.size(); ++a) {
     if (a) out += ',';
@@ -171,28 +192,22 @@ void append_city_object(std::string& out, const CityObject& object, const Point3
     out += ':';
     append_value(out, object.attributes[a].second);
   }
-  out += "},";
-  if (shells.size() <= 1) {
-    std::vector<std::size_t> all(m.mesh.faces.size());
-    for (std::size_t f = 0; f < all.size(); ++f) all[f] = f;
-    append_solid(all);
-    out += '}';
-    return;
+  out += "},\"geometry\":[" + geometry + "]";
+  if (!parts.empty()) {
+    out += ",\"children\":[";
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      if (k) out += ',';
+      append_json_string(out, parts[k].first);
+    }
+    out += ']';
   }
-  out += "\"children\":[";
-  for (std::size_t k = 0; k < shells.size(); ++k) {
-    if (k) out += ',';
-    append_json_string(out, part_id(k));
-  }
-  out += "]}";
-  for (std::size_t k = 0; k < shells.size(); ++k) {
+  out += '}';
+  for (const auto& [id, solid] : parts) {
     out += ',';
-    append_json_string(out, part_id(k));
+    append_json_string(out, id);
     out += ":{\"type\":\"BuildingPart\",\"parents\":[";
-    append_json_string(out, m.id);
-    out += "],";
-    append_solid(shells[k]);
-    out += '}';
+    append_json_string(out, object.id);
+    out += "],\"geometry\":[" + solid + "]}";
   }
 }
 
@@ -215,7 +230,9 @@ void append_header_fields(std::string& out, const CityJsonOptions& options, cons
   out += "\"type\":\"CityJSON\",\"version\":\"2.0\",\"transform\":{\"scale\":[";
   for (int i = 0; i < 3; ++i) {
     if (i) out += ',';
-    append_number(out, options.scale);
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.10g", options.scale);  // "0.0001", not "1e-04"
+    out += buf;
   }
   out += "],\"translate\":[";
   append_number(out, translate.x);
@@ -270,16 +287,22 @@ std::vector<SurfaceType> surface_types(const BuildingModel& model) {
 }
 
 void write_cityjson(const std::string& path, const std::vector<CityObject>& objects, const CityJsonOptions& options) {
-  check_options(options, path);
   Point3 translate{0, 0, 0};
   Box3 box;
   for (const CityObject& o : objects)
-    for (const Point3& p : o.model.mesh.vertices)
-      box.add({p.x + o.model.origin.x, p.y + o.model.origin.y, p.z + o.model.origin.z});
+    for (const CityGeometry& g : o.geometries)
+      for (const Point3& p : g.model.mesh.vertices)
+        box.add({p.x + g.model.origin.x, p.y + g.model.origin.y, p.z + g.model.origin.z});
   if (!box.empty()) {
     // A translation on the scale's grid keeps quantised coordinates exact multiples of the scale.
     translate = {std::floor(box.min.x), std::floor(box.min.y), std::floor(box.min.z)};
   }
+  write_cityjson(path, objects, options, translate);
+}
+
+void write_cityjson(const std::string& path, const std::vector<CityObject>& objects, const CityJsonOptions& options,
+                    const Point3& translate) {
+  check_options(options, path);
   std::string out = "{";
   append_header_fields(out, options, translate);
   out += ",\"CityObjects\":{";
@@ -325,9 +348,9 @@ void CityJsonSeqWriter::close() {
 }
 
 std::string cityjson_feature(const CityObject& object, const CityJsonOptions& options, const Point3& translate) {
-  check_options(options, object.model.id);
+  check_options(options, object.id);
   std::string line = "{\"type\":\"CityJSONFeature\",\"id\":";
-  append_json_string(line, object.model.id);
+  append_json_string(line, object.id);
   line += ",\"CityObjects\":{";
   std::vector<Quantised> vertices;
   append_city_object(line, object, translate, options.scale, vertices);

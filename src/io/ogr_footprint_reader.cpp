@@ -499,6 +499,23 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
     footprint.id = std::move(id);
     footprint.fid = fid;
     footprint.polygons = std::move(outcome.polygons);
+    // Every attribute with its type, so that outputs carry them unchanged (64-bit ids intact).
+    for (int i = 0; i < definition->GetFieldCount(); ++i) {
+      const OGRFieldDefn* field = definition->GetFieldDefn(i);
+      AttributeValue value;
+      if (feature->IsFieldSetAndNotNull(i)) {
+        switch (field->GetType()) {
+          case OFTInteger:
+            value = field->GetSubType() == OFSTBoolean ? AttributeValue{feature->GetFieldAsInteger(i) != 0}
+                                                       : AttributeValue{std::int64_t{feature->GetFieldAsInteger(i)}};
+            break;
+          case OFTInteger64: value = std::int64_t{feature->GetFieldAsInteger64(i)}; break;
+          case OFTReal: value = feature->GetFieldAsDouble(i); break;
+          default: value = std::string(feature->GetFieldAsString(i)); break;
+        }
+      }
+      footprint.attributes.emplace_back(field->GetNameRef(), std::move(value));
+    }
     if (ground_index >= 0 && feature->IsFieldSetAndNotNull(ground_index)) {
       const double z = feature->GetFieldAsDouble(ground_index);
       if (std::isfinite(z)) footprint.ground_z = z;

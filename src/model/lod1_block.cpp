@@ -5,11 +5,13 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <set>
 #include <sstream>
 #include <utility>
 
 #include "city3d/error.hpp"
 #include "city3d/lod1.hpp"
+#include "city3d/model_io.hpp"
 
 namespace city3d {
 namespace {
@@ -347,6 +349,259 @@ BuildingModel make_lod1_block(const BuildingInput& input, const Lod1Params& para
   model.origin = input.origin;
   model.mesh = extrude_polygons(input.footprint.polygons, heights.floor_z, heights.roof_z, input.id);
   return model;
+}
+
+}  // namespace city3d
+
+// LoD1.3 (and LoD1.2 from an LoD2 outline): the roof parts of an LoD2 model, clustered by height
+// and extruded, with step walls between clusters.
+namespace city3d {
+namespace {
+
+struct Key2 {
+  double x, y;
+  bool operator<(const Key2& o) const { return x < o.x || (x == o.x && y < o.y); }
+};
+
+// Distance from p to segment ab, and the parameter of its projection.
+double segment_distance(const Point2& a, const Point2& b, const Point2& p, double& t) {
+  const double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy;
+  t = l2 > 0 ? ((p.x - a.x) * dx + (p.y - a.y) * dy) / l2 : 0.0;
+  const double cx = a.x + t * dx - p.x, cy = a.y + t * dy - p.y;
+  return std::sqrt(cx * cx + cy * cy);
+}
+
+bool inside_ring(const std::vector<Point2>& ring, double x, double y) {
+  bool in = false;
+  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+    const Point2 &a = ring[i], &b = ring[j];
+    if ((a.y > y) != (b.y > y) && x < a.x + (y - a.y) * (b.x - a.x) / (b.y - a.y)) in = !in;
+  }
+  return in;
+}
+
+// The boundary loops of a set of parts (directed edges whose reverse is not in the set), when every
+// vertex has one outgoing boundary edge and every loop is counter-clockwise; else empty.
+std::vector<Loop> boundary_loops(const std::vector<Loop>& parts, const std::vector<std::size_t>& members,
+                                 const std::vector<Point2>& pts) {
+  std::set<std::pair<std::uint32_t, std::uint32_t>> edges;
+  for (std::size_t p : members)
+    for (std::size_t k = 0; k < parts[p].size(); ++k) edges.insert({parts[p][k], parts[p][(k + 1) % parts[p].size()]});
+  std::map<std::uint32_t, std::uint32_t> next;
+  for (const auto& e : edges) {
+    if (edges.count({e.second, e.first})) continue;
+    if (!next.emplace(e.first, e.second).second) return {};  // a pinch: two loops through one vertex
+  }
+  std::vector<Loop> loops;
+  std::set<std::uint32_t> used;
+  for (const auto& [start, unused] : next) {
+    if (used.count(start)) continue;
+    Loop loop;
+    for (std::uint32_t v = start; !used.count(v);) {
+      used.insert(v);
+      loop.push_back(v);
+      const auto it = next.find(v);
+      if (it == next.end()) return {};
+      v = it->second;
+    }
+    if (loop.size() < 3 || loop.front() != next.at(loop.back())) return {};
+    Ring2 ring;
+    for (std::uint32_t v : loop) ring.push_back(pts[v]);
+    if (signed_area(ring) <= 0) return {};  // a hole: a face of one ring cannot have it
+    loops.push_back(std::move(loop));
+  }
+  return loops;
+}
+
+}  // namespace
+
+BuildingModel make_lod13_blocks(const BuildingModel& lod22, const std::vector<Point3>& points, double floor_z,
+                                double step_height, double roof_percentile, double min_height) {
+  const std::vector<SurfaceType> types = surface_types(lod22);
+  // Plan-view vertices (equal x, y are one vertex) and the roof parts as loops of them.
+  std::vector<Point2> pts;
+  std::map<Key2, std::uint32_t> index_of;
+  std::vector<Loop> parts;
+  std::vector<double> mean_z;
+  for (std::size_t f = 0; f < lod22.mesh.faces.size(); ++f) {
+    if (types[f] != SurfaceType::roof) continue;
+    Loop loop;
+    double z = 0;
+    for (std::uint32_t i : lod22.mesh.faces[f]) {
+      const Point3& p = lod22.mesh.vertices[i];
+      z += p.z;
+      const auto [it, fresh] = index_of.emplace(Key2{p.x, p.y}, static_cast<std::uint32_t>(pts.size()));
+      if (fresh) pts.push_back({p.x, p.y});
+      if (loop.empty() || loop.back() != it->second) loop.push_back(it->second);
+    }
+    while (loop.size() > 1 && loop.front() == loop.back()) loop.pop_back();
+    Ring2 ring;
+    for (std::uint32_t v : loop) ring.push_back(pts[v]);
+    if (loop.size() < 3 || signed_area(ring) <= 0) continue;  // seen edge-on or from below: not a roof part
+    parts.push_back(std::move(loop));
+    mean_z.push_back(z / lod22.mesh.faces[f].size());
+  }
+  if (parts.empty()) throw ReconstructionError("lod1.3: building " + lod22.id + ": the LoD2 model has no roof face");
+
+  // Plan-view vertices lying on another part's edge split that edge, so neighbouring parts share
+  // whole edges (a low roof's eave edge against the vertices of the taller part's step wall). "On"
+  // within half a millimetre: the vertices are rounded to the 0.1 mm output grid.
+  for (Loop& loop : parts) {
+    Loop split;
+    for (std::size_t k = 0; k < loop.size(); ++k) {
+      const Point2 &a = pts[loop[k]], &b = pts[loop[(k + 1) % loop.size()]];
+      split.push_back(loop[k]);
+      std::vector<std::pair<double, std::uint32_t>> between;
+      for (std::uint32_t v = 0; v < pts.size(); ++v) {
+        if (v == loop[k] || v == loop[(k + 1) % loop.size()]) continue;
+        double t = 0;
+        if (segment_distance(a, b, pts[v], t) < 5e-4 && t > 0 && t < 1) between.push_back({t, v});
+      }
+      std::sort(between.begin(), between.end());
+      for (const auto& [t, v] : between) split.push_back(v);
+    }
+    loop = std::move(split);
+  }
+
+  // Heights: the percentile of the points above each part.
+  std::vector<std::vector<double>> part_z(parts.size());
+  std::vector<std::vector<Point2>> rings(parts.size());
+  std::vector<Box2> boxes(parts.size());
+  for (std::size_t p = 0; p < parts.size(); ++p)
+    for (std::uint32_t v : parts[p]) {
+      rings[p].push_back(pts[v]);
+      boxes[p].add(pts[v]);
+    }
+  for (const Point3& q : points)
+    for (std::size_t p = 0; p < parts.size(); ++p) {
+      if (q.x < boxes[p].min.x || q.x > boxes[p].max.x || q.y < boxes[p].min.y || q.y > boxes[p].max.y) continue;
+      if (inside_ring(rings[p], q.x, q.y)) {
+        part_z[p].push_back(q.z);
+        break;
+      }
+    }
+  std::vector<double> area(parts.size());
+  for (std::size_t p = 0; p < parts.size(); ++p) area[p] = signed_area(rings[p]);
+
+  // Adjacent parts (a shared edge in plan view).
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> part_of_edge;
+  for (std::size_t p = 0; p < parts.size(); ++p)
+    for (std::size_t k = 0; k < parts[p].size(); ++k) part_of_edge[{parts[p][k], parts[p][(k + 1) % parts[p].size()]}] = p;
+  std::set<std::pair<std::size_t, std::size_t>> adjacent;
+  for (const auto& [e, p] : part_of_edge) {
+    const auto it = part_of_edge.find({e.second, e.first});
+    if (it != part_of_edge.end() && it->second != p) adjacent.insert(std::minmax(p, it->second));
+  }
+
+  // Clusters: merge the adjacent pair of clusters with the smallest height difference while it is
+  // below the step height.
+  std::vector<std::size_t> cluster(parts.size());
+  for (std::size_t p = 0; p < parts.size(); ++p) cluster[p] = p;
+  const auto cluster_height = [&](std::size_t c) {
+    std::vector<double> zs;
+    double weighted = 0, total = 0;
+    for (std::size_t p = 0; p < parts.size(); ++p)
+      if (cluster[p] == c) {
+        zs.insert(zs.end(), part_z[p].begin(), part_z[p].end());
+        weighted += mean_z[p] * area[p];
+        total += area[p];
+      }
+    return zs.empty() ? weighted / total : percentile(zs, roof_percentile);
+  };
+  std::map<std::size_t, double> height;
+  for (std::size_t p = 0; p < parts.size(); ++p) height[p] = cluster_height(p);
+  for (;;) {
+    double best = step_height;
+    std::pair<std::size_t, std::size_t> pair{0, 0};
+    bool found = false;
+    for (const auto& [a, b] : adjacent) {
+      const std::size_t ca = cluster[a], cb = cluster[b];
+      if (ca == cb) continue;
+      const double d = std::fabs(height[ca] - height[cb]);
+      if (d < best) {
+        best = d;
+        pair = std::minmax(ca, cb);
+        found = true;
+      }
+    }
+    if (!found) break;
+    for (std::size_t& c : cluster)
+      if (c == pair.second) c = pair.first;
+    height.erase(pair.second);
+    height[pair.first] = cluster_height(pair.first);
+  }
+  for (auto& [c, h] : height) h = std::max(h, floor_z + min_height);
+
+  // The mesh: a column of vertices over every plan-view vertex (the floor and each incident
+  // cluster's height), roofs, floors and walls through every column vertex they pass.
+  BuildingModel out;
+  out.id = lod22.id;
+  out.origin = lod22.origin;
+  std::map<std::pair<std::uint32_t, double>, std::uint32_t> vertex_of;
+  std::vector<std::set<double>> column(pts.size());
+  for (std::size_t p = 0; p < parts.size(); ++p)
+    for (std::uint32_t v : parts[p]) {
+      column[v].insert(floor_z);
+      column[v].insert(height[cluster[p]]);
+    }
+  const auto vertex = [&](std::uint32_t v, double z) {
+    const auto [it, fresh] = vertex_of.emplace(std::make_pair(v, z), static_cast<std::uint32_t>(out.mesh.vertices.size()));
+    if (fresh) out.mesh.vertices.push_back({pts[v].x, pts[v].y, z});
+    return it->second;
+  };
+  const auto add_face = [&](std::vector<std::uint32_t> face, SurfaceType type) {
+    out.mesh.faces.push_back(std::move(face));
+    out.surfaces.push_back(type);
+  };
+  // Roofs: one face per cluster loop when the cluster's outline is a set of simple loops, else one
+  // per part.
+  std::vector<std::size_t> cluster_ids;
+  for (const auto& [c, h] : height) cluster_ids.push_back(c);
+  for (std::size_t c : cluster_ids) {
+    std::vector<std::size_t> members;
+    for (std::size_t p = 0; p < parts.size(); ++p)
+      if (cluster[p] == c) members.push_back(p);
+    std::vector<Loop> loops = boundary_loops(parts, members, pts);
+    if (loops.empty())
+      for (std::size_t p : members) loops.push_back(parts[p]);
+    for (const Loop& loop : loops) {
+      std::vector<std::uint32_t> face;
+      for (std::uint32_t v : loop) face.push_back(vertex(v, height[c]));
+      add_face(std::move(face), SurfaceType::roof);
+    }
+  }
+  // Floors: the outline of all parts, facing down.
+  {
+    std::vector<std::size_t> all(parts.size());
+    for (std::size_t p = 0; p < parts.size(); ++p) all[p] = p;
+    std::vector<Loop> loops = boundary_loops(parts, all, pts);
+    if (loops.empty()) loops = parts;
+    for (const Loop& loop : loops) {
+      std::vector<std::uint32_t> face;
+      for (auto it = loop.rbegin(); it != loop.rend(); ++it) face.push_back(vertex(*it, floor_z));
+      add_face(std::move(face), SurfaceType::ground);
+    }
+  }
+  // Walls: right of every part edge (outward), from the neighbour's height (the floor on the outline)
+  // up to the part's, when the part is the taller one.
+  for (std::size_t p = 0; p < parts.size(); ++p) {
+    const double top = height[cluster[p]];
+    for (std::size_t k = 0; k < parts[p].size(); ++k) {
+      const std::uint32_t a = parts[p][k], b = parts[p][(k + 1) % parts[p].size()];
+      const auto it = part_of_edge.find({b, a});
+      const double bottom = it == part_of_edge.end() ? floor_z : height[cluster[it->second]];
+      if (!(bottom < top)) continue;
+      std::vector<std::uint32_t> face{vertex(a, bottom)};
+      for (auto z = column[b].lower_bound(bottom); z != column[b].end() && *z <= top; ++z) face.push_back(vertex(b, *z));
+      for (auto z = column[a].upper_bound(top); z != column[a].begin();) {
+        --z;
+        if (*z <= bottom) break;
+        face.push_back(vertex(a, *z));
+      }
+      add_face(std::move(face), SurfaceType::wall);
+    }
+  }
+  return out;
 }
 
 }  // namespace city3d

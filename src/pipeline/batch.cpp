@@ -31,6 +31,7 @@
 #include "city3d/point_cloud_io.hpp"
 #include "io/input_check.hpp"
 #include "io/output_folder.hpp"
+#include "city3d/run_outputs.hpp"
 #include "io/atomic_file.hpp"
 #include "pipeline/finalise.hpp"
 #include "pipeline/journal.hpp"
@@ -134,29 +135,11 @@ void crop_tiles(const std::vector<std::string>& files, const Box2& extent, unsig
   }
 }
 
-std::vector<std::pair<std::string, AttributeValue>> cityjson_attributes(const BuildingReport& r, bool timings) {
-  std::vector<std::pair<std::string, AttributeValue>> a = {
-      {"status", std::string(to_string(r.status))},
-      {"level", std::string(to_string(r.level))},
-      {"reason", r.reason.empty() ? AttributeValue{} : AttributeValue{r.reason}},
-      {"note", r.note.empty() ? AttributeValue{} : AttributeValue{r.note}},
-      {"ground_z", r.ground_z},
-      {"ground_method", r.ground_method},
-      {"roof_z_p70", r.roof_z},
-      {"points", static_cast<std::int64_t>(r.points)},
-      {"planes", static_cast<std::int64_t>(r.planes)},
-      {"faces", static_cast<std::int64_t>(r.faces)},
-      {"rmse", r.rmse >= 0 ? AttributeValue{r.rmse} : AttributeValue{}},
-  };
-  if (timings) a.emplace_back("seconds", r.seconds);
-  return a;
-}
-
 // A finished building's record: its model file is written now (and hashed as written), its
 // CityJSONFeature and report rows made now, so that the run-level files need nothing but records.
 // What a building's CityJSON holds is decided here (and in cityjson_writer.cpp).
 detail::BuildingRecord make_record(std::uint64_t index, BuildingResult result, const BatchOptions& o,
-                                   const detail::RunLayout& layout) {
+                                   const detail::RunLayout& layout, const Attributes& footprint_attributes) {
   detail::BuildingRecord record;
   record.index = index;
   record.id = result.report.id;
@@ -171,8 +154,11 @@ detail::BuildingRecord make_record(std::uint64_t index, BuildingResult result, c
     record.model_hash = detail::file_hash(path);
     if (record.model_hash.empty()) throw IoError("write: cannot read back " + path);
   }
-  const CityObject object{*result.model, cityjson_lod(result.report.level),
-                          cityjson_attributes(result.report, o.timings_in_cityjson)};
+  // Every level of detail made, with the footprint's attributes and the report's (report.cpp).
+  CityObject object{result.model->id, {},
+                    detail::output_attributes(result.report, footprint_attributes, o.timings_in_cityjson)};
+  for (const LodModel& lod : result.lods) object.geometries.push_back({lod.lod, lod.model});
+  if (object.geometries.empty()) object.geometries.push_back({cityjson_lod(result.report.level), *result.model});
   record.feature = cityjson_feature(object, {layout.crs, layout.scale, ""}, layout.translate);
   if (o.merged_file) record.mesh = std::move(*result.model);
   return record;
@@ -269,6 +255,7 @@ detail::RunLayout layout_of(const BatchOptions& o) {
   l.per_building_files = o.per_building_files;
   l.local_coordinates = o.local_coordinates;
   l.format = o.format;
+  l.scale = o.reconstruction.output_grid;  // the grid every model was rounded to and checked on
   return l;
 }
 
@@ -426,8 +413,9 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
             log_warning("resume: record " + std::to_string(indices[k]) + " of " + journal.path() + " is for " +
                         finished->id + ", not " + id_of(k) + "; recomputed");
           }
-          BuildingResult result = reconstruct_building(make_input(k), options.reconstruction);
-          journal.append(make_record(indices[k], std::move(result), options, plan.layout));
+          const BuildingInput input = make_input(k);
+          BuildingResult result = reconstruct_building(input, options.reconstruction);
+          journal.append(make_record(indices[k], std::move(result), options, plan.layout, input.footprint.attributes));
         } catch (...) {
           // Only input and output errors reach here (reconstruct_building never throws for a bad
           // building): the run cannot go on.
@@ -526,6 +514,32 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   const BatchSummary summary =
       detail::finalise_run(options.output_dir, plan.layout, sources, seconds_since(start),
                            sharded ? detail::FinaliseScope::shard : detail::FinaliseScope::whole_run, manifest.outputs);
+  if (!sharded && (options.gpkg || options.html)) {
+    // The overview outputs: the records, and the footprints read once more for their geometry.
+    std::vector<Footprint> footprints;
+    if (source && !extent.empty()) {
+      footprints.resize(plan.buildings);
+      for (auto& [number, f] : source->read_box(extent))
+        if (number < footprints.size()) footprints[number] = std::move(f);
+    }
+    std::vector<std::string> reports, features;
+    for (const detail::RecordSource& r : sources) {
+      detail::BuildingRecord record = r.journal->read(*r.ref);
+      reports.push_back(std::move(record.report_json));
+      features.push_back(std::move(record.feature));
+    }
+    const std::vector<OverviewRecord> overview =
+        overview_records(reports, features, footprints, plan.layout.scale, plan.layout.translate);
+    const fs::path out(options.output_dir);
+    if (options.gpkg) {
+      write_gpkg((out / "buildings.gpkg").string(), overview, plan.layout.crs);
+      manifest.outputs["buildings.gpkg"] = detail::file_stamp_of((out / "buildings.gpkg").string());
+    }
+    if (options.html) {
+      write_report_html((out / "report.html").string(), overview, plan.layout.crs);
+      manifest.outputs["report.html"] = detail::file_stamp_of((out / "report.html").string());
+    }
+  }
   manifest.seconds = seconds_since(start);
   folder.write_manifest(manifest);
   return summary;

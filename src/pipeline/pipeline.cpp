@@ -68,6 +68,11 @@ void ReconstructionParams::validate() const {
   check([&] { selection.validate(); });
   check([&] { assemble.validate(); });
   check([&] { lod1.validate(); });
+  check([&] { validity.validate(); });
+  if (!lods.any()) problems += (problems.empty() ? "" : "; ") + std::string("lods: no level of detail asked for");
+  if (!(lod13_step_height > 0)) problems += (problems.empty() ? "" : "; ") + std::string("lod13_step_height must be > 0 (metres)");
+  if (!(output_grid >= 0) || !std::isfinite(output_grid))
+    problems += (problems.empty() ? "" : "; ") + std::string("output_grid must be >= 0 (metres)");
   if (!(time_limit > 0)) problems += (problems.empty() ? "" : "; ") + std::string("time_limit must be positive");
   if (!problems.empty()) throw ConfigError(problems);
 }
@@ -134,6 +139,12 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("assemble.merge_coplanar", p.assemble.merge_coplanar);
   put("lod1.roof_percentile", p.lod1.roof_percentile);
   put("lod1.min_height", p.lod1.min_height);
+  put("output_grid", p.output_grid);
+  put("lods", lod_set_text(p.lods));
+  put("lod13_step_height", p.lod13_step_height);
+  put("validity.snap_tolerance", p.validity.snap_tolerance);
+  put("validity.planarity_distance", p.validity.planarity_distance);
+  put("validity.planarity_normals", p.validity.planarity_normals);
   put("max_level", to_string(p.max_level));
   put("time_limit", p.time_limit);
   return s.str();
@@ -328,7 +339,153 @@ Ring2 convex_hull(std::vector<Point2> pts) {
   return hull;
 }
 
+// Heights, footprint area and point density of the report (3DBAG's b3_h_* attributes).
+void describe_points(const BuildingInput& input, const ReconstructionParams& params, BuildingReport& r) {
+  double area = 0.0;
+  for (const Polygon2& p : input.footprint.polygons) {
+    const auto ring_area = [](const Ring2& ring) {
+      double twice = 0;
+      for (std::size_t k = 0; k < ring.size(); ++k) {
+        const Point2 &a = ring[k], &b = ring[(k + 1) % ring.size()];
+        twice += a.x * b.y - b.x * a.y;
+      }
+      return std::fabs(twice) / 2;
+    };
+    area += ring_area(p.outer);
+    for (const Ring2& h : p.holes) area -= ring_area(h);
+  }
+  r.footprint_area = area;
+  r.point_density = area > 0 ? input.points.size() / area : 0.0;
+  if (input.points.empty()) {
+    r.roof_type = "no points";
+    return;
+  }
+  std::vector<double> z;
+  z.reserve(input.points.size());
+  for (const Point3& p : input.points) z.push_back(p.z + input.origin.z);
+  r.h_roof_50p = percentile(z, 50.0);
+  r.h_roof_70p = percentile(z, params.lod1.roof_percentile);
+  r.h_roof_min = *std::min_element(z.begin(), z.end());
+  r.h_roof_max = *std::max_element(z.begin(), z.end());
+  r.roof_type = "could not be detected";
+}
+
+// Roof type of an LoD2.2 model as 3DBAG names them: every roof face within 3 degrees of horizontal
+// and all at one height (within 0.3 m): "horizontal"; horizontal at several heights: "multiple
+// horizontal"; otherwise "slanted".
+std::string roof_type_of(const BuildingModel& model) {
+  const std::vector<SurfaceType> types = surface_types(model);
+  std::vector<double> heights;
+  bool slanted = false;
+  for (std::size_t f = 0; f < model.mesh.faces.size(); ++f) {
+    if (types[f] != SurfaceType::roof) continue;
+    const auto& face = model.mesh.faces[f];
+    double nx = 0, ny = 0, nz = 0, zsum = 0;
+    for (std::size_t k = 0; k < face.size(); ++k) {
+      const Point3& a = model.mesh.vertices[face[k]];
+      const Point3& b = model.mesh.vertices[face[(k + 1) % face.size()]];
+      nx += (a.y - b.y) * (a.z + b.z);
+      ny += (a.z - b.z) * (a.x + b.x);
+      nz += (a.x - b.x) * (a.y + b.y);
+      zsum += a.z;
+    }
+    const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+    if (!(len > 0)) continue;
+    if (nz / len < std::cos(3.0 * 3.14159265358979 / 180.0)) slanted = true;
+    heights.push_back(zsum / face.size());
+  }
+  if (heights.empty()) return "could not be detected";
+  if (slanted) return "slanted";
+  std::sort(heights.begin(), heights.end());
+  for (std::size_t k = 1; k < heights.size(); ++k)
+    if (heights[k] - heights[k - 1] > 0.3) return "multiple horizontal";
+  return "horizontal";
+}
+
+// LoD1.2 and LoD1.3 derived from the LoD2.2 model (or only the LoD1.2 block when the ladder ended
+// there), each valid as written; volumes and RMSE per level; the model OBJ/PLY get is the highest
+// level asked for.
+void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams& params, BuildingResult& result) {
+  BuildingReport& r = result.report;
+  const BuildingModel primary = *result.model;
+  std::vector<LodModel> made;  // in order 1.2, 1.3, 2.2
+  std::vector<std::string> real;
+  const bool lod2 = r.level == ModelLevel::lod22 || r.level == ModelLevel::lod22_footprint_walls;
+  const auto derive = [&](const char* lod, double step) {
+    try {
+      BuildingModel blocks = make_lod13_blocks(primary, input.points, input.ground_z, step,
+                                               params.lod1.roof_percentile, params.lod1.min_height);
+      const WrittenValidity v = validate_as_written(blocks, params.output_grid, params.validity);
+      if (!v.remaining.empty()) throw ReconstructionError("not valid as written: " + v.remaining.front().text());
+      made.push_back({lod, std::move(blocks)});
+      real.push_back(lod);
+    } catch (const Error& e) {
+      r.note += (r.note.empty() ? "" : "; ") + std::string("LoD") + lod + " not made: " + e.what();
+    }
+  };
+  if (lod2) {
+    if (params.lods.lod12) derive("1.2", std::numeric_limits<double>::infinity());
+    if (params.lods.lod13) derive("1.3", params.lod13_step_height);
+    made.push_back({"2.2", primary});
+    real.push_back("2.2");
+    r.h_ridge = -std::numeric_limits<double>::infinity();
+    const std::vector<SurfaceType> types = surface_types(primary);
+    for (std::size_t f = 0; f < primary.mesh.faces.size(); ++f)
+      if (types[f] == SurfaceType::roof)
+        for (std::uint32_t v : primary.mesh.faces[f]) r.h_ridge = std::max(r.h_ridge, primary.mesh.vertices[v].z + primary.origin.z);
+    r.roof_type = roof_type_of(primary);
+  } else {
+    made.push_back({"1.2", primary});
+    real.push_back("1.2");
+  }
+  // Keep the levels asked for; when none of them could be made, the ladder's fallback is kept.
+  std::vector<LodModel> kept;
+  for (LodModel& m : made) {
+    const bool asked = (m.lod == "1.2" && params.lods.lod12) || (m.lod == "1.3" && params.lods.lod13) ||
+                       (m.lod == "2.2" && params.lods.lod22);
+    if (asked) kept.push_back(std::move(m));
+  }
+  if (kept.empty()) kept.push_back({lod2 ? "2.2" : "1.2", primary});
+  for (const LodModel& m : kept) {
+    const double volume = check_mesh(m.model.mesh).signed_volume;
+    const double error = rmse(m.model.mesh, input.points);
+    (m.lod == "1.2" ? r.volume_lod12 : m.lod == "1.3" ? r.volume_lod13 : r.volume_lod22) = volume;
+    (m.lod == "1.2" ? r.rmse_lod12 : m.lod == "1.3" ? r.rmse_lod13 : r.rmse_lod22) = error;
+    r.lods += (r.lods.empty() ? "" : ",") + m.lod;
+    if (std::find(real.begin(), real.end(), m.lod) != real.end())
+      r.lods_reconstructed += (r.lods_reconstructed.empty() ? "" : ",") + m.lod;
+  }
+  result.model = kept.back().model;
+  r.faces = result.model->mesh.faces.size();
+  result.lods = std::move(kept);
+}
+
 }  // namespace
+
+LodSet parse_lod_set(const std::string& text) {
+  LodSet set{false, false, false};
+  if (text == "all") return LodSet{};
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t comma = text.find(',', start);
+    const std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    if (item == "1.2") set.lod12 = true;
+    else if (item == "1.3") set.lod13 = true;
+    else if (item == "2.2" || item == "2") set.lod22 = true;
+    else throw ConfigError("lod: '" + item + "' is not 1.2, 1.3 or 2.2 (give a comma-separated list, e.g. 1.2,2.2)");
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return set;
+}
+
+std::string lod_set_text(const LodSet& lods) {
+  std::string s;
+  if (lods.lod12) s += "1.2";
+  if (lods.lod13) s += std::string(s.empty() ? "" : ",") + "1.3";
+  if (lods.lod22) s += std::string(s.empty() ? "" : ",") + "2.2";
+  return s;
+}
 
 BuildingInput building_from_cloud(const BuildingId& id, const std::vector<Point3>& world_points,
                                   std::optional<double> ground_z) {
@@ -372,6 +529,7 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
   r.ground_z = input.ground_z + input.origin.z;
   r.ground_method = input.ground_method;
   r.note = input.footprint.note;
+  describe_points(input, params, r);
   if (!input.points.empty()) {
     try {
       r.roof_z = lod1_heights(input, params.lod1).roof_z + input.origin.z;
@@ -413,27 +571,31 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
         BuildingModel model = rung.level == ModelLevel::lod12
                                   ? lod1_rung(input, params, r)
                                   : lod2_rung(input, params, rung.footprint_walls_only, deadline, r);
-        // Closed, 2-manifold, outward, planar faces, no self-intersection: anything less is a bug
-        // of a rung, never a result. The LoD1 block is the last resort: there only the topology is
-        // required, because a repaired multipolygon can have parts that touch at a point (separate
-        // shells, each valid, that the self-intersection test reports as touching).
-        if (rung.level == ModelLevel::lod12) {
-          const MeshCheck check = check_mesh(model.mesh);
-          if (!check.valid()) throw ReconstructionError("model: LoD1 block is not a valid solid");
-        } else {
-          const MeshValidity validity = check_validity(model.mesh);
-          if (!validity.valid()) {
-            if (!params.debug_dir.empty()) {
-              ModelWriteOptions local;
-              local.local_coordinates = true;
-              write_model(debug_path(params.debug_dir, input.id,
-                                     std::string("rejected_") +
-                                         (rung.footprint_walls_only ? "footprint_walls" : "lod22") + ".obj"),
-                          model, local);
-            }
-            throw ReconstructionError("model: not a valid solid: " + validity.problem);
-          }
+        // The model as the writers will write it (rounded to the output grid) must pass every
+        // val3dity rule; a model that does not is repaired (spikes cut, warped faces split) or the
+        // ladder moves on: an invalid model is never written.
+        const WrittenValidity validity = validate_as_written(model, params.output_grid, params.validity);
+        if (!validity.found.empty()) {
+          const std::string found = std::string(to_string(rung.level)) + ": " + validity_codes(validity.found);
+          r.validity_found += (r.validity_found.empty() ? "" : "; ") + found;
         }
+        if (!validity.remaining.empty()) {
+          if (!params.debug_dir.empty()) {
+            ModelWriteOptions local;
+            local.local_coordinates = true;
+            write_model(debug_path(params.debug_dir, input.id,
+                                   std::string("rejected_") +
+                                       (rung.level == ModelLevel::lod12 ? "lod12"
+                                        : rung.footprint_walls_only ? "footprint_walls" : "lod22") + ".obj"),
+                        model, local);
+          }
+          std::string problems;
+          for (std::size_t k = 0; k < validity.remaining.size() && k < 3; ++k)
+            problems += (k ? "; " : "") + validity.remaining[k].text();
+          if (validity.remaining.size() > 3) problems += "; ...";
+          throw ReconstructionError("model: not a valid solid as written: " + problems);
+        }
+        r.repairs = validity.repairs;
         r.level = rung.level;
         r.status = rung.level == requested ? BuildingStatus::ok : BuildingStatus::fallback;
         r.faces = model.mesh.faces.size();
@@ -449,6 +611,7 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
       }
     }
     if (!result.model) r.status = BuildingStatus::failed;
+    if (result.model) add_levels_of_detail(input, params, result);
     if (result.model) r.rmse = rmse(result.model->mesh, input.points);
     if (r.status == BuildingStatus::ok) r.stage.clear(), r.reason.clear();
   }

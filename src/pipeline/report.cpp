@@ -2,6 +2,9 @@
 // fixed precision so that reports of identical runs differ only in their timings.
 #include "pipeline/report.hpp"
 
+#include <algorithm>
+
+#include <cmath>
 #include <cstdio>
 
 #include "io/atomic_file.hpp"
@@ -42,11 +45,69 @@ std::string fixed(double v, int decimals) {
   return buf;
 }
 
+// A number for CSV (empty when unknown) or JSON (null when unknown).
+std::string csv_number(double v, int decimals) { return std::isfinite(v) ? fixed(v, decimals) : ""; }
+std::string json_number(double v, int decimals) { return std::isfinite(v) ? fixed(v, decimals) : "null"; }
+
+// The value nearest to v with `decimals` decimals, so that shortest round-trip printing writes
+// 0.013, not 0.013000000000000001; null when not finite.
+AttributeValue rounded(double v, int decimals) {
+  if (!std::isfinite(v)) return AttributeValue{};
+  const double f = std::pow(10.0, decimals);
+  return std::round(v * f) / f;
+}
+
+AttributeValue text_or_null(const std::string& s) { return s.empty() ? AttributeValue{} : AttributeValue{s}; }
+
+// The report columns that CSV and JSON share beyond the first ones: name, decimals (-1 for text).
+struct Extra {
+  const char* name;
+  int decimals;
+  double BuildingReport::*number;
+  std::string BuildingReport::*text;
+};
+const Extra kExtras[] = {
+    {"lods", -1, nullptr, &BuildingReport::lods},
+    {"lods_reconstructed", -1, nullptr, &BuildingReport::lods_reconstructed},
+    {"footprint_area", 2, &BuildingReport::footprint_area, nullptr},
+    {"point_density", 2, &BuildingReport::point_density, nullptr},
+    {"h_roof_50p", 3, &BuildingReport::h_roof_50p, nullptr},
+    {"h_roof_70p", 3, &BuildingReport::h_roof_70p, nullptr},
+    {"h_roof_min", 3, &BuildingReport::h_roof_min, nullptr},
+    {"h_roof_max", 3, &BuildingReport::h_roof_max, nullptr},
+    {"h_ridge", 3, &BuildingReport::h_ridge, nullptr},
+    {"roof_type", -1, nullptr, &BuildingReport::roof_type},
+    {"volume_lod12", 2, &BuildingReport::volume_lod12, nullptr},
+    {"volume_lod13", 2, &BuildingReport::volume_lod13, nullptr},
+    {"volume_lod22", 2, &BuildingReport::volume_lod22, nullptr},
+    {"rmse_lod12", 4, &BuildingReport::rmse_lod12, nullptr},
+    {"rmse_lod13", 4, &BuildingReport::rmse_lod13, nullptr},
+    {"rmse_lod22", 4, &BuildingReport::rmse_lod22, nullptr},
+    {"validity_found", -1, nullptr, &BuildingReport::validity_found},
+    {"repairs", -1, nullptr, &BuildingReport::repairs},
+};
+
+std::string csv_extras(const BuildingReport& r) {
+  std::string extra;
+  for (const Extra& e : kExtras) extra += "," + (e.text ? csv_field(r.*e.text) : csv_number(r.*e.number, e.decimals));
+  return extra;
+}
+
+std::string json_extras(const BuildingReport& r) {
+  std::string extra;
+  for (const Extra& e : kExtras)
+    extra += std::string(", \"") + e.name + "\": " + (e.text ? json_string(r.*e.text) : json_number(r.*e.number, e.decimals));
+  return extra;
+}
+
 }  // namespace
 
 std::string report_csv_header() {
-  return "id,status,level,stage,reason,note,points,ground_points,ground_z,ground_method,roof_z,planes,walls,"
-         "candidate_faces,faces,rmse,valid,seconds";
+  std::string header =
+      "id,status,level,stage,reason,note,points,ground_points,ground_z,ground_method,roof_z,planes,walls,"
+      "candidate_faces,faces,rmse,valid";
+  for (const Extra& e : kExtras) header += std::string(",") + e.name;
+  return header + ",seconds";  // last: the only column that differs between identical runs
 }
 
 std::string report_csv_row(const BuildingReport& r) {
@@ -55,7 +116,8 @@ std::string report_csv_row(const BuildingReport& r) {
          std::to_string(r.ground_points) + "," + fixed(r.ground_z, 3) + "," + csv_field(r.ground_method) + "," +
          fixed(r.roof_z, 3) + "," + std::to_string(r.planes) + "," + std::to_string(r.walls) + "," +
          std::to_string(r.candidate_faces) + "," + std::to_string(r.faces) + "," +
-         (r.rmse >= 0 ? fixed(r.rmse, 4) : "") + "," + (r.valid ? "1" : "0") + "," + fixed(r.seconds, 4);
+         (r.rmse >= 0 ? fixed(r.rmse, 4) : "") + "," + (r.valid ? "1" : "0") + csv_extras(r) + "," +
+         fixed(r.seconds, 4);
 }
 
 std::string report_json_row(const BuildingReport& r) {
@@ -67,7 +129,7 @@ std::string report_json_row(const BuildingReport& r) {
          ", \"planes\": " + std::to_string(r.planes) + ", \"walls\": " + std::to_string(r.walls) +
          ", \"candidate_faces\": " + std::to_string(r.candidate_faces) + ", \"faces\": " + std::to_string(r.faces) +
          ", \"rmse\": " + (r.rmse >= 0 ? fixed(r.rmse, 4) : "null") + ", \"valid\": " + (r.valid ? "true" : "false") +
-         ", \"seconds\": " + fixed(r.seconds, 4) + "}";
+         json_extras(r) + ", \"seconds\": " + fixed(r.seconds, 4) + "}";
 }
 
 struct ReportWriter::Impl {
@@ -100,6 +162,60 @@ void ReportWriter::close() {
   std::fputs("\n  ]\n}\n", impl_->json.file());
   impl_->csv.commit();
   impl_->json.commit();
+}
+
+Attributes building_attributes(const BuildingReport& r, bool timings) {
+  const auto count = [](std::size_t n) { return AttributeValue{static_cast<std::int64_t>(n)}; };
+  const bool written = !r.lods.empty();
+  const auto val3dity = [&](const char* lod) {
+    // The levels written are valid by construction (an invalid model is never written).
+    return written && r.lods.find(lod) != std::string::npos ? AttributeValue{std::string("[]")} : AttributeValue{};
+  };
+  Attributes a = {
+      {"status", std::string(to_string(r.status))},
+      {"level", std::string(to_string(r.level))},
+      {"reason", text_or_null(r.reason)},
+      {"note", text_or_null(r.note)},
+      {"lods", text_or_null(r.lods)},
+      {"lods_reconstructed", text_or_null(r.lods_reconstructed)},
+      {"b3_h_maaiveld", rounded(r.status == BuildingStatus::skipped && r.points == 0 ? NAN : r.ground_z, 3)},
+      {"ground_method", text_or_null(r.ground_method)},
+      {"b3_h_dak_50p", rounded(r.h_roof_50p, 3)},
+      {"b3_h_dak_70p", rounded(r.h_roof_70p, 3)},
+      {"b3_h_dak_min", rounded(r.h_roof_min, 3)},
+      {"b3_h_dak_max", rounded(r.h_roof_max, 3)},
+      {"h_ridge", rounded(r.h_ridge, 3)},
+      {"b3_dak_type", text_or_null(r.roof_type)},
+      {"b3_volume_lod12", rounded(r.volume_lod12, 2)},
+      {"b3_volume_lod13", rounded(r.volume_lod13, 2)},
+      {"b3_volume_lod22", rounded(r.volume_lod22, 2)},
+      {"b3_rmse_lod12", rounded(r.rmse_lod12, 4)},
+      {"b3_rmse_lod13", rounded(r.rmse_lod13, 4)},
+      {"b3_rmse_lod22", rounded(r.rmse_lod22, 4)},
+      {"b3_val3dity_lod12", val3dity("1.2")},
+      {"b3_val3dity_lod13", val3dity("1.3")},
+      {"b3_val3dity_lod22", val3dity("2.2")},
+      {"validity_found", text_or_null(r.validity_found)},
+      {"repairs", text_or_null(r.repairs)},
+      {"b3_opp_grond", rounded(r.footprint_area, 2)},
+      {"point_density", rounded(r.point_density, 2)},
+      {"points", count(r.points)},
+      {"planes", count(r.planes)},
+      {"faces", count(r.faces)},
+  };
+  if (timings) a.emplace_back("seconds", rounded(r.seconds, 3));
+  return a;
+}
+
+Attributes output_attributes(const BuildingReport& r, const Attributes& footprint, bool timings) {
+  Attributes own = building_attributes(r, timings);
+  Attributes a;
+  for (const auto& [name, value] : footprint) {
+    const bool taken = std::any_of(own.begin(), own.end(), [&](const auto& o) { return o.first == name; });
+    a.emplace_back(taken ? "footprint_" + name : name, value);
+  }
+  a.insert(a.end(), own.begin(), own.end());
+  return a;
 }
 
 }  // namespace city3d::detail

@@ -1,5 +1,6 @@
-// The per-building report of a batch run, as CSV (one row per input footprint) and JSON. Each row is
-// made when its building finishes (and kept in the journal); the files are assembled from the rows.
+// The per-building report of a batch run, as CSV (one row per input footprint) and JSON, and the
+// attributes each building carries into CityJSON and the GeoPackage. Each row is made when its
+// building finishes (and kept in the journal); the files are assembled from the rows.
 #pragma once
 
 #include <cstdio>
@@ -33,5 +34,15 @@ class ReportWriter {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// A building's own attributes (README, "Attributes"): 3DBAG's names where 3DBAG has the quantity
+/// (b3_h_dak_70p, b3_dak_type, b3_volume_lod22, b3_rmse_lod22, ...), city3d's otherwise; numbers
+/// rounded to what they mean (heights to the millimetre, volumes to 0.01 m3, RMSE to 0.1 mm); NaN
+/// and unknown values are null. "seconds" only with `timings` (it differs from run to run).
+Attributes building_attributes(const BuildingReport& report, bool timings);
+
+/// The footprint's attributes (names and types as in the source; a name city3d uses itself gets the
+/// prefix "footprint_"), then building_attributes().
+Attributes output_attributes(const BuildingReport& report, const Attributes& footprint, bool timings);
 
 }  // namespace city3d::detail

@@ -1,0 +1,973 @@
+// Validity of solids under ISO 19107 as val3dity 2.6 checks it (the validator 3DBAG reports with): the
+// same error numbers, the same default tolerances and the same order (rings and polygons, then shells,
+// then the solid). Rings are tested in the 2D projection on their polygon's least-squares plane with
+// exact predicates; polygons are triangulated by a constrained Delaunay triangulation of that
+// projection (as val3dity does) for the normals test and the shell self-intersection test.
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/intersection.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Side_of_triangle_mesh.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <numeric>
+#include <set>
+#include <sstream>
+#include <unordered_map>
+#include <vector>
+
+#include "city3d/error.hpp"
+#include "city3d/evaluation.hpp"
+
+namespace city3d {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using P2 = Kernel::Point_2;
+using P3 = Kernel::Point_3;
+using Ring = std::vector<std::uint32_t>;
+using Triangle = std::array<std::uint32_t, 3>;
+
+constexpr double kPi = 3.14159265358979323846;
+
+struct Vec {
+  double x, y, z;
+};
+Vec sub(const Point3& a, const Point3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+Vec cross(const Vec& a, const Vec& b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+double dot(const Vec& a, const Vec& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+double norm(const Vec& a) { return std::sqrt(dot(a, a)); }
+
+std::string format(double v, int decimals) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(decimals);
+  s << v;
+  return s.str();
+}
+
+// Merges vertices closer than `tolerance` (val3dity's snap_tol) into the first of them, in index
+// order, through a hash grid of cells the size of the tolerance.
+std::vector<std::uint32_t> snap_vertices(const std::vector<Point3>& vertices, double tolerance) {
+  std::vector<std::uint32_t> to(vertices.size());
+  std::iota(to.begin(), to.end(), 0u);
+  if (!(tolerance > 0.0)) return to;
+  using Cell = std::array<long long, 3>;
+  std::map<Cell, std::vector<std::uint32_t>> grid;
+  const auto cell_of = [&](const Point3& p) {
+    return Cell{static_cast<long long>(std::floor(p.x / tolerance)), static_cast<long long>(std::floor(p.y / tolerance)),
+                static_cast<long long>(std::floor(p.z / tolerance))};
+  };
+  for (std::uint32_t i = 0; i < vertices.size(); ++i) {
+    const Cell c = cell_of(vertices[i]);
+    bool merged = false;
+    for (long long dx = -1; dx <= 1 && !merged; ++dx)
+      for (long long dy = -1; dy <= 1 && !merged; ++dy)
+        for (long long dz = -1; dz <= 1 && !merged; ++dz) {
+          const auto it = grid.find({c[0] + dx, c[1] + dy, c[2] + dz});
+          if (it == grid.end()) continue;
+          for (std::uint32_t j : it->second)
+            if (norm(sub(vertices[i], vertices[j])) < tolerance) {
+              to[i] = j;
+              merged = true;
+              break;
+            }
+        }
+    if (!merged) grid[c].push_back(i);
+  }
+  return to;
+}
+
+// The least-squares plane of a polygon's vertices: centroid, unit normal (oriented like the Newell
+// normal of the exterior ring) and two in-plane axes.
+struct Frame {
+  Point3 centroid;
+  Vec normal{0, 0, 1}, u{1, 0, 0}, v{0, 1, 0};
+  double max_distance = 0.0;
+  bool ok = false;
+};
+
+Frame fit_plane(const std::vector<Point3>& vertices, const SolidPolygon& polygon) {
+  Frame f;
+  std::vector<std::uint32_t> all;
+  for (const Ring& r : polygon) all.insert(all.end(), r.begin(), r.end());
+  if (all.size() < 3) return f;
+  Point3 c{0, 0, 0};
+  for (auto i : all) c = {c.x + vertices[i].x, c.y + vertices[i].y, c.z + vertices[i].z};
+  c = {c.x / all.size(), c.y / all.size(), c.z / all.size()};
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (auto i : all) {
+    const Eigen::Vector3d d(vertices[i].x - c.x, vertices[i].y - c.y, vertices[i].z - c.z);
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(cov);
+  const Eigen::Vector3d n = solver.eigenvectors().col(0);  // smallest eigenvalue
+  f.normal = {n.x(), n.y(), n.z()};
+  Vec newell{0, 0, 0};
+  const Ring& outer = polygon.front();
+  for (std::size_t k = 0; k < outer.size(); ++k) {
+    const Point3& a = vertices[outer[k]];
+    const Point3& b = vertices[outer[(k + 1) % outer.size()]];
+    newell.x += (a.y - b.y) * (a.z + b.z);
+    newell.y += (a.z - b.z) * (a.x + b.x);
+    newell.z += (a.x - b.x) * (a.y + b.y);
+  }
+  if (dot(newell, f.normal) < 0) f.normal = {-f.normal.x, -f.normal.y, -f.normal.z};
+  // u, v: a right-handed basis with the normal, so the exterior ring comes out counter-clockwise.
+  const Vec helper = std::fabs(f.normal.z) < 0.9 ? Vec{0, 0, 1} : Vec{1, 0, 0};
+  f.u = cross(helper, f.normal);
+  const double lu = norm(f.u);
+  f.u = {f.u.x / lu, f.u.y / lu, f.u.z / lu};
+  f.v = cross(f.normal, f.u);
+  f.centroid = c;
+  for (auto i : all) f.max_distance = std::max(f.max_distance, std::fabs(dot(sub(vertices[i], c), f.normal)));
+  f.ok = std::isfinite(f.max_distance);
+  return f;
+}
+
+P2 project(const Frame& f, const Point3& p) {
+  const Vec d = sub(p, f.centroid);
+  return {dot(d, f.u), dot(d, f.v)};
+}
+
+bool on_segment(const P2& a, const P2& b, const P2& c) {  // c on the closed segment ab, given collinear
+  return std::min(a.x(), b.x()) <= c.x() && c.x() <= std::max(a.x(), b.x()) && std::min(a.y(), b.y()) <= c.y() &&
+         c.y() <= std::max(a.y(), b.y());
+}
+
+bool segments_touch(const P2& p, const P2& q, const P2& r, const P2& s) {
+  const auto o1 = CGAL::orientation(p, q, r), o2 = CGAL::orientation(p, q, s);
+  const auto o3 = CGAL::orientation(r, s, p), o4 = CGAL::orientation(r, s, q);
+  if (o1 != o2 && o3 != o4 && o1 != CGAL::COLLINEAR && o2 != CGAL::COLLINEAR && o3 != CGAL::COLLINEAR &&
+      o4 != CGAL::COLLINEAR)
+    return true;
+  return (o1 == CGAL::COLLINEAR && on_segment(p, q, r)) || (o2 == CGAL::COLLINEAR && on_segment(p, q, s)) ||
+         (o3 == CGAL::COLLINEAR && on_segment(r, s, p)) || (o4 == CGAL::COLLINEAR && on_segment(r, s, q));
+}
+
+// A ring is simple in 2D: no repeated point, no spike (two consecutive edges folding back over each
+// other), no two non-consecutive edges touching.
+bool ring_is_simple(const std::vector<P2>& r) {
+  const std::size_t n = r.size();
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j)
+      if (r[i] == r[j]) return false;
+  for (std::size_t i = 0; i < n; ++i) {
+    const P2 &a = r[(i + n - 1) % n], &b = r[i], &c = r[(i + 1) % n];
+    if (CGAL::orientation(a, b, c) == CGAL::COLLINEAR && (a - b) * (c - b) > 0) return false;  // a spike
+  }
+  if (n == 3 && CGAL::orientation(r[0], r[1], r[2]) == CGAL::COLLINEAR) return false;  // collapsed to a line
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 2; j < n; ++j) {
+      if (i == 0 && j == n - 1) continue;  // consecutive through the closing edge
+      if (segments_touch(r[i], r[(i + 1) % n], r[j], r[(j + 1) % n])) return false;
+    }
+  return true;
+}
+
+double signed_area(const std::vector<P2>& r) {
+  double a = 0;
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    const P2 &p = r[i], &q = r[(i + 1) % r.size()];
+    a += p.x() * q.y() - q.x() * p.y();
+  }
+  return a / 2;
+}
+
+// Point strictly inside / on the boundary / outside a simple ring: +1 / 0 / -1.
+int locate(const std::vector<P2>& ring, const P2& p) {
+  bool inside = false;
+  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+    const P2 &a = ring[i], &b = ring[j];
+    if (CGAL::orientation(a, b, p) == CGAL::COLLINEAR && on_segment(a, b, p)) return 0;
+    if ((a.y() > p.y()) != (b.y() > p.y())) {
+      const double x = a.x() + (p.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y());
+      if (p.x() < x) inside = !inside;
+    }
+  }
+  return inside ? 1 : -1;
+}
+
+// How two simple rings meet: number of distinct touching points, or -1 when they cross or overlap
+// along more than a point.
+int ring_contacts(const std::vector<P2>& r, const std::vector<P2>& s) {
+  std::set<std::pair<double, double>> touches;
+  for (std::size_t i = 0; i < r.size(); ++i)
+    for (std::size_t j = 0; j < s.size(); ++j) {
+      const P2 &a = r[i], &b = r[(i + 1) % r.size()], &c = s[j], &d = s[(j + 1) % s.size()];
+      if (!segments_touch(a, b, c, d)) continue;
+      const auto o1 = CGAL::orientation(a, b, c), o2 = CGAL::orientation(a, b, d);
+      if (o1 == CGAL::COLLINEAR && o2 == CGAL::COLLINEAR) {
+        // Collinear: a shared point is fine only when the overlap is a single point.
+        int shared = 0;
+        P2 at = a;
+        for (const P2& p : {a, b})
+          if (on_segment(c, d, p)) ++shared, at = p;
+        for (const P2& p : {c, d})
+          if (on_segment(a, b, p) && p != a && p != b) ++shared, at = p;
+        if (shared > 1) return -1;
+        touches.insert({at.x(), at.y()});
+        continue;
+      }
+      // A touching point must be a vertex of one of the two edges; otherwise they cross.
+      const P2* at = nullptr;
+      for (const P2* p : {&a, &b})
+        if (CGAL::orientation(c, d, *p) == CGAL::COLLINEAR && on_segment(c, d, *p)) at = p;
+      for (const P2* p : {&c, &d})
+        if (CGAL::orientation(a, b, *p) == CGAL::COLLINEAR && on_segment(a, b, *p)) at = p;
+      if (!at) return -1;
+      touches.insert({at->x(), at->y()});
+    }
+  // Touching points where the rings cross each other (one ring passes from inside to outside the
+  // other) are crossings: test the midpoints of r's edges against s on both sides of each contact.
+  bool in = false, out = false;
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    const P2 m = CGAL::midpoint(r[i], r[(i + 1) % r.size()]);
+    const int l = locate(s, m);
+    in = in || l > 0;
+    out = out || l < 0;
+  }
+  if (in && out) return -1;
+  return static_cast<int>(touches.size());
+}
+
+using CdtVb = CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, Kernel>;
+using CdtFb = CGAL::Constrained_triangulation_face_base_2<Kernel>;
+using CdtTds = CGAL::Triangulation_data_structure_2<CdtVb, CdtFb>;
+using Cdt = CGAL::Constrained_Delaunay_triangulation_2<Kernel, CdtTds, CGAL::Exact_predicates_tag>;
+
+// Triangles of a valid polygon (simple rings, holes inside): a constrained Delaunay triangulation of
+// its projection, faces inside an odd number of rings kept, each oriented like the exterior ring.
+std::vector<Triangle> triangulate_polygon(const std::vector<Point3>& vertices, const SolidPolygon& polygon,
+                                          const Frame& frame) {
+  Cdt cdt;
+  for (const Ring& ring : polygon) {
+    std::vector<Cdt::Vertex_handle> handles;
+    for (std::uint32_t i : ring) {
+      auto h = cdt.insert(project(frame, vertices[i]));
+      h->info() = i;
+      handles.push_back(h);
+    }
+    for (std::size_t k = 0; k < handles.size(); ++k)
+      if (handles[k] != handles[(k + 1) % handles.size()]) cdt.insert_constraint(handles[k], handles[(k + 1) % handles.size()]);
+  }
+  // Nesting depth by flooding from the infinite face across edges; constrained edges add one.
+  std::map<Cdt::Face_handle, int> depth;
+  std::vector<Cdt::Face_handle> frontier{cdt.infinite_face()};
+  depth[cdt.infinite_face()] = 0;
+  for (std::size_t k = 0; k < frontier.size(); ++k) {
+    const Cdt::Face_handle f = frontier[k];
+    for (int e = 0; e < 3; ++e) {
+      const Cdt::Face_handle g = f->neighbor(e);
+      if (depth.count(g)) continue;
+      depth[g] = depth[f] + (cdt.is_constrained({f, e}) ? 1 : 0);
+      frontier.push_back(g);
+    }
+  }
+  // Depth by plain flooding over-counts where constrained regions are reached the long way round;
+  // relax until stable (a few rounds for a polygon with holes).
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (auto& [f, d] : depth)
+      for (int e = 0; e < 3; ++e) {
+        const auto it = depth.find(f->neighbor(e));
+        if (it == depth.end()) continue;
+        const int via = it->second + (cdt.is_constrained({f, e}) ? 1 : 0);
+        if (via < d) d = via, changed = true;
+      }
+  }
+  std::vector<Triangle> out;
+  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+    if (depth[f] % 2 == 0) continue;
+    out.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});  // CDT faces are CCW
+  }
+  return out;
+}
+
+Vec triangle_normal(const std::vector<Point3>& v, const Triangle& t) {
+  return cross(sub(v[t[1]], v[t[0]]), sub(v[t[2]], v[t[0]]));
+}
+
+using Mesh = CGAL::Surface_mesh<P3>;
+
+// A triangle soup as a CGAL mesh, or false when it is not a valid polygon mesh.
+bool to_surface_mesh(const std::vector<Point3>& vertices, const std::vector<Triangle>& triangles, Mesh& mesh) {
+  namespace PMP = CGAL::Polygon_mesh_processing;
+  std::vector<P3> points;
+  std::map<std::uint32_t, std::size_t> local;
+  std::vector<std::vector<std::size_t>> faces;
+  for (const Triangle& t : triangles) {
+    std::vector<std::size_t> f;
+    for (std::uint32_t i : t) {
+      const auto [it, fresh] = local.emplace(i, points.size());
+      if (fresh) points.push_back({vertices[i].x, vertices[i].y, vertices[i].z});
+      f.push_back(it->second);
+    }
+    faces.push_back(f);
+  }
+  if (!PMP::is_polygon_soup_a_polygon_mesh(faces)) return false;
+  PMP::polygon_soup_to_polygon_mesh(points, faces, mesh);
+  return true;
+}
+
+double signed_volume(const std::vector<Point3>& v, const std::vector<Triangle>& triangles) {
+  if (triangles.empty()) return 0.0;
+  const Point3& o = v[triangles.front()[0]];
+  double six = 0.0;
+  for (const Triangle& t : triangles) six += dot(sub(v[t[0]], o), cross(sub(v[t[1]], o), sub(v[t[2]], o)));
+  return six / 6.0;
+}
+
+struct ShellResult {
+  bool valid = false;
+  std::vector<Triangle> triangles;
+};
+
+// Shell rules 301-307 for one shell whose polygons are valid.
+ShellResult check_shell(const std::vector<Point3>& v, const std::vector<SolidPolygon>& shell,
+                        const std::vector<std::vector<Triangle>>& polygon_triangles, int shell_index, bool inner,
+                        std::vector<ValidityError>& errors) {
+  ShellResult result;
+  const std::size_t before = errors.size();
+  const auto report = [&](int code, int face, const std::string& info) { errors.push_back({code, shell_index, face, info}); };
+  if (shell.size() < 4) report(301, -1, std::to_string(shell.size()) + " polygons");
+
+  // Directed edges of every ring, with their polygon.
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::size_t>> directed;
+  for (std::size_t f = 0; f < shell.size(); ++f)
+    for (const Ring& r : shell[f])
+      for (std::size_t k = 0; k < r.size(); ++k) directed[{r[k], r[(k + 1) % r.size()]}].push_back(f);
+  std::size_t boundary = 0, overused = 0, same_direction = 0;
+  int first_boundary_face = -1, first_overused_face = -1, first_flipped_face = -1;
+  for (const auto& [e, faces] : directed) {
+    const auto opposite = directed.find({e.second, e.first});
+    const std::size_t here = faces.size(), there = opposite == directed.end() ? 0 : opposite->second.size();
+    if (e.first > e.second && there > 0) continue;  // each undirected edge once
+    if (here + there == 1) {
+      ++boundary;
+      if (first_boundary_face < 0) first_boundary_face = static_cast<int>(faces.front());
+    } else if (here + there > 2) {
+      ++overused;
+      if (first_overused_face < 0) first_overused_face = static_cast<int>(faces.front());
+    } else if (here == 2 || there == 2) {
+      ++same_direction;
+      if (first_flipped_face < 0) first_flipped_face = static_cast<int>(here == 2 ? faces[1] : opposite->second[1]);
+    }
+  }
+  if (boundary) report(302, first_boundary_face, std::to_string(boundary) + " edges used by one polygon only");
+  if (overused) report(304, first_overused_face, std::to_string(overused) + " edges used by more than two polygons");
+
+  // Connected components over shared edges (either direction).
+  std::vector<std::size_t> parent(shell.size());
+  std::iota(parent.begin(), parent.end(), std::size_t{0});
+  const auto find = [&parent](std::size_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> first_of;
+  for (const auto& [e, faces] : directed) {
+    const auto [it, fresh] = first_of.emplace(std::minmax(e.first, e.second), faces.front());
+    for (std::size_t f : faces) parent[find(f)] = find(it->second);
+  }
+  std::size_t components = 0;
+  for (std::size_t f = 0; f < shell.size(); ++f) components += find(f) == f;
+  if (components > 1) report(305, -1, std::to_string(components) + " parts joined by no edge");
+
+  // Vertex manifoldness: the polygons around a vertex must form one umbrella (connected through
+  // edges at that vertex).
+  if (!boundary && !overused) {
+    std::map<std::uint32_t, std::vector<std::pair<std::uint32_t, std::uint32_t>>> corners;
+    for (const SolidPolygon& p : shell)
+      for (const Ring& r : p)
+        for (std::size_t k = 0; k < r.size(); ++k)
+          corners[r[k]].push_back({r[(k + r.size() - 1) % r.size()], r[(k + 1) % r.size()]});
+    std::size_t pinched = 0;
+    for (const auto& [vertex, around] : corners) {
+      std::vector<std::size_t> up(around.size());
+      std::iota(up.begin(), up.end(), std::size_t{0});
+      const auto root = [&up](std::size_t i) {
+        while (up[i] != i) i = up[i] = up[up[i]];
+        return i;
+      };
+      std::map<std::uint32_t, std::size_t> with;
+      for (std::size_t c = 0; c < around.size(); ++c)
+        for (std::uint32_t w : {around[c].first, around[c].second}) {
+          const auto [it, fresh] = with.emplace(w, c);
+          if (!fresh) up[root(c)] = root(it->second);
+        }
+      std::size_t fans = 0;
+      for (std::size_t c = 0; c < around.size(); ++c) fans += root(c) == c;
+      pinched += fans > 1;
+    }
+    if (pinched) report(303, -1, std::to_string(pinched) + " vertices whose polygons form more than one umbrella");
+  }
+  if (same_direction) report(307, first_flipped_face, std::to_string(same_direction) + " edges used twice in the same direction");
+  if (errors.size() != before) return result;
+
+  std::vector<Triangle> triangles;
+  for (const auto& t : polygon_triangles) triangles.insert(triangles.end(), t.begin(), t.end());
+  Mesh mesh;
+  if (!to_surface_mesh(v, triangles, mesh)) {
+    report(306, -1, "the triangulated polygons do not form a surface");
+    return result;
+  }
+  if (CGAL::Polygon_mesh_processing::does_self_intersect(mesh)) {
+    report(306, -1, "polygons intersect");
+    return result;
+  }
+  const double volume = signed_volume(v, triangles);
+  if (inner ? volume > 0 : volume < 0)
+    errors.push_back({405, shell_index, -1,
+                      std::string(inner ? "interior shell oriented outward" : "exterior shell oriented inward") +
+                          " (volume " + format(volume, 3) + " m3)"});
+  if (errors.size() != before) return result;
+  result.valid = true;
+  result.triangles = std::move(triangles);
+  return result;
+}
+
+}  // namespace
+
+void ValidityParams::validate() const {
+  std::string problems;
+  const auto add = [&](const std::string& p) { problems += (problems.empty() ? "" : "; ") + p; };
+  if (!(snap_tolerance >= 0.0) || !std::isfinite(snap_tolerance)) add("snap_tolerance must be >= 0 (metres)");
+  if (!(planarity_distance > 0.0) || !std::isfinite(planarity_distance)) add("planarity_distance must be > 0 (metres)");
+  if (!(planarity_normals > 0.0 && planarity_normals <= 180.0)) add("planarity_normals must be in (0, 180] degrees");
+  if (!problems.empty()) throw ConfigError("validity: " + problems);
+}
+
+const char* validity_error_name(int code) {
+  switch (code) {
+    case 101: return "TOO_FEW_POINTS";
+    case 102: return "CONSECUTIVE_POINTS_SAME";
+    case 103: return "RING_NOT_CLOSED";
+    case 104: return "RING_SELF_INTERSECTION";
+    case 201: return "INTERSECTION_RINGS";
+    case 202: return "DUPLICATED_RINGS";
+    case 203: return "NON_PLANAR_POLYGON_DISTANCE_PLANE";
+    case 204: return "NON_PLANAR_POLYGON_NORMALS_DEVIATION";
+    case 205: return "POLYGON_INTERIOR_DISCONNECTED";
+    case 206: return "INNER_RING_OUTSIDE";
+    case 207: return "INNER_RINGS_NESTED";
+    case 208: return "ORIENTATION_RINGS_SAME";
+    case 301: return "TOO_FEW_POLYGONS";
+    case 302: return "SHELL_NOT_CLOSED";
+    case 303: return "NON_MANIFOLD_VERTEX";
+    case 304: return "NON_MANIFOLD_EDGE";
+    case 305: return "MULTIPLE_CONNECTED_COMPONENTS";
+    case 306: return "SHELL_SELF_INTERSECTION";
+    case 307: return "POLYGON_WRONG_ORIENTATION";
+    case 309: return "VERTICES_NOT_USED";
+    case 401: return "INTERSECTION_SHELLS";
+    case 402: return "DUPLICATED_SHELLS";
+    case 403: return "INNER_SHELL_OUTSIDE";
+    case 405: return "WRONG_ORIENTATION_SHELL";
+  }
+  return "UNKNOWN_ERROR";
+}
+
+std::string ValidityError::text() const {
+  std::string s = std::to_string(code) + " " + validity_error_name(code);
+  std::string where;
+  if (shell >= 0) where = "shell " + std::to_string(shell);
+  if (face >= 0) where += (where.empty() ? "" : ", ") + std::string("face ") + std::to_string(face);
+  if (!where.empty() || !info.empty())
+    s += " (" + where + (where.empty() || info.empty() ? "" : ": ") + info + ")";
+  return s;
+}
+
+std::string validity_codes(const std::vector<ValidityError>& errors) {
+  std::set<int> codes;
+  for (const ValidityError& e : errors) codes.insert(e.code);
+  std::string s;
+  for (int c : codes) s += (s.empty() ? "" : ",") + std::to_string(c);
+  return s;
+}
+
+std::vector<ValidityError> validate_solid(const SolidGeometry& solid, const ValidityParams& params) {
+  std::vector<ValidityError> errors;
+  const std::vector<Point3>& v = solid.vertices;
+  for (const auto& shell : solid.shells)
+    for (const auto& polygon : shell)
+      for (const auto& ring : polygon)
+        for (std::uint32_t i : ring)
+          if (i >= v.size()) {
+            errors.push_back({101, -1, -1, "vertex index " + std::to_string(i) + " of " + std::to_string(v.size())});
+            return errors;
+          }
+
+  // 309: every listed vertex must be used.
+  std::vector<bool> used(v.size(), false);
+  for (const auto& shell : solid.shells)
+    for (const auto& polygon : shell)
+      for (const auto& ring : polygon)
+        for (std::uint32_t i : ring) used[i] = true;
+  const std::size_t unused = static_cast<std::size_t>(std::count(used.begin(), used.end(), false));
+
+  // Snap, then rings and polygons.
+  const std::vector<std::uint32_t> to = snap_vertices(v, params.snap_tolerance);
+  std::vector<std::vector<SolidPolygon>> shells = solid.shells;
+  for (auto& shell : shells)
+    for (auto& polygon : shell)
+      for (auto& ring : polygon)
+        for (std::uint32_t& i : ring) i = to[i];
+
+  const double max_angle = params.planarity_normals * kPi / 180.0;
+  std::vector<std::vector<std::vector<Triangle>>> triangles(shells.size());
+  bool polygons_valid = true;
+  for (std::size_t s = 0; s < shells.size(); ++s) {
+    triangles[s].resize(shells[s].size());
+    for (std::size_t f = 0; f < shells[s].size(); ++f) {
+      const SolidPolygon& polygon = shells[s][f];
+      const auto report = [&](int code, const std::string& info) {
+        errors.push_back({code, static_cast<int>(s), static_cast<int>(f), info});
+        polygons_valid = false;
+      };
+      bool rings_ok = !polygon.empty();
+      if (polygon.empty()) report(101, "polygon without rings");
+      for (std::size_t r = 0; r < polygon.size(); ++r) {
+        const Ring& ring = polygon[r];
+        const std::string which = r == 0 ? "exterior ring" : "interior ring " + std::to_string(r - 1);
+        if (ring.size() < 3) {
+          report(101, which + ": " + std::to_string(ring.size()) + " points");
+          rings_ok = false;
+          continue;
+        }
+        for (std::size_t k = 0; k < ring.size(); ++k)
+          if (ring[k] == ring[(k + 1) % ring.size()]) {
+            report(102, which + ": points " + std::to_string(k) + " and " + std::to_string((k + 1) % ring.size()));
+            rings_ok = false;
+            break;
+          }
+      }
+      if (!rings_ok) continue;
+      const Frame frame = fit_plane(v, polygon);
+      std::vector<std::vector<P2>> rings2;
+      for (const Ring& ring : polygon) {
+        rings2.emplace_back();
+        for (std::uint32_t i : ring) rings2.back().push_back(project(frame, v[i]));
+      }
+      bool simple = true;
+      for (std::size_t r = 0; r < rings2.size(); ++r)
+        if (!ring_is_simple(rings2[r])) {
+          report(104, r == 0 ? "exterior ring" : "interior ring " + std::to_string(r - 1));
+          simple = false;
+        }
+      if (!simple) continue;
+      if (!frame.ok || frame.max_distance > params.planarity_distance) {
+        report(203, format(frame.max_distance, 4) + " m from the fitted plane");
+        continue;
+      }
+      // Interior rings: 201 (crossing), 202 (duplicated), 205 (touching into a cycle), 206 (outside),
+      // 207 (nested), 208 (same orientation as the exterior).
+      bool rings_valid = true;
+      if (rings2.size() > 1) {
+        const bool outer_ccw = signed_area(rings2[0]) > 0;
+        std::vector<std::size_t> up(rings2.size());
+        std::iota(up.begin(), up.end(), std::size_t{0});
+        const auto root = [&up](std::size_t i) {
+          while (up[i] != i) i = up[i] = up[up[i]];
+          return i;
+        };
+        bool cycle = false;
+        for (std::size_t a = 0; a < rings2.size(); ++a)
+          for (std::size_t b = a + 1; b < rings2.size(); ++b) {
+            std::vector<std::uint32_t> sa = polygon[a], sb = polygon[b];
+            std::sort(sa.begin(), sa.end());
+            std::sort(sb.begin(), sb.end());
+            if (sa == sb) {
+              report(202, "rings " + std::to_string(a) + " and " + std::to_string(b));
+              rings_valid = false;
+              continue;
+            }
+            const int contacts = ring_contacts(rings2[a], rings2[b]);
+            if (contacts < 0) {
+              report(201, "rings " + std::to_string(a) + " and " + std::to_string(b));
+              rings_valid = false;
+            } else if (contacts > 0) {
+              if (contacts > 1 || root(a) == root(b)) cycle = true;
+              up[root(a)] = root(b);
+            }
+          }
+        if (rings_valid && cycle) {
+          report(205, "rings touch so that the interior is split");
+          rings_valid = false;
+        }
+        if (rings_valid) {
+          // A ring vertex not on the other ring's boundary tells inside from outside.
+          const auto probe = [&](const std::vector<P2>& ring, const std::vector<P2>& other) {
+            for (const P2& p : ring) {
+              const int l = locate(other, p);
+              if (l != 0) return l;
+            }
+            return 0;
+          };
+          for (std::size_t h = 1; h < rings2.size(); ++h) {
+            if (probe(rings2[h], rings2[0]) < 0) {
+              report(206, "interior ring " + std::to_string(h - 1));
+              rings_valid = false;
+            }
+            for (std::size_t k = 1; k < rings2.size(); ++k)
+              if (k != h && probe(rings2[h], rings2[k]) > 0) {
+                report(207, "interior ring " + std::to_string(h - 1) + " inside interior ring " + std::to_string(k - 1));
+                rings_valid = false;
+              }
+            if ((signed_area(rings2[h]) > 0) == outer_ccw) {
+              report(208, "interior ring " + std::to_string(h - 1));
+              rings_valid = false;
+            }
+          }
+        }
+      }
+      if (!rings_valid) continue;
+      // 204: triangles of the polygon whose normals deviate by more than the tolerance. Every pair is
+      // compared (val3dity compares against one of them), so a polygon passing here passes there.
+      triangles[s][f] = triangulate_polygon(v, polygon, frame);
+      std::vector<Vec> normals;
+      for (const Triangle& t : triangles[s][f]) {
+        const Vec n = triangle_normal(v, t);
+        const double l = norm(n);
+        if (l > 0) normals.push_back({n.x / l, n.y / l, n.z / l});
+      }
+      double worst = 0.0;
+      for (std::size_t a = 0; a < normals.size(); ++a)
+        for (std::size_t b = a + 1; b < normals.size(); ++b)
+          worst = std::max(worst, std::acos(std::clamp(dot(normals[a], normals[b]), -1.0, 1.0)));
+      if (worst > max_angle) report(204, format(worst * 180.0 / kPi, 1) + " degrees between two triangles");
+    }
+  }
+  if (unused) errors.push_back({309, -1, -1, std::to_string(unused) + " vertices used by no polygon"});
+  if (!polygons_valid) return errors;
+
+  // Shells.
+  std::vector<ShellResult> shell_results;
+  bool shells_valid = true;
+  for (std::size_t s = 0; s < shells.size(); ++s) {
+    shell_results.push_back(check_shell(v, shells[s], triangles[s], static_cast<int>(s), s > 0, errors));
+    shells_valid = shells_valid && shell_results.back().valid;
+  }
+  if (!shells_valid || shells.size() < 2) return errors;
+
+  // The solid: interior shells against the exterior and each other.
+  std::vector<Mesh> meshes(shells.size());
+  for (std::size_t s = 0; s < shells.size(); ++s) to_surface_mesh(v, shell_results[s].triangles, meshes[s]);
+  for (std::size_t a = 0; a < shells.size(); ++a)
+    for (std::size_t b = a + 1; b < shells.size(); ++b) {
+      std::set<std::uint32_t> va, vb;
+      for (const auto& p : shells[a])
+        for (const auto& r : p) va.insert(r.begin(), r.end());
+      for (const auto& p : shells[b])
+        for (const auto& r : p) vb.insert(r.begin(), r.end());
+      if (va == vb) {
+        errors.push_back({402, -1, -1, "shells " + std::to_string(a) + " and " + std::to_string(b)});
+        continue;
+      }
+      if (CGAL::Polygon_mesh_processing::do_intersect(meshes[a], meshes[b])) {
+        errors.push_back({401, -1, -1, "shells " + std::to_string(a) + " and " + std::to_string(b)});
+        continue;
+      }
+      // Disjoint surfaces: one inside the other, or apart.
+      const P3 pb = meshes[b].point(*meshes[b].vertices().begin());
+      const P3 pa = meshes[a].point(*meshes[a].vertices().begin());
+      const bool b_in_a = CGAL::Side_of_triangle_mesh<Mesh, Kernel>(meshes[a])(pb) == CGAL::ON_BOUNDED_SIDE;
+      const bool a_in_b = CGAL::Side_of_triangle_mesh<Mesh, Kernel>(meshes[b])(pa) == CGAL::ON_BOUNDED_SIDE;
+      if (a == 0 && !b_in_a) errors.push_back({403, static_cast<int>(b), -1, "interior shell outside the exterior shell"});
+      if (a > 0 && (b_in_a || a_in_b))
+        errors.push_back({401, -1, -1, "interior shells " + std::to_string(a) + " and " + std::to_string(b) + " nested"});
+    }
+  return errors;
+}
+
+std::vector<PolygonMesh> mesh_parts(const PolygonMesh& mesh) {
+  std::vector<std::size_t> parent(mesh.faces.size());
+  std::iota(parent.begin(), parent.end(), std::size_t{0});
+  const auto find = [&parent](std::size_t f) {
+    while (parent[f] != f) f = parent[f] = parent[parent[f]];
+    return f;
+  };
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> first_face_of_edge;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const auto& face = mesh.faces[f];
+    for (std::size_t k = 0; k < face.size(); ++k) {
+      const auto [it, fresh] = first_face_of_edge.emplace(std::minmax(face[k], face[(k + 1) % face.size()]), f);
+      if (!fresh) parent[find(f)] = find(it->second);
+    }
+  }
+  std::vector<PolygonMesh> parts;
+  std::map<std::size_t, std::size_t> part_of_root;
+  std::vector<std::map<std::uint32_t, std::uint32_t>> local;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const auto [it, fresh] = part_of_root.emplace(find(f), parts.size());
+    if (fresh) {
+      parts.emplace_back();
+      local.emplace_back();
+    }
+    PolygonMesh& part = parts[it->second];
+    std::vector<std::uint32_t> face;
+    for (std::uint32_t i : mesh.faces[f]) {
+      if (i >= mesh.vertices.size()) {
+        face.push_back(i);  // left for the validator to report
+        continue;
+      }
+      const auto [vit, vfresh] = local[it->second].emplace(i, static_cast<std::uint32_t>(part.vertices.size()));
+      if (vfresh) part.vertices.push_back(mesh.vertices[i]);
+      face.push_back(vit->second);
+    }
+    part.faces.push_back(std::move(face));
+  }
+  return parts;
+}
+
+std::vector<ValidityError> validate_model(const PolygonMesh& mesh, const ValidityParams& params) {
+  std::vector<ValidityError> errors;
+  const std::vector<PolygonMesh> parts = mesh_parts(mesh);
+  if (parts.empty()) errors.push_back({301, 0, -1, "no polygons"});
+  for (std::size_t p = 0; p < parts.size(); ++p) {
+    SolidGeometry solid;
+    solid.vertices = parts[p].vertices;
+    solid.shells.emplace_back();
+    for (const auto& face : parts[p].faces) solid.shells[0].push_back({face});
+    for (ValidityError e : validate_solid(solid, params)) {
+      e.shell = static_cast<int>(p);
+      errors.push_back(std::move(e));
+    }
+  }
+  return errors;
+}
+
+}  // namespace city3d
+
+namespace city3d {
+namespace {
+
+// Drops repeated consecutive vertices and faces of fewer than three, then unused vertices.
+void clean_model(BuildingModel& model) {
+  std::vector<std::vector<std::uint32_t>> faces;
+  std::vector<SurfaceType> surfaces;
+  const bool typed = model.surfaces.size() == model.mesh.faces.size();
+  for (std::size_t f = 0; f < model.mesh.faces.size(); ++f) {
+    std::vector<std::uint32_t> face;
+    for (std::uint32_t i : model.mesh.faces[f])
+      if (face.empty() || face.back() != i) face.push_back(i);
+    while (face.size() > 1 && face.front() == face.back()) face.pop_back();
+    if (face.size() < 3) continue;
+    faces.push_back(std::move(face));
+    if (typed) surfaces.push_back(model.surfaces[f]);
+  }
+  std::vector<std::uint32_t> index(model.mesh.vertices.size(), UINT32_MAX);
+  std::vector<Point3> vertices;
+  for (auto& face : faces)
+    for (std::uint32_t& i : face) {
+      if (index[i] == UINT32_MAX) {
+        index[i] = static_cast<std::uint32_t>(vertices.size());
+        vertices.push_back(model.mesh.vertices[i]);
+      }
+      i = index[i];
+    }
+  model.mesh.vertices = std::move(vertices);
+  model.mesh.faces = std::move(faces);
+  if (typed) model.surfaces = std::move(surfaces);
+}
+
+// Cuts zero-width spikes off every face: a vertex whose two edges fold back onto each other (the
+// same neighbour on both sides, or edges pointing the same way with the shorter one's end within
+// `tolerance` of the longer one's line). Returns how many.
+std::size_t remove_spikes(BuildingModel& model, double tolerance) {
+  std::size_t removed = 0;
+  auto& faces = model.mesh.faces;
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    auto& face = faces[f];
+    for (bool changed = true; changed && face.size() >= 3;) {
+      changed = false;
+      for (std::size_t k = 0; k < face.size() && face.size() >= 3; ++k) {
+        const std::size_t n = face.size();
+        const std::uint32_t ia = face[(k + n - 1) % n], ib = face[k], ic = face[(k + 1) % n];
+        const Point3& a = model.mesh.vertices[ia];
+        const Point3& b = model.mesh.vertices[ib];
+        const Point3& c = model.mesh.vertices[ic];
+        const Vec ba = sub(a, b), bc = sub(c, b);
+        const double lab = norm(ba), lbc = norm(bc);
+        const bool same = ia == ic;
+        // |ba x bc| / longer edge = distance of the shorter edge's end from the longer edge's line.
+        const bool folded = lab > 0 && lbc > 0 && dot(ba, bc) > 0 && norm(cross(ba, bc)) <= tolerance * std::max(lab, lbc);
+        if (!same && !folded) continue;
+        face.erase(face.begin() + static_cast<std::ptrdiff_t>(k));
+        if (same) {
+          face.erase(face.begin() + static_cast<std::ptrdiff_t>(k % face.size()));  // a, b, a -> a
+        } else {
+          // The face across the spike runs c, b, a with b on its edge: it loses b too, so both
+          // faces keep sharing the edge a-c.
+          for (std::size_t g = 0; g < faces.size(); ++g) {
+            if (g == f) continue;
+            auto& other = faces[g];
+            const std::size_t m = other.size();
+            for (std::size_t j = 0; j < m; ++j)
+              if (other[j] == ic && other[(j + 1) % m] == ib && other[(j + 2) % m] == ia) {
+                other.erase(other.begin() + static_cast<std::ptrdiff_t>((j + 1) % m));
+                break;
+              }
+          }
+        }
+        ++removed;
+        changed = true;
+        break;
+      }
+    }
+  }
+  return removed;
+}
+
+// Polygon-level codes (1xx, 2xx) of one face on its own.
+std::vector<int> face_codes(const BuildingModel& model, std::size_t f, const ValidityParams& params) {
+  SolidGeometry solid;
+  solid.vertices = model.mesh.vertices;
+  solid.shells = {{{model.mesh.faces[f]}}};
+  std::vector<int> codes;
+  for (const ValidityError& e : validate_solid(solid, params))
+    if (e.code < 300) codes.push_back(e.code);
+  return codes;
+}
+
+}  // namespace
+
+void round_to_grid(BuildingModel& model, double grid) {
+  // Vertices that round to the same grid point become one, within each edge-connected part only:
+  // detached parts (the blocks of a multipolygon touching at a corner) are separate Solids in
+  // CityJSON and must stay separate here.
+  std::vector<std::size_t> parent(model.mesh.faces.size());
+  std::iota(parent.begin(), parent.end(), std::size_t{0});
+  const auto find = [&parent](std::size_t f) {
+    while (parent[f] != f) f = parent[f] = parent[parent[f]];
+    return f;
+  };
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> first_face_of_edge;
+  for (std::size_t f = 0; f < model.mesh.faces.size(); ++f) {
+    const auto& face = model.mesh.faces[f];
+    for (std::size_t k = 0; k < face.size(); ++k) {
+      const auto [it, fresh] = first_face_of_edge.emplace(std::minmax(face[k], face[(k + 1) % face.size()]), f);
+      if (!fresh) parent[find(f)] = find(it->second);
+    }
+  }
+  std::map<std::pair<std::size_t, std::array<long long, 3>>, std::uint32_t> index_of;
+  std::vector<Point3> vertices;
+  for (std::size_t f = 0; f < model.mesh.faces.size(); ++f) {
+    const std::size_t part = find(f);
+    for (std::uint32_t& i : model.mesh.faces[f]) {
+      if (i >= model.mesh.vertices.size()) continue;
+      const Point3& p = model.mesh.vertices[i];
+      std::array<long long, 3> q;
+      Point3 rounded = p;
+      if (grid > 0) {
+        q = {std::llround((p.x + model.origin.x) / grid), std::llround((p.y + model.origin.y) / grid),
+             std::llround((p.z + model.origin.z) / grid)};
+        rounded = {q[0] * grid - model.origin.x, q[1] * grid - model.origin.y, q[2] * grid - model.origin.z};
+      } else {
+        q = {static_cast<long long>(i), 0, 0};  // no rounding: keep vertices apart
+      }
+      const auto [it, fresh] = index_of.emplace(std::make_pair(part, q), static_cast<std::uint32_t>(vertices.size()));
+      if (fresh) vertices.push_back(rounded);
+      i = it->second;
+    }
+  }
+  model.mesh.vertices = std::move(vertices);
+  clean_model(model);
+}
+
+namespace {
+
+// Faces that are not planar as rounded (203, 204), or not simple (104), split into triangles of their
+// own vertices. Returns how many faces were split.
+std::size_t split_bad_faces(BuildingModel& model, const ValidityParams& params) {
+  std::vector<std::vector<std::uint32_t>> faces;
+  std::vector<SurfaceType> surfaces;
+  const bool typed = model.surfaces.size() == model.mesh.faces.size();
+  std::size_t split = 0;
+  for (std::size_t f = 0; f < model.mesh.faces.size(); ++f) {
+    const std::vector<int> codes = face_codes(model, f, params);
+    const bool bad = std::any_of(codes.begin(), codes.end(), [](int c) { return c == 203 || c == 204 || c == 104; });
+    if (!bad || model.mesh.faces[f].size() <= 3) {
+      faces.push_back(model.mesh.faces[f]);
+      if (typed) surfaces.push_back(model.surfaces[f]);
+      continue;
+    }
+    PolygonMesh one;
+    one.vertices = model.mesh.vertices;
+    one.faces = {model.mesh.faces[f]};
+    for (const auto& t : triangulate(one)) {
+      faces.push_back({t[0], t[1], t[2]});
+      if (typed) surfaces.push_back(model.surfaces[f]);
+    }
+    ++split;
+  }
+  model.mesh.faces = std::move(faces);
+  if (typed) model.surfaces = std::move(surfaces);
+  return split;
+}
+
+std::string plural(std::size_t n, const char* what) {
+  const std::string w = what;
+  return std::to_string(n) + " " + (n > 1 ? (w == "vertex" ? std::string("vertices") : w + "s") : w);
+}
+
+}  // namespace
+
+WrittenValidity validate_as_written(BuildingModel& model, double grid, const ValidityParams& params) {
+  WrittenValidity result;
+  round_to_grid(model, grid);
+  result.found = validate_model(model.mesh, params);
+  result.remaining = result.found;
+  if (result.found.empty()) return result;
+
+  // Repairs, mildest first; the first that leaves a valid model wins. (1) Split the faces the
+  // rounding bent (or that are not simple) into triangles of their own vertices: nothing moves.
+  // (2) Snap: vertices closer than the snap tolerance become one (what val3dity does before it
+  // checks, so that it finds no repeated point, 102), then split. (3) Cut zero-width spikes (a
+  // vertex whose edges fold back onto each other), then split.
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    BuildingModel repaired = model;
+    std::string repairs;
+    if (attempt == 1) {
+      const std::vector<std::uint32_t> to = snap_vertices(repaired.mesh.vertices, params.snap_tolerance);
+      std::size_t merged = 0;
+      for (std::uint32_t i = 0; i < to.size(); ++i) merged += to[i] != i;
+      if (merged == 0) continue;
+      for (auto& face : repaired.mesh.faces)
+        for (std::uint32_t& i : face)
+          if (i < to.size()) i = to[i];
+      round_to_grid(repaired, grid);
+      repairs = "snapped " + plural(merged, "vertex") + " onto a neighbour within " +
+                format(params.snap_tolerance * 1000, 1) + " mm";
+    }
+    if (attempt == 2) {
+      const std::size_t spikes = remove_spikes(repaired, std::max(params.snap_tolerance, grid));
+      if (spikes == 0) continue;
+      round_to_grid(repaired, grid);
+      repairs = "cut " + plural(spikes, "zero-width spike");
+    }
+    const std::size_t split = split_bad_faces(repaired, params);
+    if (split) {
+      round_to_grid(repaired, grid);
+      repairs += (repairs.empty() ? "" : "; ") + std::string("split ") + plural(split, "face") + " into triangles";
+    }
+    if (repairs.empty()) continue;
+    std::vector<ValidityError> remaining = validate_model(repaired.mesh, params);
+    if (remaining.empty()) {
+      model = std::move(repaired);
+      result.remaining.clear();
+      result.repairs = repairs;
+      return result;
+    }
+  }
+  return result;  // not repaired: the model stays as built (rounded), e.g. for --debug
+}
+
+}  // namespace city3d

@@ -1,0 +1,528 @@
+// report.html: the run overview, one self-contained file (inline CSS, SVG and script, nothing
+// fetched): summary, a map of the footprints coloured by status or RMSE, histograms, the worst
+// buildings with their reason, and a 3D view of a chosen building. The data is embedded as JSON;
+// the page draws itself with plain DOM/SVG/canvas code.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "city3d/error.hpp"
+#include "city3d/run_outputs.hpp"
+#include "io/atomic_file.hpp"
+
+namespace city3d {
+namespace {
+
+// JSON text, safe inside a <script> element ('<' escaped, so no "</script>" can appear).
+void json_string(std::string& out, const std::string& s) {
+  out += '"';
+  for (unsigned char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += static_cast<char>(c);
+    } else if (c < 0x20 || c == '<' || c == '>' || c == '&') {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", c);
+      out += buf;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  out += '"';
+}
+
+void json_number(std::string& out, double v, int decimals) {
+  if (!std::isfinite(v)) {
+    out += "null";
+    return;
+  }
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  // Trim trailing zeros to keep the page small ("12.50" -> "12.5", "3.000" -> "3").
+  std::string s = buf;
+  if (s.find('.') != std::string::npos) {
+    while (s.back() == '0') s.pop_back();
+    if (s.back() == '.') s.pop_back();
+  }
+  if (s == "-0") s = "0";
+  out += s;
+}
+
+// Vertex coordinates of models embedded for the 3D view, at most (keeps a 10,000-building page light).
+constexpr std::size_t kModelVertexBudget = 150000;
+
+const char* kPage1 = R"HTML(<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<title>city3d run overview</title>
+<style>
+:root { --ok: #2e9e5b; --fallback: #e0a526; --skipped: #9aa3ad; --failed: #d64545; --ink: #1d2733; --muted: #5f6b78;
+        --line: #dde3ea; --panel: #ffffff; --bg: #f3f5f8; --accent: #2f6fdf; }
+* { box-sizing: border-box; }
+body { margin: 0; font: 14px/1.45 system-ui, -apple-system, "Segoe UI", Roboto, Helvetica, Arial, sans-serif;
+       color: var(--ink); background: var(--bg); }
+header { padding: 18px 28px 10px; }
+h1 { margin: 0 0 2px; font-size: 22px; font-weight: 650; letter-spacing: -0.01em; }
+h2 { margin: 0 0 10px; font-size: 15px; font-weight: 650; }
+.sub { color: var(--muted); font-size: 13px; }
+.cards { display: flex; flex-wrap: wrap; gap: 10px; padding: 6px 28px 14px; }
+.card { background: var(--panel); border: 1px solid var(--line); border-radius: 10px; padding: 10px 16px; min-width: 118px; }
+.card .v { font-size: 22px; font-weight: 650; }
+.card .k { color: var(--muted); font-size: 12px; text-transform: uppercase; letter-spacing: 0.04em; }
+.card.ok .v { color: var(--ok); } .card.fallback .v { color: #b7811a; } .card.failed .v { color: var(--failed); }
+.card.skipped .v { color: #6f7983; }
+main { display: grid; grid-template-columns: minmax(0, 1.35fr) minmax(0, 1fr); gap: 16px; padding: 0 28px 28px; }
+.panel { background: var(--panel); border: 1px solid var(--line); border-radius: 12px; padding: 14px 16px; min-width: 0; }
+.wide { grid-column: 1 / -1; }
+.toolbar { display: flex; align-items: center; gap: 8px; margin-bottom: 8px; }
+.toolbar h2 { margin: 0; flex: 1; }
+button.tab { border: 1px solid var(--line); background: #f7f9fb; border-radius: 7px; padding: 4px 10px; font: inherit;
+             font-size: 13px; cursor: pointer; color: var(--ink); }
+button.tab.on { background: var(--accent); border-color: var(--accent); color: #fff; }
+#map { width: 100%; height: 460px; display: block; background: #fbfcfd; border-radius: 8px; border: 1px solid var(--line); }
+#map path { stroke: #ffffff; stroke-width: 0.6; vector-effect: non-scaling-stroke; cursor: pointer; }
+#map path:hover { stroke: var(--ink); stroke-width: 1.5; }
+#map path.sel { stroke: #111; stroke-width: 2.5; }
+.legend { display: flex; flex-wrap: wrap; gap: 12px; margin-top: 8px; font-size: 12px; color: var(--muted); align-items: center; }
+.sw { display: inline-block; width: 12px; height: 12px; border-radius: 3px; margin-right: 5px; vertical-align: -2px; }
+.ramp { width: 140px; height: 10px; border-radius: 3px; display: inline-block; vertical-align: -1px; margin: 0 6px; }
+#view { width: 100%; height: 300px; display: block; background: linear-gradient(#eef3fa, #fdfdfe); border-radius: 8px;
+        border: 1px solid var(--line); cursor: grab; }
+#details { margin-top: 10px; font-size: 13px; }
+#details table { border-collapse: collapse; width: 100%; }
+#details td { padding: 2px 6px 2px 0; vertical-align: top; }
+#details td:first-child { color: var(--muted); width: 38%; }
+.hists { display: grid; grid-template-columns: repeat(3, minmax(0, 1fr)); gap: 16px; }
+.hist svg { width: 100%; height: 170px; display: block; }
+.hist .t { font-size: 13px; font-weight: 600; margin-bottom: 4px; }
+.hist .n { color: var(--muted); font-weight: 400; }
+table.worst { border-collapse: collapse; width: 100%; font-size: 13px; }
+table.worst th { text-align: left; color: var(--muted); font-weight: 600; border-bottom: 1px solid var(--line); padding: 6px 8px; }
+table.worst td { border-bottom: 1px solid #eef1f4; padding: 5px 8px; vertical-align: top; }
+table.worst tr { cursor: pointer; }
+table.worst tr:hover td { background: #f5f8fc; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; }
+.pill { display: inline-block; padding: 0 8px; border-radius: 10px; font-size: 12px; color: #fff; }
+.reason { color: var(--muted); max-width: 520px; }
+#tip { position: fixed; pointer-events: none; background: rgba(29, 39, 51, 0.92); color: #fff; padding: 5px 8px; border-radius: 6px;
+       font-size: 12px; display: none; z-index: 5; max-width: 360px; }
+.empty { color: var(--muted); padding: 30px 0; text-align: center; }
+footer { color: var(--muted); font-size: 12px; padding: 0 28px 24px; }
+@media (max-width: 1000px) { main { grid-template-columns: 1fr; } .hists { grid-template-columns: 1fr; } }
+</style>
+</head>
+<body>
+<header><h1>city3d run overview</h1><div class="sub" id="subtitle"></div></header>
+<div class="cards" id="cards"></div>
+<main>
+  <section class="panel">
+    <div class="toolbar"><h2>Footprints</h2>
+      <button class="tab on" id="by-status">Status</button><button class="tab" id="by-rmse">RMSE</button></div>
+    <svg id="map" role="img" aria-label="map of the footprints"></svg>
+    <div class="legend" id="legend"></div>
+  </section>
+  <section class="panel">
+    <div class="toolbar"><h2 id="view-title">3D view</h2></div>
+    <canvas id="view" width="600" height="300"></canvas>
+    <div id="details"></div>
+  </section>
+  <section class="panel wide"><h2>Distributions</h2><div class="hists" id="hists"></div></section>
+  <section class="panel wide"><h2>Worst buildings</h2><div id="worst"></div></section>
+</main>
+<footer>Written by city3d. Drag the 3D view to turn the model; click a footprint or a table row to choose a building.</footer>
+<div id="tip"></div>
+<script id="data" type="application/json">)HTML";
+
+const char* kPage2 = R"HTML(</script>
+<script>
+"use strict";
+const D = JSON.parse(document.getElementById("data").textContent);
+const B = D.buildings;
+const COLORS = { ok: "#2e9e5b", fallback: "#e0a526", skipped: "#9aa3ad", failed: "#d64545" };
+const SVGNS = "http://www.w3.org/2000/svg";
+const $ = (id) => document.getElementById(id);
+const fmt = (v, d) => (v === null || v === undefined ? "–" : Number(v).toFixed(d));
+function el(tag, attrs, parent) {
+  const e = tag === "svg" || ["path", "rect", "line", "text", "g"].includes(tag) ? document.createElementNS(SVGNS, tag)
+                                                                                 : document.createElement(tag);
+  for (const k in attrs || {}) e.setAttribute(k, attrs[k]);
+  if (parent) parent.appendChild(e);
+  return e;
+}
+function median(xs) {
+  if (!xs.length) return null;
+  const s = xs.slice().sort((a, b) => a - b), m = s.length >> 1;
+  return s.length % 2 ? s[m] : (s[m - 1] + s[m]) / 2;
+}
+
+// Summary.
+const counts = { ok: 0, fallback: 0, skipped: 0, failed: 0 };
+B.forEach((b) => { counts[b.s] = (counts[b.s] || 0) + 1; });
+const rmses = B.filter((b) => b.rmse !== null).map((b) => b.rmse);
+const faces = B.filter((b) => b.f > 0).map((b) => b.f);
+const secs = B.map((b) => b.t);
+$("subtitle").textContent = B.length + " buildings" + (D.crs ? " · " + D.crs : "") + " · city3d " + D.version;
+[["buildings", B.length, ""], ["ok", counts.ok, "ok"], ["fallback", counts.fallback, "fallback"],
+ ["skipped", counts.skipped, "skipped"], ["failed", counts.failed, "failed"],
+ ["median RMSE (m)", fmt(median(rmses), 3), ""], ["faces", faces.reduce((a, b) => a + b, 0), ""],
+ ["seconds (sum)", fmt(secs.reduce((a, b) => a + b, 0), 1), ""]].forEach(([k, v, c]) => {
+  const card = el("div", { class: "card " + c }, $("cards"));
+  el("div", { class: "v" }, card).textContent = v;
+  el("div", { class: "k" }, card).textContent = k;
+});
+
+// RMSE colour ramp: green (good) through yellow to red at the 95th percentile or 0.5 m.
+const rmseMax = Math.max(0.05, Math.min(0.5, rmses.length ? rmses.slice().sort((a, b) => a - b)[Math.floor(0.95 * (rmses.length - 1))] : 0.5));
+function rampColor(t) {
+  t = Math.max(0, Math.min(1, t));
+  const stops = [[46, 158, 91], [240, 200, 60], [214, 69, 69]];
+  const u = t < 0.5 ? t * 2 : (t - 0.5) * 2, a = stops[t < 0.5 ? 0 : 1], c = stops[t < 0.5 ? 1 : 2];
+  return "rgb(" + a.map((v, i) => Math.round(v + (c[i] - v) * u)).join(",") + ")";
+}
+
+// Map.
+const map = $("map"), tip = $("tip");
+let mode = "status", selected = -1;
+const paths = [];
+(function drawMap() {
+  let minx = Infinity, miny = Infinity, maxx = -Infinity, maxy = -Infinity;
+  B.forEach((b) => (b.fp || []).forEach((ring) => ring.forEach(([x, y]) => {
+    minx = Math.min(minx, x); maxx = Math.max(maxx, x); miny = Math.min(miny, y); maxy = Math.max(maxy, y);
+  })));
+  if (!isFinite(minx)) {
+    const t = el("text", { x: "50%", y: "50%", "text-anchor": "middle", fill: "#5f6b78" }, map);
+    t.textContent = "no footprints in this run (single-building clouds)";
+    return;
+  }
+  const pad = 0.03 * Math.max(maxx - minx, maxy - miny, 1);
+  map.setAttribute("viewBox", [minx - pad, -(maxy + pad), maxx - minx + 2 * pad, maxy - miny + 2 * pad].join(" "));
+  map.setAttribute("preserveAspectRatio", "xMidYMid meet");
+  B.forEach((b, i) => {
+    if (!b.fp || !b.fp.length) return;
+    const d = b.fp.map((ring) => "M" + ring.map(([x, y]) => x + "," + -y).join("L") + "Z").join("");
+    const p = el("path", { d: d, "fill-rule": "evenodd" }, map);
+    p.addEventListener("mousemove", (e) => {
+      tip.style.display = "block";
+      tip.style.left = e.clientX + 12 + "px";
+      tip.style.top = e.clientY + 12 + "px";
+      tip.textContent = b.id + " · " + b.s + (b.rmse !== null ? " · RMSE " + fmt(b.rmse, 3) + " m" : "") + (b.r ? " · " + b.r : "");
+    });
+    p.addEventListener("mouseleave", () => { tip.style.display = "none"; });
+    p.addEventListener("click", () => select(i));
+    paths[i] = p;
+  });
+})();
+function colourMap() {
+  B.forEach((b, i) => {
+    if (!paths[i]) return;
+    const c = mode === "status" ? COLORS[b.s] : b.rmse === null ? "#c9ced4" : rampColor(b.rmse / rmseMax);
+    paths[i].setAttribute("fill", c);
+  });
+  const lg = $("legend");
+  lg.innerHTML = "";
+  if (mode === "status") {
+    Object.keys(COLORS).forEach((k) => {
+      const s = el("span", {}, lg);
+      el("span", { class: "sw", style: "background:" + COLORS[k] }, s);
+      s.appendChild(document.createTextNode(k + " (" + (counts[k] || 0) + ")"));
+    });
+  } else {
+    const s = el("span", {}, lg);
+    s.appendChild(document.createTextNode("RMSE 0 m"));
+    el("span", { class: "ramp", style: "background:linear-gradient(90deg," + rampColor(0) + "," + rampColor(0.5) + "," + rampColor(1) + ")" }, s);
+    s.appendChild(document.createTextNode(fmt(rmseMax, 2) + " m and more"));
+    const n = el("span", {}, lg);
+    el("span", { class: "sw", style: "background:#c9ced4" }, n);
+    n.appendChild(document.createTextNode("no model"));
+  }
+}
+$("by-status").addEventListener("click", () => { mode = "status"; $("by-status").classList.add("on"); $("by-rmse").classList.remove("on"); colourMap(); });
+$("by-rmse").addEventListener("click", () => { mode = "rmse"; $("by-rmse").classList.add("on"); $("by-status").classList.remove("on"); colourMap(); });
+colourMap();
+
+// Histograms.
+function histogram(title, values, unit, decimals) {
+  const box = el("div", { class: "hist" }, $("hists"));
+  const t = el("div", { class: "t" }, box);
+  t.textContent = title + " ";
+  el("span", { class: "n" }, t).textContent = values.length ? "median " + fmt(median(values), decimals) + " " + unit + ", n = " + values.length : "no values";
+  const W = 360, H = 170, L = 36, R = 8, T = 8, Bm = 26;
+  const svg = el("svg", { viewBox: "0 0 " + W + " " + H }, box);
+  if (!values.length) return;
+  const lo = Math.min(...values), hi = Math.max(...values);
+  const n = Math.max(1, Math.min(24, Math.ceil(Math.sqrt(values.length)) + 2));
+  const width = hi > lo ? (hi - lo) / n : 1;
+  const bins = new Array(n).fill(0);
+  values.forEach((v) => { bins[Math.min(n - 1, Math.floor((v - lo) / width))]++; });
+  const top = Math.max(...bins);
+  const bw = (W - L - R) / n;
+  for (let k = 0; k <= 4; k++) {
+    const y = T + (H - T - Bm) * (1 - k / 4);
+    el("line", { x1: L, x2: W - R, y1: y, y2: y, stroke: "#eef1f4" }, svg);
+    el("text", { x: L - 5, y: y + 4, "text-anchor": "end", "font-size": 10, fill: "#5f6b78" }, svg).textContent = Math.round(top * k / 4);
+  }
+  bins.forEach((c, i) => {
+    const h = (H - T - Bm) * c / top;
+    const r = el("rect", { x: L + i * bw + 1, y: H - Bm - h, width: Math.max(1, bw - 2), height: h, rx: 2, fill: "#2f6fdf" }, svg);
+    r.addEventListener("mousemove", (e) => {
+      tip.style.display = "block"; tip.style.left = e.clientX + 12 + "px"; tip.style.top = e.clientY + 12 + "px";
+      tip.textContent = fmt(lo + i * width, decimals) + "–" + fmt(lo + (i + 1) * width, decimals) + " " + unit + ": " + c;
+    });
+    r.addEventListener("mouseleave", () => { tip.style.display = "none"; });
+  });
+  [0, 0.5, 1].forEach((f) => {
+    el("text", { x: L + f * (W - L - R), y: H - 8, "text-anchor": f === 0 ? "start" : f === 1 ? "end" : "middle", "font-size": 10, fill: "#5f6b78" }, svg)
+      .textContent = fmt(lo + f * (hi - lo), decimals) + (f === 1 ? " " + unit : "");
+  });
+}
+histogram("RMSE", rmses, "m", 3);
+histogram("Faces", faces, "", 0);
+histogram("Seconds", secs, "s", 2);
+
+// Worst buildings: failed, then fallback, then the highest RMSE.
+const rank = { failed: 0, fallback: 1, ok: 2, skipped: 3 };
+const worst = B.map((b, i) => i).filter((i) => B[i].s !== "skipped" || B[i].r)
+  .sort((a, b) => rank[B[a].s] - rank[B[b].s] || (B[b].rmse || 0) - (B[a].rmse || 0) || a - b).slice(0, 25);
+(function drawWorst() {
+  if (!worst.length) { el("div", { class: "empty" }, $("worst")).textContent = "no buildings"; return; }
+  const table = el("table", { class: "worst" }, $("worst"));
+  const head = el("tr", {}, el("thead", {}, table));
+  ["building", "status", "level", "RMSE (m)", "faces", "seconds", "reason"].forEach((h, k) => {
+    el("th", k >= 3 && k <= 5 ? { class: "num" } : {}, head).textContent = h;
+  });
+  const body = el("tbody", {}, table);
+  worst.forEach((i) => {
+    const b = B[i], tr = el("tr", {}, body);
+    el("td", {}, tr).textContent = b.id;
+    el("span", { class: "pill", style: "background:" + COLORS[b.s] }, el("td", {}, tr)).textContent = b.s;
+    el("td", {}, tr).textContent = b.l;
+    el("td", { class: "num" }, tr).textContent = fmt(b.rmse, 3);
+    el("td", { class: "num" }, tr).textContent = b.f;
+    el("td", { class: "num" }, tr).textContent = fmt(b.t, 2);
+    el("td", { class: "reason" }, tr).textContent = b.r || (b.n || "");
+    tr.addEventListener("click", () => select(i));
+  });
+})();
+
+// 3D view: the chosen building's model, flat-shaded polygons sorted back to front, turned by dragging.
+const canvas = $("view"), ctx = canvas.getContext("2d");
+let yaw = -0.7, pitch = 0.55, model = null;
+function resize() {
+  const r = canvas.getBoundingClientRect(), s = window.devicePixelRatio || 1;
+  canvas.width = Math.max(1, Math.round(r.width * s));
+  canvas.height = Math.max(1, Math.round(r.height * s));
+  draw();
+}
+function draw() {
+  const W = canvas.width, H = canvas.height;
+  ctx.clearRect(0, 0, W, H);
+  if (!model) {
+    ctx.fillStyle = "#5f6b78";
+    ctx.font = Math.round(13 * (window.devicePixelRatio || 1)) + "px system-ui, sans-serif";
+    ctx.textAlign = "center";
+    ctx.fillText(selected >= 0 ? "no model for this building" : "choose a building", W / 2, H / 2);
+    return;
+  }
+  const cy = Math.cos(yaw), sy = Math.sin(yaw), cp = Math.cos(pitch), sp = Math.sin(pitch);
+  const P = model.v.map(([x, y, z]) => {
+    const x1 = x * cy - y * sy, y1 = x * sy + y * cy;
+    return [x1, y1 * sp + z * cp, -y1 * cp + z * sp];  // screen x, screen y (up), depth (towards viewer)
+  });
+  let ylo = Infinity, yhi = -Infinity;
+  P.forEach((p) => { ylo = Math.min(ylo, p[1]); yhi = Math.max(yhi, p[1]); });
+  const zc = (ylo + yhi) / 2;
+  let r = 1e-9;
+  P.forEach(([x, y]) => { r = Math.max(r, Math.abs(x), Math.abs(y - zc)); });
+  const scale = 0.42 * Math.min(W, H) / r;
+  const light = [0.35, 0.55, 0.75];
+  const faces = model.f.map((f, k) => {
+    let nx = 0, ny = 0, nz = 0, depth = 0;
+    for (let i = 0; i < f.length; i++) {
+      const a = model.v[f[i]], b = model.v[f[(i + 1) % f.length]];
+      nx += (a[1] - b[1]) * (a[2] + b[2]); ny += (a[2] - b[2]) * (a[0] + b[0]); nz += (a[0] - b[0]) * (a[1] + b[1]);
+      depth += P[f[i]][2];
+    }
+    const len = Math.hypot(nx, ny, nz) || 1;
+    return { f: f, k: k, depth: depth / f.length, shade: Math.abs((nx * light[0] + ny * light[1] + nz * light[2]) / len) };
+  }).sort((a, b) => a.depth - b.depth);
+  const base = { 0: [150, 150, 150], 1: [236, 232, 222], 2: [205, 92, 72] };  // ground, wall, roof
+  faces.forEach(({ f, k, shade }) => {
+    const c = base[model.s[k]] || [200, 200, 200], m = 0.55 + 0.45 * shade;
+    ctx.beginPath();
+    f.forEach((i, j) => {
+      const X = W / 2 + P[i][0] * scale, Y = H / 2 - (P[i][1] - zc) * scale;
+      if (j) ctx.lineTo(X, Y); else ctx.moveTo(X, Y);
+    });
+    ctx.closePath();
+    ctx.fillStyle = "rgb(" + c.map((v) => Math.round(v * m)).join(",") + ")";
+    ctx.fill();
+    ctx.strokeStyle = "rgba(40,40,40,0.35)";
+    ctx.lineWidth = 1;
+    ctx.stroke();
+  });
+}
+let drag = null;
+canvas.addEventListener("pointerdown", (e) => { drag = [e.clientX, e.clientY]; canvas.setPointerCapture(e.pointerId); });
+canvas.addEventListener("pointermove", (e) => {
+  if (!drag) return;
+  yaw -= (e.clientX - drag[0]) * 0.01;
+  pitch = Math.max(-0.2, Math.min(1.5, pitch + (e.clientY - drag[1]) * 0.01));
+  drag = [e.clientX, e.clientY];
+  draw();
+});
+canvas.addEventListener("pointerup", () => { drag = null; });
+window.addEventListener("resize", resize);
+
+function select(i) {
+  if (paths[selected]) paths[selected].classList.remove("sel");
+  selected = i;
+  if (paths[i]) paths[i].classList.add("sel");
+  const b = B[i];
+  model = b.m >= 0 ? D.models[b.m] : null;
+  $("view-title").textContent = "3D view · " + b.id + (model ? " · LoD" + model.lod : "");
+  const rows = [["status", b.s], ["level", b.l], ["levels written", b.lods || "–"], ["RMSE", fmt(b.rmse, 3) + " m"],
+                ["faces", b.f], ["points", b.p], ["roof height (70th percentile)", fmt(b.h, 2) + " m"],
+                ["roof type", b.rt || "–"], ["seconds", fmt(b.t, 2)], ["reason", b.r || "–"], ["note", b.n || "–"]];
+  const d = $("details");
+  d.innerHTML = "";
+  const table = el("table", {}, d);
+  rows.forEach(([k, v]) => { const tr = el("tr", {}, table); el("td", {}, tr).textContent = k; el("td", {}, tr).textContent = v; });
+  draw();
+}
+resize();
+// Start with the worst building that has a model, else the first building with one.
+const first = worst.find((i) => B[i].m >= 0);
+const start = first !== undefined ? first : B.findIndex((b) => b.m >= 0);
+if (start >= 0) select(start);
+console.log("city3d report ready");
+</script>
+</body>
+</html>
+)HTML";
+
+}  // namespace
+
+void write_report_html(const std::string& path, const std::vector<OverviewRecord>& records, const std::string& crs) {
+  // Footprints (or, for clouds, the models' floors) relative to the run's corner, in centimetres.
+  Box2 extent;
+  for (const OverviewRecord& r : records)
+    for (const Polygon2& p : r.footprint)
+      for (const Point2& v : p.outer) extent.add(v);
+  const bool have_footprints = !extent.empty();
+  const Point2 corner = have_footprints ? Point2{std::floor(extent.min.x), std::floor(extent.min.y)} : Point2{0, 0};
+
+  std::string data = "{\"crs\":";
+  json_string(data, crs);
+  data += ",\"version\":";
+  json_string(data, CITY3D_VERSION);
+  data += ",\"buildings\":[";
+  std::string models = "[";
+  std::size_t model_count = 0, vertex_budget = kModelVertexBudget;
+  // Models of the worst buildings first (failed ones have none), then in order, within the budget.
+  std::vector<std::size_t> order(records.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    const auto key = [&](std::size_t i) { return records[i].report.status == BuildingStatus::fallback ? 0 : 1; };
+    if (key(a) != key(b)) return key(a) < key(b);
+    return records[a].report.rmse > records[b].report.rmse;
+  });
+  std::vector<long> model_of(records.size(), -1);
+  for (std::size_t i : order) {
+    const OverviewRecord& r = records[i];
+    if (r.lods.empty()) continue;
+    const BuildingModel& m = r.lods.back().model;
+    if (m.mesh.vertices.size() > vertex_budget) continue;
+    vertex_budget -= m.mesh.vertices.size();
+    // Centred on the model's plan-view centre, floor at z = 0.
+    Box3 box;
+    for (const Point3& p : m.mesh.vertices) box.add(p);
+    const Point3 c{(box.min.x + box.max.x) / 2, (box.min.y + box.max.y) / 2, box.min.z};
+    if (model_count) models += ',';
+    models += "{\"lod\":";
+    json_string(models, r.lods.back().lod);
+    models += ",\"v\":[";
+    for (std::size_t k = 0; k < m.mesh.vertices.size(); ++k) {
+      const Point3& p = m.mesh.vertices[k];
+      models += k ? ",[" : "[";
+      json_number(models, p.x - c.x, 2);
+      models += ',';
+      json_number(models, p.y - c.y, 2);
+      models += ',';
+      json_number(models, p.z - c.z, 2);
+      models += ']';
+    }
+    models += "],\"f\":[";
+    for (std::size_t f = 0; f < m.mesh.faces.size(); ++f) {
+      models += f ? ",[" : "[";
+      for (std::size_t k = 0; k < m.mesh.faces[f].size(); ++k) models += (k ? "," : "") + std::to_string(m.mesh.faces[f][k]);
+      models += ']';
+    }
+    models += "],\"s\":[";
+    const std::vector<SurfaceType> types = surface_types(m);
+    for (std::size_t f = 0; f < types.size(); ++f) models += (f ? "," : "") + std::to_string(static_cast<int>(types[f]));
+    models += "]}";
+    model_of[i] = static_cast<long>(model_count++);
+  }
+  models += ']';
+
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const OverviewRecord& r = records[i];
+    const BuildingReport& b = r.report;
+    if (i) data += ',';
+    data += "\n{\"id\":";
+    json_string(data, b.id);
+    data += ",\"s\":";
+    json_string(data, to_string(b.status));
+    data += ",\"l\":";
+    json_string(data, to_string(b.level));
+    data += ",\"r\":";
+    json_string(data, b.reason);
+    data += ",\"n\":";
+    json_string(data, b.note);
+    data += ",\"lods\":";
+    json_string(data, b.lods);
+    data += ",\"rt\":";
+    json_string(data, b.roof_type);
+    data += ",\"rmse\":";
+    json_number(data, b.rmse >= 0 ? b.rmse : NAN, 4);
+    data += ",\"f\":" + std::to_string(b.faces) + ",\"p\":" + std::to_string(b.points) + ",\"t\":";
+    json_number(data, b.seconds, 3);
+    data += ",\"h\":";
+    json_number(data, b.h_roof_70p, 2);
+    data += ",\"m\":" + std::to_string(model_of[i]) + ",\"fp\":[";
+    bool first_ring = true;
+    const auto add_ring = [&](const Ring2& ring) {
+      if (!first_ring) data += ',';
+      first_ring = false;
+      data += '[';
+      for (std::size_t k = 0; k < ring.size(); ++k) {
+        data += k ? ",[" : "[";
+        json_number(data, ring[k].x - corner.x, 2);
+        data += ',';
+        json_number(data, ring[k].y - corner.y, 2);
+        data += ']';
+      }
+      data += ']';
+    };
+    for (const Polygon2& p : r.footprint) {
+      add_ring(p.outer);
+      for (const Ring2& h : p.holes) add_ring(h);
+    }
+    data += "]}";
+  }
+  data += "],\"models\":" + models + "}";
+
+  detail::AtomicFile file(path);
+  std::FILE* out = file.file();
+  std::fputs(kPage1, out);
+  std::fputs(data.c_str(), out);
+  std::fputs(kPage2, out);
+  file.commit();
+}
+
+}  // namespace city3d
