@@ -80,9 +80,12 @@ struct ReconstructionParams {
   /// LoD1.3: adjacent roof parts whose heights differ by less than this (metres) become one block,
   /// as 3DBAG's lod13_step_height.
   double lod13_step_height = 3.0;
-  /// Wall-clock limit for one building's LoD2 attempts, seconds: the full rung gets 60% of it, the
-  /// footprint-walls rung the rest, and each selection what is left of its rung's share.
-  double time_limit = 20.0;
+  /// Opt-in wall-clock safety net for one building's LoD2 attempts, seconds; 0 (the default): none.
+  /// The full rung gets 60% of it, the footprint-walls rung the rest, and each selection what is
+  /// left of its rung's share. When it fires the output depends on the machine's speed and load;
+  /// without it, every limit counts work (nodes, faces, points) and the output is a function of
+  /// the inputs and parameters alone.
+  double time_limit = 0.0;
   /// When not empty: per-building intermediate results (heightmap and edge PNGs, polylines before
   /// and after regularisation, walls, planes, candidate faces) are written into <debug_dir>/<id>/.
   std::string debug_dir;
