@@ -125,7 +125,10 @@ struct BuildingReport {
   /// rung they came from ("LoD2.2: 204"); empty when every model built was valid as it came.
   std::string validity_found;
   std::string repairs;    ///< what was repaired to make the written model valid, or empty
-  double seconds = 0.0;
+  double seconds = 0.0;      ///< wall clock of reconstruct_building()
+  /// CPU time of reconstruct_building(): its thread's, plus the solver processes it started. Unlike
+  /// the wall clock it does not grow when other work shares the machine.
+  double cpu_seconds = 0.0;
 
   // 3DBAG-style attributes (see README, "Attributes"); world heights in metres, NaN when unknown.
   std::string lods;                 ///< levels written, e.g. "1.2,1.3,2.2"

@@ -104,4 +104,8 @@ bool satisfies_constraints(const SelectionProblem& problem, const std::vector<bo
 /// several threads solve at once, and a crash inside CBC costs only that call (backend_failures).
 SelectionResult solve_selection(const SelectionProblem& problem, const SelectionParams& params);
 
+/// CPU seconds (user + system) that the solver processes started from this thread have used so far:
+/// the part of a building's CPU time that is not the thread's own.
+double solver_process_cpu_seconds();
+
 }  // namespace city3d

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <sstream>
 
@@ -157,6 +158,13 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// CPU seconds of the calling thread (user + system).
+double thread_cpu_seconds() {
+  timespec t{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
 // The LoD1 rung: always possible when the building has points and a usable footprint.
@@ -536,6 +544,7 @@ BuildingInput building_from_cloud(const BuildingId& id, const std::vector<Point3
 
 BuildingResult reconstruct_building(const BuildingInput& input, const ReconstructionParams& params) {
   const auto start = Clock::now();
+  const double cpu_start = thread_cpu_seconds() + solver_process_cpu_seconds();
   BuildingResult result;
   BuildingReport& r = result.report;
   r.id = input.id;
@@ -635,6 +644,7 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
   }
 
   r.seconds = seconds_since(start);
+  r.cpu_seconds = thread_cpu_seconds() + solver_process_cpu_seconds() - cpu_start;
   return result;
 }
 

@@ -57,6 +57,7 @@
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
 #include "selection/solver.hpp"
+#include "selection/solver_process.hpp"
 
 namespace city3d {
 namespace {
@@ -677,5 +678,7 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
   log_debug(line.str());
   return result;
 }
+
+double solver_process_cpu_seconds() { return detail::children_cpu_seconds(); }
 
 }  // namespace city3d

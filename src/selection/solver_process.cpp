@@ -6,6 +6,7 @@
 #include <poll.h>
 #include <signal.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -77,7 +78,12 @@ std::string describe_end(int status) {
   return "ended with status " + std::to_string(status);
 }
 
+// CPU seconds of the children this thread has waited for.
+thread_local double children_cpu = 0.0;
+
 }  // namespace
+
+double children_cpu_seconds() { return children_cpu; }
 
 ChildResult run_in_child(const std::function<std::string()>& work, double time_limit) {
   int result_pipe[2], stderr_pipe[2];
@@ -139,8 +145,10 @@ ChildResult run_in_child(const std::function<std::string()>& work, double time_l
   for (pollfd& p : fds)
     if (p.fd >= 0) ::close(p.fd);
   int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  rusage usage{};
+  while (::wait4(pid, &status, 0, &usage) < 0 && errno == EINTR) {
   }
+  children_cpu += usage.ru_utime.tv_sec + usage.ru_stime.tv_sec + 1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
 
   if (errors.size() > kStderrKept) errors.erase(0, errors.size() - kStderrKept);
   while (!errors.empty() && (errors.back() == '\n' || errors.back() == '\r')) errors.pop_back();

@@ -26,4 +26,7 @@ struct ChildResult {
 /// be started (fork or pipe refused).
 ChildResult run_in_child(const std::function<std::string()>& work, double time_limit);
 
+/// CPU seconds (user + system) used by the children that run_in_child started from this thread.
+double children_cpu_seconds();
+
 }  // namespace city3d::detail
