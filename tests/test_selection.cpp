@@ -145,6 +145,51 @@ TEST(Selection, face_prior_forces_the_top_and_changes_the_optimum) {
   EXPECT_FALSE(without.selected[T]);
 }
 
+// Three roofs over one cell and nothing else: without the group the empty selection is optimal
+// (no support, a positive roof-preference cost); with it exactly one roof is chosen, the highest.
+TEST(Selection, exactly_one_group_selects_one_roof_of_its_cell_with_both_backends) {
+  SelectionProblem p;
+  p.face_count = 3;
+  p.support = {0, 0, 0};
+  p.centroid_z = {1.0, 3.0, 2.0};
+  p.is_roof = {true, true, true};
+  p.point_count = 10;
+  p.z_min = 0.0;
+  p.z_max = 4.0;
+  p.vertical_overlaps = {{0, 1}, {0, 2}, {1, 2}};
+  for (const std::string solver : {"glpk", "cbc"}) {
+    SCOPED_TRACE(solver);
+    p.exactly_one.clear();
+    const auto free = solve_selection(p, with_solver(solver));
+    ASSERT_EQ(free.status, SelectionStatus::optimal) << free.message;
+    EXPECT_EQ(free.selected, faces(3, {}));
+    p.exactly_one = {{0, 1, 2}};
+    const auto grouped = solve_selection(p, with_solver(solver));
+    ASSERT_EQ(grouped.status, SelectionStatus::optimal) << grouped.message;
+    EXPECT_EQ(grouped.selected, faces(3, {1}));
+  }
+  EXPECT_FALSE(satisfies_constraints(p, faces(3, {}), SelectionParams{}));
+  EXPECT_FALSE(satisfies_constraints(p, faces(3, {0, 2}), SelectionParams{}));
+  SelectionParams no_layer;
+  no_layer.use_single_layer = false;  // the group is the single-layer constraint
+  EXPECT_TRUE(satisfies_constraints(p, faces(3, {}), no_layer));
+}
+
+TEST(Selection, exactly_one_group_with_every_face_off_is_infeasible_without_a_solver) {
+  SelectionProblem p = cut_box();
+  p.exactly_one = {{T, M}};
+  p.forced_off = {T, M};
+  const auto r = solve_selection(p, box_params());
+  EXPECT_EQ(r.status, SelectionStatus::infeasible);
+  EXPECT_EQ(r.solver, "presolve");
+  EXPECT_NE(r.message.find("roof group 0"), std::string::npos) << r.message;
+  p.forced_off = {T};  // propagation puts M on
+  const auto m = solve_selection(p, box_params());
+  ASSERT_EQ(m.status, SelectionStatus::optimal) << m.message;
+  EXPECT_TRUE(m.selected[M]);
+  EXPECT_FALSE(m.selected[T]);
+}
+
 TEST(Selection, forced_off_face_is_never_selected) {
   auto p = cut_box();
   p.forced_off = {M};

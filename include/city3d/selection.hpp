@@ -6,7 +6,8 @@
 //   E_c = (1/|E|) sum_e corner(e)                                  model complexity (PolyFit)
 //   E_r = (1/|F|) sum_i x_i (z_max - z_i) / (z_max - z_min)        roof preference (City3D)
 //   s.t. sum_{j in N(e)} x_j in {0, 2}  for every edge e          watertight, 2-manifold
-//        single-layer roof: vertically overlapping roof faces are never selected together
+//        single-layer roof: exactly one roof face over each cell, and vertically overlapping roof
+//        faces never selected together
 //        face prior: x_l = 1 for the best-supported face l of each planar segment
 //        x_i in {0, 1}
 //
@@ -40,6 +41,12 @@ struct SelectionProblem {
 
   /// Pairs of roof faces whose vertical projections overlap (area above a tolerance).
   std::vector<std::pair<std::uint32_t, std::uint32_t>> vertical_overlaps;
+  /// Groups of roof faces that cover the same part of the footprint (in the 2.5D hypothesis: the
+  /// roof faces over one cell), of which exactly one is selected: the paper's single-layer equality
+  /// sum_{k in V(f_i)} x_k = 1. It holds where every face of a group covers the whole group's area
+  /// and that area must be roofed; it implies the vertical overlaps inside a group and, unlike their
+  /// pairwise form, is tight for the LP relaxation. Applied with use_single_layer.
+  std::vector<std::vector<std::uint32_t>> exactly_one;
   /// Faces fixed to 1 by the face prior (best-supported face of each planar segment).
   std::vector<std::uint32_t> face_prior;
   /// Faces fixed to 1 for other reasons (e.g. the floor), and faces fixed to 0.

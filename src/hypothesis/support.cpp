@@ -117,9 +117,12 @@ void build_selection_problem(const std::vector<Point3>& points, const std::vecto
         (best < 0 || prob.support[i] > prob.support[static_cast<std::size_t>(best)]))
       best = i;
   }
-  for (const auto& list : roofs_over_cell)
+  // A cell's floor is always on, so closing the solid over it takes exactly one of its roof faces.
+  for (const auto& list : roofs_over_cell) {
     for (std::size_t i = 0; i < list.size(); ++i)
       for (std::size_t j = i + 1; j < list.size(); ++j) prob.vertical_overlaps.emplace_back(list[i], list[j]);
+    if (!list.empty()) prob.exactly_one.push_back(list);
+  }
   for (long p : prior)
     if (p >= 0) prob.face_prior.push_back(static_cast<std::uint32_t>(p));
   std::sort(prob.face_prior.begin(), prob.face_prior.end());

@@ -132,6 +132,16 @@ void check_problem(const SelectionProblem& problem) {
   for (const auto& [a, b] : problem.vertical_overlaps)
     if (a >= n || b >= n || a == b)
       add("vertical overlap (" + std::to_string(a) + ", " + std::to_string(b) + ") is not a pair of faces");
+  for (std::size_t g = 0; g < problem.exactly_one.size(); ++g) {
+    std::vector<std::uint32_t> sorted = problem.exactly_one[g];
+    std::sort(sorted.begin(), sorted.end());
+    if (sorted.empty()) add("exactly_one group " + std::to_string(g) + " is empty");
+    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
+      add("exactly_one group " + std::to_string(g) + " lists a face twice");
+    if (!sorted.empty() && sorted.back() >= n)
+      add("exactly_one group " + std::to_string(g) + " names face " + std::to_string(sorted.back()) + " of " +
+          std::to_string(n));
+  }
   const auto check_list = [&](const std::vector<std::uint32_t>& list, const char* name) {
     for (auto f : list)
       if (f >= n) add(std::string(name) + " names face " + std::to_string(f) + " of " + std::to_string(n));
@@ -166,14 +176,17 @@ std::string propagate_fixings(const SelectionProblem& problem, const SelectionPa
                               std::vector<std::int8_t>& value) {
   const std::size_t n = problem.face_count;
   value.assign(n, kFree);
-  std::vector<std::vector<std::uint32_t>> edges_of(n), overlaps_of(n);
+  std::vector<std::vector<std::uint32_t>> edges_of(n), overlaps_of(n), groups_of(n);
   for (std::size_t e = 0; e < problem.edges.size(); ++e)
     for (auto f : problem.edges[e].faces) edges_of[f].push_back(static_cast<std::uint32_t>(e));
-  if (params.use_single_layer)
+  if (params.use_single_layer) {
     for (const auto& [a, b] : problem.vertical_overlaps) {
       overlaps_of[a].push_back(b);
       overlaps_of[b].push_back(a);
     }
+    for (std::size_t g = 0; g < problem.exactly_one.size(); ++g)
+      for (auto f : problem.exactly_one[g]) groups_of[f].push_back(static_cast<std::uint32_t>(g));
+  }
 
   std::deque<std::uint32_t> queue;
   std::string conflict;
@@ -211,11 +224,34 @@ std::string propagate_fixings(const SelectionProblem& problem, const SelectionPa
     if (on == 1 && open == 1) fix(last_open, 1, "only partner on " + where);
     if (on == 0 && open == 1) fix(last_open, 0, "only candidate on " + where);
   };
+  // A group: a face on => the rest off; none on and one left open => that one on.
+  const auto settle_group = [&](std::uint32_t g) {
+    const auto& faces = problem.exactly_one[g];
+    int on = 0, open = 0;
+    std::uint32_t last_open = 0;
+    for (auto f : faces) {
+      if (value[f] == 1) ++on;
+      if (value[f] == kFree) {
+        ++open;
+        last_open = f;
+      }
+    }
+    const std::string where = "roof group " + std::to_string(g);
+    if (on > 1 && conflict.empty()) conflict = where + " has " + std::to_string(on) + " faces on";
+    if (on == 0 && open == 0 && conflict.empty()) conflict = where + " has no face left";
+    if (on == 1)
+      for (auto f : faces)
+        if (value[f] == kFree) fix(f, 0, where + " already has its face");
+    if (on == 0 && open == 1) fix(last_open, 1, "only face left in " + where);
+  };
   for (std::uint32_t e = 0; e < problem.edges.size(); ++e) settle_edge(e);
+  if (params.use_single_layer)
+    for (std::uint32_t g = 0; g < problem.exactly_one.size(); ++g) settle_group(g);
   while (!queue.empty() && conflict.empty()) {
     const std::uint32_t f = queue.front();
     queue.pop_front();
     for (auto e : edges_of[f]) settle_edge(e);
+    for (auto g : groups_of[f]) settle_group(g);
     if (value[f] == 1)
       for (auto g : overlaps_of[f]) fix(g, 0, "overlaps face " + std::to_string(f) + " which is on");
   }
@@ -341,9 +377,24 @@ GlobalProgram build_program(const SelectionProblem& problem, const SelectionPara
     }
   }
 
+  // Single layer: one equality per group with free faces (propagation leaves a group with a face
+  // on fully settled), then the overlapping pairs no group already covers.
+  std::vector<int> group_of(n, -1);
+  if (params.use_single_layer)
+    for (std::size_t g = 0; g < problem.exactly_one.size(); ++g) {
+      GlobalRow row;
+      for (auto f : problem.exactly_one[g]) {
+        group_of[f] = static_cast<int>(g);
+        if (value[f] == kFree) row.add(program.class_of_face[f], 1.0);
+      }
+      if (row.vars.empty()) continue;
+      row.lower = row.upper = 1.0;
+      program.rows.push_back(std::move(row));
+    }
   if (params.use_single_layer)
     for (const auto& [a, b] : problem.vertical_overlaps) {
       if (value[a] != kFree || value[b] != kFree) continue;  // settled by propagation
+      if (group_of[a] >= 0 && group_of[a] == group_of[b]) continue;  // in its group's equality
       GlobalRow row;
       row.add(program.class_of_face[a], 1.0);
       row.add(program.class_of_face[b], 1.0);
@@ -495,9 +546,12 @@ bool satisfies_constraints(const SelectionProblem& problem, const std::vector<bo
     const auto count = std::count_if(edge.faces.begin(), edge.faces.end(), on);
     if (count != 0 && count != 2) return false;
   }
-  if (params.use_single_layer)
+  if (params.use_single_layer) {
     for (const auto& [a, b] : problem.vertical_overlaps)
       if (on(a) && on(b)) return false;
+    for (const auto& group : problem.exactly_one)
+      if (std::count_if(group.begin(), group.end(), on) != 1) return false;
+  }
   if (params.use_face_prior && !std::all_of(problem.face_prior.begin(), problem.face_prior.end(), on))
     return false;
   if (!std::all_of(problem.forced_on.begin(), problem.forced_on.end(), on)) return false;
