@@ -61,8 +61,11 @@
 //     prior, else its best-supported face), the floors, and over every edge the wall faces between
 //     the roofs chosen on its two sides. A checkerboard of high and low cells around a vertex puts
 //     four walls on one vertical edge; a local search changes one cell's roof at a time until every
-//     edge has 0 or 2 faces (or leaves the start empty when no change helps). Large programs whose
-//     solver finds no feasible point within the limits then still give a full LoD2 model.
+//     edge has 0 or 2 faces (or leaves the start empty when no change helps). Then the start descends
+//     the selection energy (the weights `energy` passed in): one cell's roof at a time, the change
+//     that lowers the energy most on each cell, keeping every edge at 0 or 2 faces and every cell
+//     holding its face prior, until no change helps. Large programs that the solver cannot finish
+//     within its limits then still give a full LoD2 model, and a good one; the solver starts from it.
 //
 // Vertex identity: a vertex is (arrangement vertex or station on an edge, height cluster). The xy
 // part comes from the exact arrangement; at one xy position the heights of the levels through it
@@ -170,7 +173,8 @@ struct CandidateFaces {
 /// The problem's edges each list at least two faces (faces that could never close are pruned), its
 /// floor faces are forced on, its face prior holds the best-supported face of each roof segment that
 /// has support, vertical_overlaps lists every pair of roof faces over the same cell, and start holds
-/// a closed selection when one was found (see 5 above).
+/// a closed selection when one was found (see 5 above), improved under the weights of `energy`;
+/// exactly_one lists the roof faces over each cell.
 /// Deterministic: the same input gives the same faces in the same order.
 /// Throws ConfigError (params) and ReconstructionError ("hypothesis: 0 planes, need at least 1 roof
 /// plane", empty footprint, no inside cell).
@@ -178,6 +182,7 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
                                    const std::vector<PlanarSegment>& roof_planes,
                                    const std::vector<VerticalPlane>& walls,
                                    const std::vector<Polygon2>& footprint_local, double ground_z,
-                                   bool ground_measured, const HypothesisParams& params);
+                                   bool ground_measured, const HypothesisParams& params,
+                                   const SelectionParams& energy = SelectionParams{});
 
 }  // namespace city3d

@@ -70,7 +70,13 @@ struct SelectionParams {
   /// Opt-in wall-clock safety limit for the whole call, seconds; 0 (the default): none. When it
   /// fires, the result depends on the machine's speed and load.
   double time_limit = 0.0;
-  long node_limit = 100000;         ///< deterministic work limit: branch-and-bound nodes per component
+  long node_limit = 1000;           ///< deterministic work limit: branch-and-bound nodes per program solved
+  /// Components with more variables than this are solved by windows from the start (when there is
+  /// one): sub-programs of about window_variables variables, the rest fixed, until a round of
+  /// windows improves nothing or window_rounds rounds are done. Deterministic; not proven optimal.
+  std::size_t max_exact_variables = 1500;
+  std::size_t window_variables = 600;
+  std::size_t window_rounds = 4;
   bool use_face_prior = true;
   bool use_single_layer = true;
   /// Throws ConfigError listing every invalid field.
@@ -92,6 +98,7 @@ struct SelectionResult {
   double seconds = 0.0;
   std::size_t variables = 0, constraints = 0;
   std::size_t components = 0;       ///< independent sub-problems solved separately
+  std::size_t window_components = 0;  ///< of them, solved by windows (too large to solve whole)
   std::string message;              ///< why, when not optimal
   /// A backend that broke on a component (CBC's process crashed) and what it said; GLPK then solved
   /// that component instead.

@@ -215,6 +215,21 @@ const std::vector<OptionSpec>& option_table() {
            throw ConfigError("option --solver: '" + v + "' is not auto, glpk or cbc");
          o.batch.reconstruction.selection.solver = v;
        }},
+      {"--node-limit", nullptr, "N", "deterministic work limit of the integer programs: branch-and-bound nodes per "
+       "program (the search keeps the best selection found when it stops there; the report says so)",
+       [](const O& o) { return std::to_string(o.batch.reconstruction.selection.node_limit); },
+       [](O& o, V v) { o.batch.reconstruction.selection.node_limit = parse_int("--node-limit", v, 1); }},
+      {"--exact-variables", nullptr, "N", "integer programs of more variables than this are solved by windows "
+       "from the start (deterministic, not proven optimal; the report says so)",
+       [](const O& o) { return std::to_string(o.batch.reconstruction.selection.max_exact_variables); },
+       [](O& o, V v) {
+         o.batch.reconstruction.selection.max_exact_variables = static_cast<std::size_t>(parse_int("--exact-variables", v, 1));
+       }},
+      {"--window-variables", nullptr, "N", "variables per window of a program solved by windows",
+       [](const O& o) { return std::to_string(o.batch.reconstruction.selection.window_variables); },
+       [](O& o, V v) {
+         o.batch.reconstruction.selection.window_variables = static_cast<std::size_t>(parse_int("--window-variables", v, 2));
+       }},
       {"--time-limit", nullptr, "S", "opt-in wall-clock safety net per building for LoD2, seconds (then it falls back); "
        "0: none, the default. When it fires, the output depends on the machine and its load",
        [](const O& o) { return number_text(o.batch.reconstruction.time_limit); },

@@ -46,7 +46,8 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
                                    const std::vector<PlanarSegment>& roof_planes_in,
                                    const std::vector<VerticalPlane>& walls,
                                    const std::vector<Polygon2>& footprint_local, double ground_z,
-                                   bool ground_measured, const HypothesisParams& params) {
+                                   bool ground_measured, const HypothesisParams& params,
+                                   const SelectionParams& energy) {
   using namespace detail;
   params.validate();
 
@@ -81,7 +82,7 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
   const auto edge_faces = lift_cells(arr, cell_planes, lv, params.vertex_merge_tolerance, out);
   build_selection_problem(points, roofs, arr, floor_z, edge_faces, params, out);
   SelectionProblem& prob = out.problem;
-  prob.start = start_assignment(out, arr, lv, cell_count);
+  prob.start = start_assignment(out, arr, lv, cell_count, energy);
 
   out.cell_count = cell_count;
   out.edge_count = arr.edges.size();

@@ -10,6 +10,15 @@
 #include "hypothesis/steps.hpp"
 
 namespace city3d::detail {
+namespace {
+
+// The descent stops after this many passes over the cells even if the last one still improved (it
+// rarely takes more than a handful).
+constexpr std::size_t kMaxDescentPasses = 50;
+// A change must lower the energy by more than this to count (rounding in the running sums).
+constexpr double kEnergyTolerance = 1e-12;
+
+}  // namespace
 
 // A feasible start for face selection: one roof face per cell, the floors, and over every edge the
 // wall faces between the roofs chosen on its two sides (or the floor, outside). Each cell first takes
@@ -18,8 +27,16 @@ namespace city3d::detail {
 // puts four walls on one vertical edge), so a local search then changes one cell's roof at a time,
 // taking the change that leaves the fewest such edges (cells holding a face prior only when no other
 // change helps), until none is left or no change helps. Returns an empty vector in that case.
+//
+// The closed start then descends the selection energy of selection.hpp under `energy`'s weights, kept
+// up to date as faces toggle (support and roof-preference sums, and per edge whether a sharp pair
+// is on): each pass visits the cells in order and gives each the roof face that lowers the energy
+// most among those that keep every edge at 0 or 2 faces; cells holding a face prior keep it, so the
+// start still satisfies the prior when it did. Passes repeat until none improves, at most
+// kMaxDescentPasses: every accepted change lowers the energy, so the search ends, and it visits the
+// same cells in the same order on every machine.
 std::vector<bool> start_assignment(const CandidateFaces& out, const PlainArrangement& arr, const Levels& lv,
-                                   std::size_t cell_count) {
+                                   std::size_t cell_count, const SelectionParams& energy) {
   const SelectionProblem& prob = out.problem;
   const std::size_t nf = out.faces.size();
   const int floor_level = lv.floor();
@@ -56,13 +73,34 @@ std::vector<bool> start_assignment(const CandidateFaces& out, const PlainArrange
   std::vector<int> count(prob.edges.size(), 0);
   std::size_t bad = 0;
   const auto is_bad = [](int n) { return n != 0 && n != 2; };
+  // The energy's parts: sum of support and of roof preference over the selected faces, and the
+  // edges where two selected faces meet at a sharp angle.
+  const double z_span = prob.z_max - prob.z_min;
+  double support_sum = 0.0, roof_sum = 0.0;
+  std::size_t sharp_edges = 0;
+  std::vector<bool> sharp(prob.edges.size(), false);
   const auto toggle = [&](std::uint32_t f) {
     selected[f] = !selected[f];
+    const double sign = selected[f] ? 1.0 : -1.0;
+    support_sum += sign * prob.support[f];
+    if (z_span > 0) roof_sum += sign * (prob.z_max - prob.centroid_z[f]) / z_span;
     for (auto e : edges_of_face[f]) {
       bad -= is_bad(count[e]);
       count[e] += selected[f] ? 1 : -1;
       bad += is_bad(count[e]);
+      bool now = false;
+      for (const auto& [a, b] : prob.edges[e].sharp_pairs) now = now || (selected[a] && selected[b]);
+      if (now != sharp[e]) {
+        sharp[e] = now;
+        sharp_edges += now ? 1 : std::size_t(0) - 1;
+      }
     }
+  };
+  const auto current_energy = [&] {
+    const double data = prob.point_count ? 1.0 - support_sum / static_cast<double>(prob.point_count) : 0.0;
+    const double complexity = prob.edges.empty() ? 0.0 : static_cast<double>(sharp_edges) / prob.edges.size();
+    const double roof = nf ? roof_sum / static_cast<double>(nf) : 0.0;
+    return energy.lambda_data * data + energy.lambda_complexity * complexity + energy.lambda_roof * roof;
   };
   const auto level = [&](int cell) {
     return cell < 0 ? floor_level : out.faces[roof_of_cell[static_cast<std::size_t>(cell)]].source;
@@ -134,6 +172,37 @@ std::vector<bool> start_assignment(const CandidateFaces& out, const PlainArrange
               " edges left with one or more than two faces)");
     return {};
   }
+
+  // Descent: one cell's roof at a time, closed and prior-keeping changes only.
+  const double initial = current_energy();
+  double e_now = initial;
+  std::size_t passes = 0, changes = 0;
+  for (bool improved = true; improved && passes < kMaxDescentPasses; ++passes) {
+    improved = false;
+    for (std::size_t c = 0; c < cell_count; ++c) {
+      const std::uint32_t current = roof_of_cell[c];
+      if (is_prior[current]) continue;
+      std::uint32_t best = current;
+      double best_energy = e_now;
+      for (auto roof : roofs_of_cell[c]) {
+        if (roof == current) continue;
+        choose(c, roof);
+        const double e = current_energy();
+        if (bad == 0 && e < best_energy - kEnergyTolerance) {
+          best = roof;
+          best_energy = e;
+        }
+        choose(c, current);
+      }
+      if (best == current) continue;
+      choose(c, best);
+      e_now = current_energy();
+      improved = true;
+      ++changes;
+    }
+  }
+  log_debug("hypothesis: start energy " + std::to_string(initial) + " -> " + std::to_string(e_now) + " (" +
+            std::to_string(changes) + " cells changed in " + std::to_string(passes) + " passes)");
   return selected;
 }
 

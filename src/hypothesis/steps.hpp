@@ -110,8 +110,9 @@ void build_selection_problem(const std::vector<Point3>& points, const std::vecto
                              const std::vector<std::vector<std::uint32_t>>& edge_faces,
                              const HypothesisParams& params, CandidateFaces& out);
 
-// 6. A closed start assignment for the solvers (start.cpp), or an empty vector when none was found.
+// 6. A closed start assignment for the solvers (start.cpp), descended under the weights of `energy`,
+// or an empty vector when none was found.
 std::vector<bool> start_assignment(const CandidateFaces& out, const PlainArrangement& arr, const Levels& lv,
-                                   std::size_t cell_count);
+                                   std::size_t cell_count, const SelectionParams& energy);
 
 }  // namespace city3d::detail

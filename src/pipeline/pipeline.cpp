@@ -135,6 +135,9 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("selection.auto_cbc_variables", p.selection.auto_cbc_variables);
   put("selection.time_limit", p.selection.time_limit);
   put("selection.node_limit", p.selection.node_limit);
+  put("selection.max_exact_variables", p.selection.max_exact_variables);
+  put("selection.window_variables", p.selection.window_variables);
+  put("selection.window_rounds", p.selection.window_rounds);
   put("selection.use_face_prior", p.selection.use_face_prior);
   put("selection.use_single_layer", p.selection.use_single_layer);
   put("assemble.collinear_tolerance", p.assemble.collinear_tolerance);
@@ -303,7 +306,8 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
 
   // Face hypothesis and selection (paper section 3.3).
   const CandidateFaces candidates =
-      generate_candidates(points, roofs, walls, outline, input.ground_z, input.ground_measured, params.hypothesis);
+      generate_candidates(points, roofs, walls, outline, input.ground_z, input.ground_measured, params.hypothesis,
+                          params.selection);
   report.candidate_faces = candidates.faces.size();
   check_time(deadline, "hypothesis");
   if (debug) write_candidates_obj(debug_path(params.debug_dir, input.id, "candidates.obj"), candidates);
@@ -483,6 +487,13 @@ void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams
   result.lods = std::move(kept);
 }
 
+// The RMSE of the model the OBJ/PLY files hold (the highest level written), already measured for its
+// level's attribute.
+double highest_level_rmse(const BuildingReport& r) {
+  const std::string highest = r.lods.substr(r.lods.rfind(',') == std::string::npos ? 0 : r.lods.rfind(',') + 1);
+  return highest == "1.2" ? r.rmse_lod12 : highest == "1.3" ? r.rmse_lod13 : r.rmse_lod22;
+}
+
 }  // namespace
 
 LodSet parse_lod_set(const std::string& text) {
@@ -639,7 +650,7 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
     }
     if (!result.model) r.status = BuildingStatus::failed;
     if (result.model) add_levels_of_detail(input, params, result);
-    if (result.model) r.rmse = rmse(result.model->mesh, input.points);
+    if (result.model) r.rmse = r.lods.empty() ? rmse(result.model->mesh, input.points) : highest_level_rmse(r);
     if (r.status == BuildingStatus::ok) r.stage.clear(), r.reason.clear();
   }
 

@@ -48,6 +48,7 @@
 #include <cmath>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <limits>
 #include <numeric>
 #include <sstream>
@@ -58,6 +59,7 @@
 #include "city3d/log.hpp"
 #include "selection/solver.hpp"
 #include "selection/solver_process.hpp"
+#include "selection/windows.hpp"
 
 namespace city3d {
 namespace {
@@ -492,6 +494,77 @@ const char* status_name(SelectionStatus status) {
   return "?";
 }
 
+/// The backends one solve_selection() call used, and the CBC failures GLPK stood in for.
+struct Backends {
+  bool glpk = false, cbc = false;
+  std::vector<std::string> failures;
+};
+
+/// One program through the backends `params` choose, under the node limit and the time left: CBC
+/// for auto_cbc_variables variables or more (or always / never with solver cbc / glpk), else GLPK
+/// first. A CBC failure hands the program to GLPK; a limit that stops the search keeps the start
+/// when it is better than what was found.
+MipSolution solve_program(const MipModel& model, const SelectionParams& params,
+                          const std::function<double()>& time_left, Backends& used) {
+  const bool automatic = params.solver == "auto";
+  const bool use_cbc = params.solver == "cbc" || (automatic && model.columns.size() >= params.auto_cbc_variables);
+  MipLimits limits;
+  limits.node_limit = params.node_limit;
+  limits.time_limit = time_left();
+  MipSolution part;
+  if (limits.time_limit <= 0.0) {
+    part.status = MipStatus::no_solution;
+    part.message = "time limit " + std::to_string(params.time_limit) + " s reached before this program";
+  } else if (use_cbc) {
+    part = detail::solve_with_cbc(model, limits);
+    used.cbc = true;
+  } else if (!automatic) {
+    part = detail::solve_with_glpk(model, limits);
+    used.glpk = true;
+  } else {
+    // "auto" below the threshold: GLPK first (with half the time left, when there is a time
+    // limit). GLPK is erratic on some programs (no incumbent after its root node, or a long
+    // search where CBC's preprocessing and heuristics finish quickly), so when it stops on a
+    // limit CBC gets the rest and the better of the two answers is kept.
+    if (std::isfinite(limits.time_limit)) limits.time_limit *= 0.5;
+    part = detail::solve_with_glpk(model, limits);
+    used.glpk = true;
+    limits.time_limit = time_left();
+    if ((part.status == MipStatus::feasible || part.status == MipStatus::no_solution) && limits.time_limit > 0.0) {
+      MipSolution second = detail::solve_with_cbc(model, limits);
+      used.cbc = true;
+      if (second.status == MipStatus::failed) {
+        used.failures.push_back(second.message);
+      } else {
+        const bool better = second.status == MipStatus::optimal || second.status == MipStatus::infeasible ||
+                            (second.status == MipStatus::feasible &&
+                             (part.status == MipStatus::no_solution || second.objective < part.objective));
+        if (better) part = std::move(second);
+      }
+    }
+  }
+  if (part.status == MipStatus::failed) {
+    // CBC broke (its process crashed: an assertion inside Clp, say). The same program goes to
+    // GLPK under the same node limit, so the building still gets a selection and the run goes on.
+    used.failures.push_back(part.message);
+    limits.time_limit = time_left();
+    part = limits.time_limit > 0.0 ? detail::solve_with_glpk(model, limits) : MipSolution{};
+    used.glpk = true;
+  }
+  if (!model.start.empty() && (part.status == MipStatus::no_solution || part.status == MipStatus::feasible)) {
+    // A limit stopped the backend: the start is feasible, so keep whichever is better.
+    double start_objective = 0.0;
+    for (std::size_t j = 0; j < model.columns.size(); ++j) start_objective += model.columns[j].cost * model.start[j];
+    if (part.status == MipStatus::no_solution || start_objective < part.objective - 1e-12) {
+      part.status = MipStatus::feasible;
+      part.values = model.start;
+      part.objective = start_objective;
+      part.message += "; the start assignment is kept";
+    }
+  }
+  return part;
+}
+
 }  // namespace
 
 void SelectionParams::validate() const {
@@ -508,6 +581,8 @@ void SelectionParams::validate() const {
   if (!std::isfinite(time_limit) || time_limit < 0.0)
     errors.push_back("time_limit = " + std::to_string(time_limit) + " s (need >= 0; 0: none)");
   if (node_limit < 1) errors.push_back("node_limit = " + std::to_string(node_limit) + " (need >= 1)");
+  if (window_variables < 2) errors.push_back("window_variables = " + std::to_string(window_variables) + " (need >= 2)");
+  if (window_rounds < 1) errors.push_back("window_rounds = " + std::to_string(window_rounds) + " (need >= 1)");
   if (errors.empty()) return;
   std::string message = "selection: invalid parameters:";
   for (const auto& e : errors) message += " " + e + ";";
@@ -597,7 +672,7 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
   const std::vector<Component> components = split_components(program);
   result.components = components.size();
   std::vector<double> solution(program.columns.size(), 0.0);
-  bool used_glpk = false, used_cbc = false;
+  Backends backends;
   result.status = SelectionStatus::optimal;
   std::vector<std::string> notes;
 
@@ -625,66 +700,16 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
     result.variables += model.columns.size();
     result.constraints += model.rows.size();
 
-    const bool automatic = params.solver == "auto";
-    const bool use_cbc = params.solver == "cbc" || (automatic && model.columns.size() >= params.auto_cbc_variables);
-    MipLimits limits;
-    limits.node_limit = params.node_limit;
-    limits.time_limit = time_left();
     MipSolution part;
-    if (limits.time_limit <= 0.0) {
-      part.status = MipStatus::no_solution;
-      part.message = "time limit " + std::to_string(params.time_limit) + " s reached before this component";
-    } else if (use_cbc) {
-      part = detail::solve_with_cbc(model, limits);
-      used_cbc = true;
-    } else if (!automatic) {
-      part = detail::solve_with_glpk(model, limits);
-      used_glpk = true;
+    if (model.columns.size() > params.max_exact_variables && !model.start.empty()) {
+      // Too large to solve whole within the work limits: windows from the start.
+      detail::WindowSearch search;
+      part = detail::solve_by_windows(
+          model, params.window_variables, params.window_rounds,
+          [&](const MipModel& window) { return solve_program(window, params, time_left, backends); }, search);
+      ++result.window_components;
     } else {
-      // "auto" below the threshold: GLPK first (with half the time left, when there is a time
-      // limit). GLPK is erratic on some programs (no incumbent after its root node, or a long
-      // search where CBC's preprocessing and heuristics finish quickly), so when it stops on a
-      // limit CBC gets the rest and the better of the two answers is kept.
-      if (std::isfinite(limits.time_limit)) limits.time_limit *= 0.5;
-      part = detail::solve_with_glpk(model, limits);
-      used_glpk = true;
-      limits.time_limit = time_left();
-      if ((part.status == MipStatus::feasible || part.status == MipStatus::no_solution) &&
-          limits.time_limit > 0.0) {
-        MipSolution second = detail::solve_with_cbc(model, limits);
-        used_cbc = true;
-        if (second.status == MipStatus::failed) {
-          notes.push_back(second.message);
-        } else {
-          const bool better = second.status == MipStatus::optimal || second.status == MipStatus::infeasible ||
-                              (second.status == MipStatus::feasible &&
-                               (part.status == MipStatus::no_solution || second.objective < part.objective));
-          if (better) part = std::move(second);
-        }
-      }
-    }
-    if (part.status == MipStatus::failed) {
-      // CBC broke (its process crashed: an assertion inside Clp, say). The same program goes to
-      // GLPK under the same node limit, so the building still gets a selection and the run goes on.
-      result.backend_failures.push_back(part.message);
-      notes.push_back(part.message + "; solved with glpk instead");
-      limits.time_limit = time_left();
-      part = limits.time_limit > 0.0 ? detail::solve_with_glpk(model, limits) : MipSolution{};
-      used_glpk = true;
-    }
-
-    if (!model.start.empty() &&
-        (part.status == MipStatus::no_solution || part.status == MipStatus::feasible)) {
-      // A limit stopped the backend: the start is feasible, so keep whichever is better.
-      double start_objective = 0.0;
-      for (std::size_t j = 0; j < model.columns.size(); ++j)
-        start_objective += model.columns[j].cost * model.start[j];
-      if (part.status == MipStatus::no_solution || start_objective < part.objective - 1e-12) {
-        part.status = MipStatus::feasible;
-        part.values = model.start;
-        part.objective = start_objective;
-        part.message += "; the start assignment (one roof per cell) is kept";
-      }
+      part = solve_program(model, params, time_left, backends);
     }
     const std::string where = "component " + std::to_string(k + 1) + "/" + std::to_string(components.size()) +
                               " (" + std::to_string(model.columns.size()) + " variables)";
@@ -704,7 +729,15 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
     }
     for (std::size_t v : component.vars) solution[v] = part.values[local[v]];
   }
-  result.solver = used_glpk && used_cbc ? "glpk+cbc" : used_cbc ? "cbc" : used_glpk ? "glpk" : "presolve";
+  result.solver = backends.glpk && backends.cbc ? "glpk+cbc" : backends.cbc ? "cbc" : backends.glpk ? "glpk" : "presolve";
+  // Each distinct failure once, with how often it happened (windows can meet the same one again).
+  for (const std::string& failure : backends.failures) {
+    const auto times = std::count(backends.failures.begin(), backends.failures.end(), failure);
+    const std::string text = failure + (times > 1 ? " (" + std::to_string(times) + " programs)" : "");
+    if (std::find(result.backend_failures.begin(), result.backend_failures.end(), text) == result.backend_failures.end())
+      result.backend_failures.push_back(text);
+  }
+  for (const std::string& failure : result.backend_failures) notes.push_back(failure + "; solved with glpk instead");
 
   if (result.status == SelectionStatus::optimal || result.status == SelectionStatus::feasible) {
     result.selected.assign(problem.face_count, false);
@@ -726,7 +759,7 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
   std::ostringstream line;
   line << "selection: " << problem.face_count << " faces, " << result.variables << " variables, "
        << result.constraints << " constraints, " << result.components << " components, " << result.solver
-       << ", " << status_name(result.status) << ", " << result.seconds << " s"
+       << ", " << status_name(result.status) << ", energy " << result.objective << ", " << result.seconds << " s"
        << (start_values.empty() ? "" : ", from a start")
        << (result.message.empty() ? "" : ": " + result.message);
   log_debug(line.str());

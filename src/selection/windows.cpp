@@ -1,0 +1,141 @@
+// Large programs by windows (windows.hpp): windows grown through shared rows, sub-programs with the
+// rest fixed at the incumbent, accepted when they lower the objective.
+#include "selection/windows.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <vector>
+
+namespace city3d::detail {
+namespace {
+
+// A window's answer must lower the objective by more than this to replace the incumbent (rounding).
+constexpr double kImprovement = 1e-12;
+
+// Rows within this of their bounds count as satisfied when the incumbent is checked.
+constexpr double kRowTolerance = 1e-9;
+
+}  // namespace
+
+MipSolution solve_by_windows(const MipModel& model, std::size_t window_variables, std::size_t max_rounds,
+                             const std::function<MipSolution(const MipModel&)>& solve, WindowSearch& search) {
+  const std::size_t n = model.columns.size();
+  MipSolution result;
+  result.status = MipStatus::feasible;
+  result.values = model.start;
+  std::vector<double>& x = result.values;
+  // Integer columns exactly integral: a value of 0.9999999 from a backend would leave the fixed
+  // share of a row a hair off its integer bound, and Clp asserts on bounds that cross by a hair.
+  const auto settle = [&model](std::size_t c, double v) { return model.columns[c].integer ? std::round(v) : v; };
+  for (std::size_t c = 0; c < n; ++c) x[c] = settle(c, x[c]);
+  std::vector<std::vector<std::size_t>> rows_of(n);
+  for (std::size_t r = 0; r < model.rows.size(); ++r)
+    for (int c : model.rows[r].columns) rows_of[static_cast<std::size_t>(c)].push_back(r);
+
+  std::vector<int> local(n, -1);
+  std::vector<std::size_t> window;
+  for (search.rounds = 0; search.rounds < max_rounds; ++search.rounds) {
+    bool improved = false;
+    std::vector<bool> held(n, false);  // by a window of this round
+    // Odd rounds seed from the last column backwards, so their windows cut the building elsewhere.
+    const bool backwards = search.rounds % 2 == 1;
+    for (std::size_t step = 0; step < n; ++step) {
+      const std::size_t seed = backwards ? n - 1 - step : step;
+      if (held[seed]) continue;
+      // The window: breadth-first from the seed through shared rows, through columns no window of
+      // this round has held first, so the round's windows overlap little.
+      window.clear();
+      std::deque<std::size_t> fresh{seed}, seen;
+      local[seed] = 0;
+      while ((!fresh.empty() || !seen.empty()) && window.size() < window_variables) {
+        std::deque<std::size_t>& from = fresh.empty() ? seen : fresh;
+        const std::size_t c = from.front();
+        from.pop_front();
+        window.push_back(c);
+        for (std::size_t r : rows_of[c])
+          for (int d : model.rows[r].columns)
+            if (local[static_cast<std::size_t>(d)] < 0) {
+              local[static_cast<std::size_t>(d)] = 0;
+              (held[static_cast<std::size_t>(d)] ? seen : fresh).push_back(static_cast<std::size_t>(d));
+            }
+      }
+      for (std::size_t c : fresh) local[c] = -1;
+      for (std::size_t c : seen) local[c] = -1;
+      std::sort(window.begin(), window.end());
+      for (std::size_t k = 0; k < window.size(); ++k) {
+        local[window[k]] = static_cast<int>(k);
+        held[window[k]] = true;
+      }
+
+      // Its sub-program: the window's columns; every row that holds one, with the fixed columns'
+      // share moved into its bounds.
+      MipModel sub;
+      double incumbent = 0.0;
+      for (std::size_t c : window) {
+        sub.columns.push_back(model.columns[c]);
+        sub.start.push_back(x[c]);
+        incumbent += model.columns[c].cost * x[c];
+      }
+      std::vector<bool> row_taken(model.rows.size(), false);
+      for (std::size_t c : window)
+        for (std::size_t r : rows_of[c]) {
+          if (row_taken[r]) continue;
+          row_taken[r] = true;
+          const MipModel::Row& row = model.rows[r];
+          MipModel::Row part;
+          double fixed = 0.0;
+          for (std::size_t k = 0; k < row.columns.size(); ++k) {
+            const int l = local[static_cast<std::size_t>(row.columns[k])];
+            if (l >= 0) {
+              part.columns.push_back(l);
+              part.values.push_back(row.values[k]);
+            } else {
+              fixed += row.values[k] * x[static_cast<std::size_t>(row.columns[k])];
+            }
+          }
+          part.lower = row.lower - fixed;
+          part.upper = row.upper - fixed;
+          sub.rows.push_back(std::move(part));
+        }
+      for (std::size_t c : window) local[c] = -1;
+
+      const MipSolution answer = solve(sub);
+      ++search.windows;
+      if ((answer.status == MipStatus::optimal || answer.status == MipStatus::feasible) &&
+          answer.values.size() == window.size()) {
+        double objective = 0.0;
+        for (std::size_t k = 0; k < window.size(); ++k) objective += sub.columns[k].cost * answer.values[k];
+        if (objective < incumbent - kImprovement) {
+          for (std::size_t k = 0; k < window.size(); ++k) x[window[k]] = settle(window[k], answer.values[k]);
+          improved = true;
+          ++search.improved;
+        }
+      }
+    }
+    if (!improved) {
+      ++search.rounds;
+      break;
+    }
+  }
+
+  result.objective = 0.0;
+  for (std::size_t c = 0; c < n; ++c) result.objective += model.columns[c].cost * x[c];
+  // Every accepted window kept its rows; check it once more over the whole program.
+  for (const MipModel::Row& row : model.rows) {
+    double sum = 0.0;
+    for (std::size_t k = 0; k < row.columns.size(); ++k) sum += row.values[k] * x[static_cast<std::size_t>(row.columns[k])];
+    if (sum < row.lower - kRowTolerance || sum > row.upper + kRowTolerance) {
+      result.status = MipStatus::no_solution;
+      result.values.clear();
+      result.message = "windows: the combined answer breaks a row";
+      return result;
+    }
+  }
+  result.message = "solved by " + std::to_string(search.windows) + " windows of up to " +
+                   std::to_string(window_variables) + " variables in " + std::to_string(search.rounds) +
+                   " rounds (" + std::to_string(search.improved) + " improved the start); not proven optimal";
+  return result;
+}
+
+}  // namespace city3d::detail
