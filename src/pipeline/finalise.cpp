@@ -19,6 +19,7 @@
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
 #include "city3d/model_io.hpp"
+#include "city3d/run_outputs.hpp"
 #include "io/atomic_file.hpp"
 #include "pipeline/report.hpp"
 
@@ -194,10 +195,20 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const
     std::fwrite(header.data(), 1, header.size(), seq->file());
   }
   ReportWriter report((out / "report.csv").string(), (out / "report.json").string(), summary);
+  // The overview outputs' inputs, gathered in the same pass: every record's report row,
+  // CityJSONFeature and footprint.
+  const bool overview = whole && (layout.gpkg || layout.html);
+  std::vector<std::string> overview_reports, overview_features;
+  std::vector<Footprint> overview_footprints;
 
   for (const RecordSource& source : records) {
     BuildingRecord r = source.journal->read(*source.ref);
     report.add(r.report_csv, r.report_json);
+    if (overview) {
+      overview_reports.push_back(r.report_json);
+      overview_features.push_back(r.feature);
+      overview_footprints.push_back(r.footprint ? std::move(*r.footprint) : Footprint{});
+    }
     if (r.feature.empty()) continue;
     if (cityjson) cityjson->add(r.feature);
     if (seq) {
@@ -227,6 +238,18 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const
   report.close();
   written.push_back("report.csv");
   written.push_back("report.json");
+  if (overview) {
+    const std::vector<OverviewRecord> overview_rows =
+        overview_records(overview_reports, overview_features, overview_footprints, layout.scale, layout.translate);
+    if (layout.gpkg) {
+      write_gpkg((out / "buildings.gpkg").string(), overview_rows, layout.crs);
+      written.push_back("buildings.gpkg");
+    }
+    if (layout.html) {
+      write_report_html((out / "report.html").string(), overview_rows, layout.crs);
+      written.push_back("report.html");
+    }
+  }
   for (const std::string& name : written) outputs[name] = file_stamp_of((out / name).string());
   return summary;
 }

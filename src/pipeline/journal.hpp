@@ -31,6 +31,10 @@ struct BuildingRecord {
   std::string model_file;   ///< file name under models/ (empty when none was written)
   std::string model_hash;   ///< content_hash() of that file
   std::optional<BuildingModel> mesh;  ///< the model itself, kept only when a run-level file needs it (--merged)
+  /// The input footprint as read: its polygons (world coordinates) and the source's attributes with
+  /// their types, nothing else of it. Kept only when the overview outputs (buildings.gpkg,
+  /// report.html) need it, so that a merge of shards makes them from the records alone.
+  std::optional<Footprint> footprint;
 };
 
 /// What the run-level files of a run look like: the same for every shard of it.
@@ -45,6 +49,8 @@ struct RunLayout {
   bool per_building_files = true;
   bool local_coordinates = false;
   MeshFormat format = MeshFormat::obj;
+  bool gpkg = false;             ///< buildings.gpkg
+  bool html = false;             ///< report.html
 };
 
 /// The first line of a journal: which run (and which shard of it) the records belong to.
