@@ -5,6 +5,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -23,6 +24,8 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "city3d/footprint_io.hpp"
 #include "city3d/error.hpp"
@@ -147,6 +150,43 @@ pid_t spawn(const std::vector<std::string>& arguments, const fs::path& log) {
   return pid;
 }
 
+// A shard folder holding `copies` copies of the records of `from` (a finished shard 1/1), each under a
+// new index and id and without a model file, and whether the run asked for the overview outputs: a run
+// of copies x its buildings, to measure a merge with.
+void replicate_shard(const fs::path& from, const fs::path& to, int copies, bool overview) {
+  using nlohmann::json;
+  const auto line_of = [](const json& j) {
+    const std::string text = j.dump();
+    return city3d::detail::content_hash(text) + " " + text + "\n";
+  };
+  const std::vector<std::string> lines = lines_of(read_file(from / "resume.journal"));
+  json header = json::parse(lines.front().substr(17));
+  const std::size_t records = (lines.size() - 1) * static_cast<std::size_t>(copies);
+  header["expected"] = records;
+  header["layout"]["records"] = records;
+  header["layout"]["merged_file"] = false;
+  header["layout"]["gpkg"] = overview;
+  header["layout"]["html"] = overview;
+  fs::create_directories(to);
+  std::ofstream out(to / "resume.journal", std::ios::binary);
+  out << line_of(header);
+  std::size_t index = 0;
+  for (int c = 0; c < copies; ++c)
+    for (std::size_t k = 1; k < lines.size(); ++k) {
+      json record = json::parse(lines[k].substr(17));
+      record["index"] = index++;
+      record["id"] = record["id"].get<std::string>() + "_" + std::to_string(c);
+      record["model"] = "";
+      record["model_hash"] = "";
+      out << line_of(record);
+    }
+  json manifest = json::parse(read_file(from / "run.json"));
+  manifest["expected"] = records;
+  manifest["records"] = records;
+  manifest["outputs"] = json::object();
+  write_file(to / "run.json", manifest.dump());
+}
+
 class Shards : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -220,6 +260,39 @@ TEST_F(Shards, merge_writes_buildings_gpkg_and_report_html_only_when_the_run_ask
   EXPECT_TRUE(fs::exists(dir_ / "merged" / "report.csv"));
   EXPECT_FALSE(fs::exists(dir_ / "merged" / "buildings.gpkg"));
   EXPECT_FALSE(fs::exists(dir_ / "merged" / "report.html"));
+}
+
+// A country is merged region by region, each of about half a million buildings (docs/COST_MODEL.md):
+// merge must not hold every record's journal line (about 6 KB each) to copy the journal, nor every
+// record's models to write buildings.gpkg and report.html.
+TEST_F(Shards, merge_memory_grows_by_little_more_than_a_reference_per_record) {
+  ASSERT_EQ(reconstruct(dir_ / "one", "--shard 1/1").exit_code, 0);  // 15 buildings, with --gpkg and report.html
+  const auto peak_kb_of_merge = [&](const fs::path& shard) {
+    const fs::path out = dir_ / ("merged_" + shard.filename().string());
+    const pid_t pid = spawn({"merge", shard.string(), "-o", out.string(), "-q"}, dir_ / "merge.log");
+    int status = 0;
+    struct rusage usage {};
+    ::wait4(pid, &status, 0, &usage);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << read_file(dir_ / "merge.log");
+    EXPECT_TRUE(fs::exists(out / "run.json")) << shard;
+    return static_cast<double>(usage.ru_maxrss);
+  };
+  replicate_shard(dir_ / "one", dir_ / "small", 10, false);    // 150 records
+  replicate_shard(dir_ / "one", dir_ / "big", 400, false);     // 6,000 records
+  replicate_shard(dir_ / "one", dir_ / "small_overview", 10, true);
+  replicate_shard(dir_ / "one", dir_ / "big_overview", 400, true);
+  const double small = peak_kb_of_merge(dir_ / "small");
+  const double big = peak_kb_of_merge(dir_ / "big");
+  const double small_overview = peak_kb_of_merge(dir_ / "small_overview");
+  const double big_overview = peak_kb_of_merge(dir_ / "big_overview");
+  EXPECT_EQ(lines_of(read_file(dir_ / "merged_big" / "resume.journal")).size(), 6001u);
+  EXPECT_TRUE(fs::exists(dir_ / "merged_big_overview" / "buildings.gpkg"));
+  EXPECT_TRUE(fs::exists(dir_ / "merged_big_overview" / "report.html"));
+  // Per record: a reference to it (and no copy of its line) ...
+  EXPECT_LT((big - small) * 1024.0 / 5850.0, 1024.0) << small << " KB for 150 records, " << big << " KB for 6,000";
+  // ... and with the overview outputs, its row of report.html (about 0.5 KB) too, not its models.
+  EXPECT_LT((big_overview - small_overview) * 1024.0 / 5850.0, 2048.0)
+      << small_overview << " KB for 150 records, " << big_overview << " KB for 6,000, with the overview outputs";
 }
 
 TEST_F(Shards, merge_refuses_a_missing_an_incomplete_and_a_foreign_shard_and_names_it) {

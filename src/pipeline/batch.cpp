@@ -626,9 +626,7 @@ BatchSummary merge_shards(const MergeOptions& options) {
   }
   // Model files, copied and checked against the hash their shard recorded.
   if (layout.per_building_files) fs::create_directories(fs::path(options.output_dir) / "models");
-  std::vector<std::string> lines;
   for (const detail::RecordSource& source : sources) {
-    lines.push_back(source.journal->line(*source.ref));
     const detail::RecordRef& ref = *source.ref;
     if (ref.model_file.empty()) continue;
     const fs::path from = fs::path(source.journal->path()).parent_path() / "models" / ref.model_file;
@@ -642,8 +640,10 @@ BatchSummary merge_shards(const MergeOptions& options) {
     copy.commit();
   }
   // The merged folder's journal, as one process would have left it: a later run of the same inputs
-  // and parameters into it resumes every building.
-  detail::write_journal((fs::path(options.output_dir) / "resume.journal").string(), whole, lines);
+  // and parameters into it resumes every building. Its lines are copied one at a time: the journals of
+  // a region's shards can be gigabytes.
+  detail::write_journal((fs::path(options.output_dir) / "resume.journal").string(), whole, sources.size(),
+                        [&sources](std::size_t k) { return sources[k].journal->line(*sources[k].ref); });
   double seconds = 0.0;
   for (const Shard& s : shards) seconds += s.manifest.seconds;
   detail::RunManifest manifest;

@@ -57,6 +57,23 @@ void remove_temporary_files(const fs::path& folder, bool locked) {
   }
 }
 
+// The records of a run as the overview outputs read them, one at a time, from their journals.
+class JournalOverview : public OverviewSource {
+ public:
+  JournalOverview(const std::vector<RecordSource>& records, const RunLayout& layout)
+      : records_(records), layout_(layout) {}
+  std::size_t size() const override { return records_.size(); }
+  OverviewRecord at(std::size_t k, bool levels) const override {
+    BuildingRecord r = records_[k].journal->read(*records_[k].ref);
+    return overview_record(r.report_json, r.feature, r.footprint ? std::move(*r.footprint) : Footprint{},
+                           layout_.scale, layout_.translate, k, levels);
+  }
+
+ private:
+  const std::vector<RecordSource>& records_;
+  const RunLayout& layout_;
+};
+
 }  // namespace
 
 std::string file_stamp_of(const std::string& path) {
@@ -195,20 +212,10 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const
     std::fwrite(header.data(), 1, header.size(), seq->file());
   }
   ReportWriter report((out / "report.csv").string(), (out / "report.json").string(), summary);
-  // The overview outputs' inputs, gathered in the same pass: every record's report row,
-  // CityJSONFeature and footprint.
-  const bool overview = whole && (layout.gpkg || layout.html);
-  std::vector<std::string> overview_reports, overview_features;
-  std::vector<Footprint> overview_footprints;
 
   for (const RecordSource& source : records) {
     BuildingRecord r = source.journal->read(*source.ref);
     report.add(r.report_csv, r.report_json);
-    if (overview) {
-      overview_reports.push_back(r.report_json);
-      overview_features.push_back(r.feature);
-      overview_footprints.push_back(r.footprint ? std::move(*r.footprint) : Footprint{});
-    }
     if (r.feature.empty()) continue;
     if (cityjson) cityjson->add(r.feature);
     if (seq) {
@@ -238,15 +245,16 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const
   report.close();
   written.push_back("report.csv");
   written.push_back("report.json");
-  if (overview) {
-    const std::vector<OverviewRecord> overview_rows =
-        overview_records(overview_reports, overview_features, overview_footprints, layout.scale, layout.translate);
+  // The overview outputs, reading the records again one at a time (a run's records are never all in
+  // memory at once).
+  if (whole && (layout.gpkg || layout.html)) {
+    const JournalOverview overview(records, layout);
     if (layout.gpkg) {
-      write_gpkg((out / "buildings.gpkg").string(), overview_rows, layout.crs);
+      write_gpkg((out / "buildings.gpkg").string(), overview, layout.crs);
       written.push_back("buildings.gpkg");
     }
     if (layout.html) {
-      write_report_html((out / "report.html").string(), overview_rows, layout.crs);
+      write_report_html((out / "report.html").string(), overview, layout.crs);
       written.push_back("report.html");
     }
   }

@@ -399,7 +399,7 @@ Journal::Journal(const std::string& output_dir, JournalHeader header, bool resum
     }
   }
   // Rewrite the journal with its good lines only, then append to it.
-  write_journal(path_, header, kept);
+  write_journal(path_, header, kept.size(), [&kept](std::size_t k) { return kept[k]; });
   file_ = std::fopen(path_.c_str(), "ab");
   if (!file_) throw IoError("resume: cannot append to " + path_ + ": " + std::strerror(errno));
   if (!done_.empty()) log_info("resume: " + std::to_string(done_.size()) + " finished buildings in " + path_);
@@ -425,7 +425,8 @@ void Journal::append(const BuildingRecord& record) {
     throw IoError("resume: cannot append to " + path_ + ": " + std::strerror(errno));
 }
 
-void write_journal(const std::string& path, const JournalHeader& header, const std::vector<std::string>& lines) {
+void write_journal(const std::string& path, const JournalHeader& header, std::size_t count,
+                   const std::function<std::string(std::size_t)>& line_at) {
   // A fixed temporary name: only one run may write into a folder (the folder lock), and a stale one
   // is removed when the next run starts.
   const std::string temp = path + ".tmp";
@@ -433,8 +434,16 @@ void write_journal(const std::string& path, const JournalHeader& header, const s
   if (!f) throw IoError("resume: cannot write " + temp + ": " + std::strerror(errno));
   const std::string first = make_line(header_json(header)) + "\n";
   bool ok = std::fwrite(first.data(), 1, first.size(), f) == first.size();
-  for (const std::string& line : lines)
-    ok = ok && std::fwrite(line.data(), 1, line.size(), f) == line.size() && std::fputc('\n', f) != EOF;
+  try {
+    for (std::size_t k = 0; k < count && ok; ++k) {
+      const std::string line = line_at(k);
+      ok = std::fwrite(line.data(), 1, line.size(), f) == line.size() && std::fputc('\n', f) != EOF;
+    }
+  } catch (...) {
+    std::fclose(f);
+    std::remove(temp.c_str());
+    throw;
+  }
   if (std::fclose(f) != 0 || !ok || std::rename(temp.c_str(), path.c_str()) != 0) {
     const int err = errno;
     std::remove(temp.c_str());

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -135,9 +136,11 @@ class Journal {
   std::vector<std::pair<std::string, std::string>> earlier_models_;
 };
 
-/// Writes a journal that holds `header` and the given lines (record lines as JournalReader::line()
-/// returns them), atomically. Used by merge to leave a journal beside the merged output.
-void write_journal(const std::string& path, const JournalHeader& header, const std::vector<std::string>& lines);
+/// Writes a journal that holds `header` and `count` record lines, line_at(k) giving the k-th (as
+/// JournalReader::line() returns it), atomically; one line is held at a time. Used by merge to leave a
+/// journal beside the merged output.
+void write_journal(const std::string& path, const JournalHeader& header, std::size_t count,
+                   const std::function<std::string(std::size_t)>& line_at);
 
 /// A fingerprint of everything that determines the records of a run: the version, the input files
 /// (canonical path, size, modification time) and every option that changes a building's outputs.
