@@ -545,15 +545,31 @@ TEST_F(Reconstruct, unusable_output_or_debug_folder_is_an_input_error_naming_the
     EXPECT_TRUE(contains(r.output, c.message)) << c.options << "\n" << r.output;
     EXPECT_FALSE(contains(r.output, "internal error")) << r.output;
   }
-  // Without write permission (only testable when not root: root writes anywhere).
-  if (::geteuid() != 0) {
-    fs::create_directories(dir_ / "locked");
-    fs::permissions(dir_ / "locked", fs::perms::owner_read | fs::perms::owner_exec);
-    const Result r = run(args + " -o " + (dir_ / "locked" / "out").string());
-    fs::permissions(dir_ / "locked", fs::perms::owner_all);
-    EXPECT_EQ(r.exit_code, 1) << r.output;
-    EXPECT_TRUE(contains(r.output, "Permission denied")) << r.output;
+  // Without write permission, for the output and the --debug folder. Root writes anywhere, so as root
+  // (CI) the run is made as the user nobody (setpriv, util-linux) in a folder only root may write.
+  std::string as_user;
+  if (::geteuid() == 0) {
+    if (run_shell("command -v setpriv > /dev/null").exit_code != 0) GTEST_SKIP() << "root without setpriv";
+    as_user = "setpriv --reuid=65534 --regid=65534 --clear-groups ";
   }
+  fs::create_directories(dir_ / "locked");
+  fs::permissions(dir_ / "locked", ::geteuid() == 0 ? fs::perms::owner_all | fs::perms::others_read | fs::perms::others_exec
+                                                    : fs::perms::owner_read | fs::perms::owner_exec);
+  // nobody must reach the inputs and the executable, and write the other folder.
+  fs::permissions(dir_, fs::perms::others_read | fs::perms::others_exec, fs::perm_options::add);
+  fs::create_directories(dir_ / "open");
+  fs::permissions(dir_ / "open", fs::perms::all);
+  const Result out = run_shell(as_user + CITY3D_EXE + " " + args + " -o " + (dir_ / "locked" / "out").string());
+  const Result debug = run_shell(as_user + CITY3D_EXE + " " + args + " -o " + (dir_ / "open" / "out").string() +
+                                 " --debug " + (dir_ / "locked" / "debug").string());
+  fs::permissions(dir_ / "locked", fs::perms::owner_all);
+  EXPECT_EQ(out.exit_code, 1) << out.output;
+  EXPECT_TRUE(contains(out.output, "output: cannot create folder " + (dir_ / "locked" / "out").string() +
+                                       ": Permission denied")) << out.output;
+  EXPECT_EQ(debug.exit_code, 1) << debug.output;
+  EXPECT_TRUE(contains(debug.output, "debug: cannot create folder " + (dir_ / "locked" / "debug").string() +
+                                         ": Permission denied")) << debug.output;
+  EXPECT_FALSE(fs::exists(dir_ / "open" / "out"));  // a run that fails on its outputs leaves no folder
 }
 
 namespace {
