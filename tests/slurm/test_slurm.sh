@@ -123,7 +123,8 @@ same_outputs() {  # the outputs of two folders: byte for byte, the reports up to
 same_outputs "$tmp/single" "$tmp/merged1"
 echo "4 shards + merge: identical to one process"
 
-# Again, with shard 3 killed (-9) once it has finished a few buildings.
+# Again, two shards per array task (task 2 runs shards 3 and 4), with shard 3 killed (-9) once it has
+# finished a few buildings: task 2 goes on with shard 4, then fails, so the merge does not run.
 cat > "$tmp/city3d-killed-once" << WRAPPER
 #!/usr/bin/env bash
 if [[ " \$* " == *" --shard 3/4 "* && ! -e "$tmp/killed" ]]; then
@@ -138,7 +139,7 @@ fi
 exec "$city3d" "\$@"
 WRAPPER
 chmod +x "$tmp/city3d-killed-once"
-if "$repo/scripts/slurm/city3d-slurm" submit --work "$tmp/w2" --output "$tmp/merged2" --shards 4 \
+if "$repo/scripts/slurm/city3d-slurm" submit --work "$tmp/w2" --output "$tmp/merged2" --shards 4 --per-task 2 \
   --city3d "$tmp/city3d-killed-once" --sbatch "--cpus-per-task=1" --wait -- "${reconstruct_args[@]}"; then
   fail "the merge ran although shard 3 was killed"
 fi
@@ -151,7 +152,13 @@ echo "$status"
 grep -q "not finished: 3 " <<< "$status" || fail "status does not name shard 3"
 resubmitted="$("$repo/scripts/slurm/city3d-slurm" resubmit --work "$tmp/w2" --wait)" || fail "the re-submission failed"
 echo "$resubmitted"
-grep -q "shard tasks 3 of job" <<< "$resubmitted" || fail "the re-submission did not submit only shard 3"
-grep -q "resume: [1-9][0-9]* finished buildings" "$tmp"/w2/logs/shards-*_3.out || fail "shard 3 did not resume from its journal"
+job="$(sed -nE 's/.*shard tasks 2 of job ([0-9]+).*/\1/p' <<< "$resubmitted")"
+[[ -n "$job" ]] || fail "the re-submission did not submit only task 2 (shards 3 and 4)"
+# In the re-submitted task, shard 3 resumes from its journal and finished shard 4 is only re-assembled.
+section() { awk -v k="$1" '$0 ~ "city3d-slurm: shard " k "/4" {on = 1; next} /city3d-slurm: shard [0-9]+\/4/ {on = 0} on' \
+  "$tmp/w2/logs/shards-${job}_2.out"; }
+section 3 | grep -q "resume: [1-9][0-9]* finished buildings" || fail "shard 3 did not resume from its journal"
+section 4 | grep -q "resume: [1-9][0-9]* finished buildings" || fail "shard 4 was not only re-assembled from its journal"
+section 4 | grep -q "points streamed" && fail "shard 4 read its tiles again"
 same_outputs "$tmp/single" "$tmp/merged2"
 echo "shard 3 killed, re-submitted, resumed + merge: identical to one process"
