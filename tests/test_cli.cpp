@@ -332,6 +332,77 @@ TEST_F(Reconstruct, output_is_byte_identical_for_one_and_two_jobs_and_any_block_
     EXPECT_EQ(read_file(entry.path()), read_file(dir_ / "j2" / "models" / entry.path().filename())) << entry.path();
 }
 
+namespace {
+
+// Faces of an OBJ model that are neither horizontal nor vertical (a slanted roof), by Newell normals.
+std::size_t slanted_faces(const fs::path& obj) {
+  std::vector<std::array<double, 3>> v;
+  std::size_t slanted = 0;
+  for (const std::string& line : lines_of(read_file(obj))) {
+    std::stringstream ss(line);
+    std::string tag;
+    ss >> tag;
+    if (tag == "v") {
+      std::array<double, 3> p{};
+      ss >> p[0] >> p[1] >> p[2];
+      v.push_back(p);
+    } else if (tag == "f") {
+      std::vector<std::size_t> face;
+      for (std::string index; ss >> index;) face.push_back(std::stoul(index.substr(0, index.find('/'))) - 1);
+      double n[3] = {0, 0, 0};
+      for (std::size_t k = 0; k < face.size(); ++k) {
+        const auto& a = v.at(face[k]);
+        const auto& b = v.at(face[(k + 1) % face.size()]);
+        n[0] += (a[1] - b[1]) * (a[2] + b[2]);
+        n[1] += (a[2] - b[2]) * (a[0] + b[0]);
+        n[2] += (a[0] - b[0]) * (a[1] + b[1]);
+      }
+      const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      if (len > 0 && std::fabs(n[2]) / len > 0.01 && std::fabs(n[2]) / len < 0.99) ++slanted;
+    }
+  }
+  return slanted;
+}
+
+}  // namespace
+
+// Issue 13 item 3: --lod chooses the levels CityJSON holds; OBJ/PLY hold one, the highest asked for;
+// 1.2 alone makes blocks without trying LoD2.
+TEST_F(Reconstruct, lod_option_chooses_the_levels_of_cityjson_and_obj_holds_the_highest) {
+  struct Case {
+    std::string lods;
+    std::vector<std::string> in, out;
+    bool slanted_obj;  // the OBJ models are LoD2.2 (slanted roofs), not blocks
+    std::string report;
+  };
+  const std::vector<Case> cases = {
+      {"1.2,1.3,2.2", {"1.2", "1.3", "2.2"}, {}, true, ",LoD2.2,"},
+      {"1.2,1.3", {"1.2", "1.3"}, {"2.2"}, false, "\"1.2,1.3\",\"1.2,1.3\""},
+      {"2.2", {"2.2"}, {"1.2", "1.3"}, true, ",2.2,2.2,"},
+      {"1.2", {"1.2"}, {"1.3", "2.2"}, false, ",LoD1.2,"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE("--lod " + c.lods);
+    const fs::path out = dir_ / ("lod" + c.lods);
+    const Result r = run("reconstruct " + sample_args() + " --no-html --lod " + c.lods + " -o " + out.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const std::string cityjson = read_file(out / "buildings.city.json");
+    for (const std::string& lod : c.in)
+      EXPECT_TRUE(contains(cityjson, "{\"type\":\"Solid\",\"lod\":\"" + lod + "\"")) << lod;
+    for (const std::string& lod : c.out)
+      EXPECT_FALSE(contains(cityjson, "\"lod\":\"" + lod + "\"")) << lod;
+    std::size_t slanted = 0;
+    for (const auto& entry : fs::directory_iterator(out / "models")) slanted += slanted_faces(entry.path());
+    if (c.slanted_obj)
+      EXPECT_GT(slanted, 15u);  // the sample's roofs are pitched
+    else
+      EXPECT_EQ(slanted, 0u);
+    const auto rows = lines_of(read_file(out / "report.csv"));
+    ASSERT_EQ(rows.size(), 16u);
+    for (std::size_t i = 1; i < rows.size(); ++i) EXPECT_TRUE(contains(rows[i], c.report)) << rows[i];
+  }
+}
+
 TEST_F(Reconstruct, single_building_cloud_without_footprint_gives_one_model) {
   const std::string ply = kShared + "/city3d_smoke/AHN3";
   if (!fs::exists(ply)) GTEST_SKIP() << "../shared/data is not beside the repository";
@@ -474,15 +545,31 @@ TEST_F(Reconstruct, unusable_output_or_debug_folder_is_an_input_error_naming_the
     EXPECT_TRUE(contains(r.output, c.message)) << c.options << "\n" << r.output;
     EXPECT_FALSE(contains(r.output, "internal error")) << r.output;
   }
-  // Without write permission (only testable when not root: root writes anywhere).
-  if (::geteuid() != 0) {
-    fs::create_directories(dir_ / "locked");
-    fs::permissions(dir_ / "locked", fs::perms::owner_read | fs::perms::owner_exec);
-    const Result r = run(args + " -o " + (dir_ / "locked" / "out").string());
-    fs::permissions(dir_ / "locked", fs::perms::owner_all);
-    EXPECT_EQ(r.exit_code, 1) << r.output;
-    EXPECT_TRUE(contains(r.output, "Permission denied")) << r.output;
+  // Without write permission, for the output and the --debug folder. Root writes anywhere, so as root
+  // (CI) the run is made as the user nobody (setpriv, util-linux) in a folder only root may write.
+  std::string as_user;
+  if (::geteuid() == 0) {
+    if (run_shell("command -v setpriv > /dev/null").exit_code != 0) GTEST_SKIP() << "root without setpriv";
+    as_user = "setpriv --reuid=65534 --regid=65534 --clear-groups ";
   }
+  fs::create_directories(dir_ / "locked");
+  fs::permissions(dir_ / "locked", ::geteuid() == 0 ? fs::perms::owner_all | fs::perms::others_read | fs::perms::others_exec
+                                                    : fs::perms::owner_read | fs::perms::owner_exec);
+  // nobody must reach the inputs and the executable, and write the other folder.
+  fs::permissions(dir_, fs::perms::others_read | fs::perms::others_exec, fs::perm_options::add);
+  fs::create_directories(dir_ / "open");
+  fs::permissions(dir_ / "open", fs::perms::all);
+  const Result out = run_shell(as_user + CITY3D_EXE + " " + args + " -o " + (dir_ / "locked" / "out").string());
+  const Result debug = run_shell(as_user + CITY3D_EXE + " " + args + " -o " + (dir_ / "open" / "out").string() +
+                                 " --debug " + (dir_ / "locked" / "debug").string());
+  fs::permissions(dir_ / "locked", fs::perms::owner_all);
+  EXPECT_EQ(out.exit_code, 1) << out.output;
+  EXPECT_TRUE(contains(out.output, "output: cannot create folder " + (dir_ / "locked" / "out").string() +
+                                       ": Permission denied")) << out.output;
+  EXPECT_EQ(debug.exit_code, 1) << debug.output;
+  EXPECT_TRUE(contains(debug.output, "debug: cannot create folder " + (dir_ / "locked" / "debug").string() +
+                                         ": Permission denied")) << debug.output;
+  EXPECT_FALSE(fs::exists(dir_ / "open" / "out"));  // a run that fails on its outputs leaves no folder
 }
 
 namespace {

@@ -5,15 +5,19 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -21,10 +25,13 @@
 #include <thread>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "city3d/footprint_io.hpp"
 #include "city3d/error.hpp"
 #include "city3d/model_io.hpp"
 #include "city3d/options.hpp"
+#include "pipeline/journal.hpp"
 
 extern char** environ;
 
@@ -77,6 +84,25 @@ std::string without_timings(const std::string& report) {
   return std::regex_replace(std::regex_replace(report, csv_seconds, ",S,S\n"), json_seconds, "\"$1seconds\": S");
 }
 
+// report.html without each building's seconds ("t" in the page's data).
+std::string html_without_timings(const std::string& page) {
+  static const std::regex seconds(R"("t":(null|-?[0-9.]+))");
+  return std::regex_replace(page, seconds, "\"t\":S");
+}
+
+// What ogrinfo reads from a GeoPackage: every layer's fields and every feature with its values and
+// geometry, without the line naming the file.
+std::string gpkg_dump(const fs::path& gpkg) {
+  const Result r = run_shell("ogrinfo -ro -al -q " + gpkg.string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "Layer name: buildings")) << r.output.substr(0, 400);
+  EXPECT_TRUE(contains(r.output, "Layer name: roof_parts")) << r.output.substr(0, 400);
+  EXPECT_TRUE(contains(r.output, "MULTIPOLYGON (((")) << r.output.substr(0, 400);
+  return r.output;
+}
+
+bool have_ogrinfo() { return run_shell("command -v ogrinfo > /dev/null").exit_code == 0; }
+
 std::set<std::string> files_in(const fs::path& dir) {
   std::set<std::string> names;
   std::error_code ec;
@@ -85,17 +111,23 @@ std::set<std::string> files_in(const fs::path& dir) {
 }
 
 // Every output of two folders equal: CityJSON, CityJSONSeq, models.obj and every model byte for
-// byte; the reports up to their timings.
+// byte; the GeoPackage as ogrinfo reads it (and byte for byte: its timestamp is fixed); the reports
+// (report.html too) up to their timings.
 void expect_same_outputs(const fs::path& a, const fs::path& b) {
-  for (const char* f : {"buildings.city.json", "buildings.city.jsonl", "models.obj"}) {
+  for (const char* f : {"buildings.city.json", "buildings.city.jsonl", "models.obj", "buildings.gpkg"}) {
     ASSERT_TRUE(fs::exists(a / f)) << a / f;
+    ASSERT_TRUE(fs::exists(b / f)) << b / f;
     EXPECT_EQ(read_file(a / f), read_file(b / f)) << f;
   }
+  if (have_ogrinfo()) EXPECT_EQ(gpkg_dump(a / "buildings.gpkg"), gpkg_dump(b / "buildings.gpkg"));
   for (const char* f : {"report.csv", "report.json"}) {
     const std::string ra = read_file(a / f), rb = read_file(b / f);
     EXPECT_FALSE(ra.empty()) << a / f;
     EXPECT_EQ(without_timings(ra), without_timings(rb)) << f;
   }
+  const std::string ha = read_file(a / "report.html"), hb = read_file(b / "report.html");
+  EXPECT_TRUE(contains(ha, "city3d report ready")) << a / "report.html";
+  EXPECT_EQ(html_without_timings(ha), html_without_timings(hb)) << "report.html";
   EXPECT_EQ(files_in(a / "models"), files_in(b / "models"));
   for (const std::string& name : files_in(a / "models"))
     EXPECT_EQ(read_file(a / "models" / name), read_file(b / "models" / name)) << name;
@@ -118,6 +150,43 @@ pid_t spawn(const std::vector<std::string>& arguments, const fs::path& log) {
   return pid;
 }
 
+// A shard folder holding `copies` copies of the records of `from` (a finished shard 1/1), each under a
+// new index and id and without a model file, and whether the run asked for the overview outputs: a run
+// of copies x its buildings, to measure a merge with.
+void replicate_shard(const fs::path& from, const fs::path& to, int copies, bool overview) {
+  using nlohmann::json;
+  const auto line_of = [](const json& j) {
+    const std::string text = j.dump();
+    return city3d::detail::content_hash(text) + " " + text + "\n";
+  };
+  const std::vector<std::string> lines = lines_of(read_file(from / "resume.journal"));
+  json header = json::parse(lines.front().substr(17));
+  const std::size_t records = (lines.size() - 1) * static_cast<std::size_t>(copies);
+  header["expected"] = records;
+  header["layout"]["records"] = records;
+  header["layout"]["merged_file"] = false;
+  header["layout"]["gpkg"] = overview;
+  header["layout"]["html"] = overview;
+  fs::create_directories(to);
+  std::ofstream out(to / "resume.journal", std::ios::binary);
+  out << line_of(header);
+  std::size_t index = 0;
+  for (int c = 0; c < copies; ++c)
+    for (std::size_t k = 1; k < lines.size(); ++k) {
+      json record = json::parse(lines[k].substr(17));
+      record["index"] = index++;
+      record["id"] = record["id"].get<std::string>() + "_" + std::to_string(c);
+      record["model"] = "";
+      record["model_hash"] = "";
+      out << line_of(record);
+    }
+  json manifest = json::parse(read_file(from / "run.json"));
+  manifest["expected"] = records;
+  manifest["records"] = records;
+  manifest["outputs"] = json::object();
+  write_file(to / "run.json", manifest.dump());
+}
+
 class Shards : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -131,8 +200,8 @@ class Shards : public ::testing::Test {
   std::vector<std::string> sample(const fs::path& out) const {
     const std::string d = CITY3D_SAMPLE_DATA;
     return {"reconstruct", d + "/delft_sample_1.las", d + "/delft_sample_2.las", "-f", d + "/delft_sample_footprints.gpkg",
-            "--id-field", "gml_id", "--cityjsonseq", "--merged", "--block-size", "10", "--no-progress", "-o",
-            out.string()};
+            "--id-field", "gml_id", "--cityjsonseq", "--merged", "--gpkg", "--block-size", "10", "--no-progress",
+            "-o", out.string()};
   }
   static std::string join(const std::vector<std::string>& args) {
     std::string s;
@@ -171,6 +240,59 @@ TEST_F(Shards, merge_of_1_2_4_and_7_shards_is_byte_identical_to_one_process) {
   ASSERT_EQ(again.exit_code, 0) << again.output;
   EXPECT_TRUE(contains(again.output, "resume: 15 finished buildings")) << again.output;
   expect_same_outputs(dir_ / "single", dir_ / "merged4");
+}
+
+TEST_F(Shards, merge_writes_buildings_gpkg_and_report_html_only_when_the_run_asked_for_them) {
+  std::vector<std::string> args = sample(dir_ / "unused");
+  args.erase(std::find(args.begin(), args.end(), "--gpkg"));
+  args.resize(args.size() - 2);  // without "-o DIR"
+  std::string folders;
+  for (int k = 1; k <= 2; ++k) {
+    const fs::path shard = dir_ / ("s" + std::to_string(k));
+    const Result r = run(join(args) + " --no-html --shard " + std::to_string(k) + "/2 -o " + shard.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    // A shard writes no overview of its own part: only the merge knows every building.
+    EXPECT_FALSE(fs::exists(shard / "report.html"));
+    folders += " " + shard.string();
+  }
+  const Result m = run("merge" + folders + " -o " + (dir_ / "merged").string());
+  ASSERT_EQ(m.exit_code, 0) << m.output;
+  EXPECT_TRUE(fs::exists(dir_ / "merged" / "report.csv"));
+  EXPECT_FALSE(fs::exists(dir_ / "merged" / "buildings.gpkg"));
+  EXPECT_FALSE(fs::exists(dir_ / "merged" / "report.html"));
+}
+
+// A country is merged region by region, each of about half a million buildings (docs/COST_MODEL.md):
+// merge must not hold every record's journal line (about 6 KB each) to copy the journal, nor every
+// record's models to write buildings.gpkg and report.html.
+TEST_F(Shards, merge_memory_grows_by_little_more_than_a_reference_per_record) {
+  ASSERT_EQ(reconstruct(dir_ / "one", "--shard 1/1").exit_code, 0);  // 15 buildings, with --gpkg and report.html
+  const auto peak_kb_of_merge = [&](const fs::path& shard) {
+    const fs::path out = dir_ / ("merged_" + shard.filename().string());
+    const pid_t pid = spawn({"merge", shard.string(), "-o", out.string(), "-q"}, dir_ / "merge.log");
+    int status = 0;
+    struct rusage usage {};
+    ::wait4(pid, &status, 0, &usage);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << read_file(dir_ / "merge.log");
+    EXPECT_TRUE(fs::exists(out / "run.json")) << shard;
+    return static_cast<double>(usage.ru_maxrss);
+  };
+  replicate_shard(dir_ / "one", dir_ / "small", 10, false);    // 150 records
+  replicate_shard(dir_ / "one", dir_ / "big", 400, false);     // 6,000 records
+  replicate_shard(dir_ / "one", dir_ / "small_overview", 10, true);
+  replicate_shard(dir_ / "one", dir_ / "big_overview", 400, true);
+  const double small = peak_kb_of_merge(dir_ / "small");
+  const double big = peak_kb_of_merge(dir_ / "big");
+  const double small_overview = peak_kb_of_merge(dir_ / "small_overview");
+  const double big_overview = peak_kb_of_merge(dir_ / "big_overview");
+  EXPECT_EQ(lines_of(read_file(dir_ / "merged_big" / "resume.journal")).size(), 6001u);
+  EXPECT_TRUE(fs::exists(dir_ / "merged_big_overview" / "buildings.gpkg"));
+  EXPECT_TRUE(fs::exists(dir_ / "merged_big_overview" / "report.html"));
+  // Per record: a reference to it (and no copy of its line) ...
+  EXPECT_LT((big - small) * 1024.0 / 5850.0, 1024.0) << small << " KB for 150 records, " << big << " KB for 6,000";
+  // ... and with the overview outputs, its row of report.html (about 0.5 KB) too, not its models.
+  EXPECT_LT((big_overview - small_overview) * 1024.0 / 5850.0, 2048.0)
+      << small_overview << " KB for 150 records, " << big_overview << " KB for 6,000, with the overview outputs";
 }
 
 TEST_F(Shards, merge_refuses_a_missing_an_incomplete_and_a_foreign_shard_and_names_it) {
@@ -310,6 +432,7 @@ TEST_F(Shards, rerun_with_fewer_buildings_removes_the_models_and_files_the_earli
   EXPECT_TRUE(fs::exists(out / "notes.txt"));
   EXPECT_FALSE(fs::exists(out / "buildings.city.jsonl"));
   EXPECT_FALSE(fs::exists(out / "models.obj"));
+  EXPECT_FALSE(fs::exists(out / "buildings.gpkg"));
   EXPECT_TRUE(fs::exists(out / "buildings.city.json"));
 }
 
@@ -353,6 +476,97 @@ TEST(CityJsonAssembly, features_spliced_into_one_file_equal_write_cityjson_of_th
   } catch (const std::exception& e) {
     EXPECT_TRUE(contains(e.what(), "feature 1 is not a CityJSONFeature")) << e.what();
   }
+  fs::remove_all(dir);
+}
+
+// The overview outputs of a merge (buildings.gpkg, report.html) are made from the records alone, so a
+// record must give back its footprint exactly: coordinates to the bit, every attribute with its type.
+TEST(JournalRecord, footprint_reads_back_with_bit_identical_coordinates_and_every_attribute_type) {
+  using namespace city3d;
+  const fs::path dir = fs::temp_directory_path() / "city3d_journal_footprint";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  detail::JournalHeader header;
+  header.fingerprint = "test";
+  header.expected = 1;
+  header.layout.records = 1;
+  header.layout.gpkg = true;
+  detail::BuildingRecord record;
+  record.index = 0;
+  record.id = "b1";
+  record.status = BuildingStatus::failed;
+  record.report_csv = "b1,failed";
+  record.report_json = "{\"id\":\"b1\"}";
+  Footprint f;
+  f.id = "b1";
+  Polygon2 p;
+  p.outer = {{85000.123456789012, 447500.1 + 0.2}, {85010.0, -0.0}, {1e-300, 5e15 + 0.5}};
+  p.holes = {{{85001.0 / 3.0, 447501.0 / 7.0}, {85002.5, 447501.0}, {85002.0, 447502.0}}};
+  f.polygons = {p, Polygon2{{{1.0, 2.0}, {3.0, 2.0}, {3.0, 4.0}}, {}}};
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  f.attributes = {{"flag", true},
+                  {"bag_pnd", std::int64_t{9007199254740993}},
+                  {"smallest", std::numeric_limits<std::int64_t>::min()},
+                  {"whole_real", 3.0},
+                  {"third", 1.0 / 3.0},
+                  {"not_a_number", nan},
+                  {"up", inf},
+                  {"down", -inf},
+                  {"name", std::string("a \"quoted\" naam, \u00e9\u00e9n [x]")},
+                  {"nothing", std::monostate{}}};
+  record.footprint = f;
+  {
+    detail::Journal journal(dir.string(), header, false);
+    journal.append(record);
+  }
+  const detail::JournalReader reader((dir / "resume.journal").string());
+  ASSERT_TRUE(reader.header_ok());
+  EXPECT_TRUE(reader.header().layout.gpkg);
+  EXPECT_FALSE(reader.header().layout.html);
+  ASSERT_EQ(reader.records().size(), 1u);
+  const detail::BuildingRecord back = reader.read(reader.records().front());
+  ASSERT_TRUE(back.footprint.has_value());
+  ASSERT_EQ(back.footprint->polygons.size(), 2u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    const Polygon2& a = f.polygons[k];
+    const Polygon2& b = back.footprint->polygons[k];
+    ASSERT_EQ(a.outer.size(), b.outer.size());
+    ASSERT_EQ(a.holes.size(), b.holes.size());
+    for (std::size_t i = 0; i < a.outer.size(); ++i) {
+      EXPECT_EQ(a.outer[i].x, b.outer[i].x);
+      EXPECT_EQ(a.outer[i].y, b.outer[i].y);
+      EXPECT_EQ(std::signbit(a.outer[i].y), std::signbit(b.outer[i].y));
+    }
+    for (std::size_t h = 0; h < a.holes.size(); ++h) {
+      ASSERT_EQ(a.holes[h].size(), b.holes[h].size());
+      for (std::size_t i = 0; i < a.holes[h].size(); ++i) {
+        EXPECT_EQ(a.holes[h][i].x, b.holes[h][i].x);
+        EXPECT_EQ(a.holes[h][i].y, b.holes[h][i].y);
+      }
+    }
+  }
+  const Attributes& got = back.footprint->attributes;
+  ASSERT_EQ(got.size(), f.attributes.size());
+  for (std::size_t k = 0; k < got.size(); ++k) {
+    SCOPED_TRACE(f.attributes[k].first);
+    EXPECT_EQ(got[k].first, f.attributes[k].first);
+    EXPECT_EQ(got[k].second.index(), f.attributes[k].second.index());  // the same type
+    if (const double* d = std::get_if<double>(&got[k].second); d && std::isnan(*d)) continue;
+    EXPECT_TRUE(got[k].second == f.attributes[k].second);
+  }
+  EXPECT_TRUE(std::isnan(std::get<double>(got[5].second)));
+  // A record without a footprint (a skipped one, or a run without overview outputs) has none.
+  record.index = 1;
+  record.footprint.reset();
+  header.expected = 2;
+  header.layout.records = 2;
+  {
+    detail::Journal journal(dir.string(), header, false);
+    journal.append(record);
+  }
+  const detail::JournalReader again((dir / "resume.journal").string());
+  ASSERT_EQ(again.records().size(), 1u);
+  EXPECT_FALSE(again.read(again.records().front()).footprint.has_value());
   fs::remove_all(dir);
 }
 

@@ -75,8 +75,8 @@ struct MergeOptions {
 };
 
 /// Combines the folders of every shard of one run into the outputs one process would have written
-/// (byte-identical CityJSON, CityJSONSeq, models and models.<ext>; the report differs only in its
-/// timings). Throws Error naming the folder when a shard is missing, incomplete (no run.json) or of
+/// (byte-identical CityJSON, CityJSONSeq, models and models.<ext>, and buildings.gpkg when the run
+/// asked for it; report.csv, report.json and report.html differ only in their timings). Throws Error naming the folder when a shard is missing, incomplete (no run.json) or of
 /// other inputs or parameters, or a record or model file is damaged.
 BatchSummary merge_shards(const MergeOptions& options);
 

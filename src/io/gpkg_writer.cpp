@@ -94,7 +94,7 @@ struct DatasetCloser {
 
 }  // namespace
 
-void write_gpkg(const std::string& path, const std::vector<OverviewRecord>& records, const std::string& crs) {
+void write_gpkg(const std::string& path, const OverviewSource& records, const std::string& crs) {
   GDALAllRegister();
   GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GPKG");
   if (!driver) throw IoError("gpkg: GDAL has no GPKG driver; cannot write " + path);
@@ -120,13 +120,13 @@ void write_gpkg(const std::string& path, const std::vector<OverviewRecord>& reco
     throw IoError("gpkg: " + what + " in " + path + ": " + CPLGetLastErrorMsg());
   };
 
-  // Layer `buildings`: the union of all records' attribute names, in first-seen order.
-  std::vector<Attributes> attributes;
+  // Layer `buildings`: the union of all records' attribute names, in first-seen order (a first pass
+  // over the records, without their models).
   std::vector<std::string> names;
   std::map<std::string, Kind> kinds;
-  for (const OverviewRecord& r : records) {
-    attributes.push_back(detail::output_attributes(r.report, r.footprint_attributes, false));
-    for (const auto& [name, value] : attributes.back()) {
+  for (std::size_t k = 0; k < records.size(); ++k) {
+    const OverviewRecord r = records.at(k, false);
+    for (const auto& [name, value] : detail::output_attributes(r.report, r.footprint_attributes, false)) {
       const auto [it, fresh] = kinds.emplace(name, Kind::none);
       if (fresh) names.push_back(name);
       it->second = join(it->second, kind_of(value));
@@ -153,14 +153,16 @@ void write_gpkg(const std::string& path, const std::vector<OverviewRecord>& reco
     index_of[buildings->GetLayerDefn()->GetFieldDefn(i)->GetNameRef()] = i;
   if (ds->StartTransaction() != OGRERR_NONE) fail("cannot start a transaction");
   for (std::size_t k = 0; k < records.size(); ++k) {
+    const OverviewRecord r = records.at(k, false);
     OGRFeature feature(buildings->GetLayerDefn());
-    feature.SetField(0, records[k].report.id.c_str());
-    for (const auto& [name, value] : attributes[k]) set_field(feature, index_of.at(name), kinds[name], value);
-    if (!records[k].footprint.empty()) {
-      OGRMultiPolygon geometry = footprint_geometry(records[k].footprint);
+    feature.SetField(0, r.report.id.c_str());
+    for (const auto& [name, value] : detail::output_attributes(r.report, r.footprint_attributes, false))
+      set_field(feature, index_of.at(name), kinds[name], value);
+    if (!r.footprint.empty()) {
+      OGRMultiPolygon geometry = footprint_geometry(r.footprint);
       feature.SetGeometry(&geometry);
     }
-    if (buildings->CreateFeature(&feature) != OGRERR_NONE) fail("cannot write building " + records[k].report.id);
+    if (buildings->CreateFeature(&feature) != OGRERR_NONE) fail("cannot write building " + r.report.id);
   }
   if (ds->CommitTransaction() != OGRERR_NONE) fail("cannot commit the buildings");
 
@@ -175,7 +177,8 @@ void write_gpkg(const std::string& path, const std::vector<OverviewRecord>& reco
     if (roofs->CreateField(&field) != OGRERR_NONE) fail(std::string("cannot create field ") + name);
   }
   if (ds->StartTransaction() != OGRERR_NONE) fail("cannot start a transaction");
-  for (const OverviewRecord& r : records) {
+  for (std::size_t k = 0; k < records.size(); ++k) {
+    const OverviewRecord r = records.at(k, true);
     for (const CityGeometry& g : r.lods) {
       if (g.lod != "2.2") continue;
       const BuildingModel& m = g.model;

@@ -407,36 +407,42 @@ console.log("city3d report ready");
 
 }  // namespace
 
-void write_report_html(const std::string& path, const std::vector<OverviewRecord>& records, const std::string& crs) {
-  // Footprints (or, for clouds, the models' floors) relative to the run's corner, in centimetres.
+void write_report_html(const std::string& path, const OverviewSource& records, const std::string& crs) {
+  // A first pass over the records: the footprints' extent (the map is drawn relative to the run's
+  // corner, in centimetres), what orders the models (status, RMSE) and each highest level's size.
+  struct Key {
+    bool fallback = false;
+    double rmse = 0.0;
+    std::size_t vertices = 0;
+    bool model = false;
+  };
+  std::vector<Key> keys(records.size());
   Box2 extent;
-  for (const OverviewRecord& r : records)
+  for (std::size_t k = 0; k < records.size(); ++k) {
+    const OverviewRecord r = records.at(k, true);
     for (const Polygon2& p : r.footprint)
       for (const Point2& v : p.outer) extent.add(v);
+    keys[k] = {r.report.status == BuildingStatus::fallback, r.report.rmse,
+               r.lods.empty() ? 0 : r.lods.back().model.mesh.vertices.size(), !r.lods.empty()};
+  }
   const bool have_footprints = !extent.empty();
   const Point2 corner = have_footprints ? Point2{std::floor(extent.min.x), std::floor(extent.min.y)} : Point2{0, 0};
 
-  std::string data = "{\"crs\":";
-  json_string(data, crs);
-  data += ",\"version\":";
-  json_string(data, CITY3D_VERSION);
-  data += ",\"buildings\":[";
   std::string models = "[";
   std::size_t model_count = 0, vertex_budget = kModelVertexBudget;
   // Models of the worst buildings first (failed ones have none), then in order, within the budget.
   std::vector<std::size_t> order(records.size());
   for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    const auto key = [&](std::size_t i) { return records[i].report.status == BuildingStatus::fallback ? 0 : 1; };
-    if (key(a) != key(b)) return key(a) < key(b);
-    return records[a].report.rmse > records[b].report.rmse;
+    if (keys[a].fallback != keys[b].fallback) return keys[a].fallback;
+    return keys[a].rmse > keys[b].rmse;
   });
   std::vector<long> model_of(records.size(), -1);
   for (std::size_t i : order) {
-    const OverviewRecord& r = records[i];
-    if (r.lods.empty()) continue;
+    if (!keys[i].model || keys[i].vertices > vertex_budget) continue;
+    // Only the models shown are read again.
+    const OverviewRecord r = records.at(i, true);
     const BuildingModel& m = r.lods.back().model;
-    if (m.mesh.vertices.size() > vertex_budget) continue;
     vertex_budget -= m.mesh.vertices.size();
     // Centred on the model's plan-view centre, floor at z = 0.
     Box3 box;
@@ -470,9 +476,20 @@ void write_report_html(const std::string& path, const std::vector<OverviewRecord
   }
   models += ']';
 
+  // The page, written as it is made: a row per record, one record at a time, then the models.
+  detail::AtomicFile file(path);
+  std::FILE* out = file.file();
+  std::fputs(kPage1, out);
+  std::string data = "{\"crs\":";
+  json_string(data, crs);
+  data += ",\"version\":";
+  json_string(data, CITY3D_VERSION);
+  data += ",\"buildings\":[";
+  std::fputs(data.c_str(), out);
   for (std::size_t i = 0; i < records.size(); ++i) {
-    const OverviewRecord& r = records[i];
+    const OverviewRecord r = records.at(i, false);
     const BuildingReport& b = r.report;
+    data.clear();
     if (i) data += ',';
     data += "\n{\"id\":";
     json_string(data, b.id);
@@ -514,13 +531,11 @@ void write_report_html(const std::string& path, const std::vector<OverviewRecord
       for (const Ring2& h : p.holes) add_ring(h);
     }
     data += "]}";
+    std::fputs(data.c_str(), out);
   }
-  data += "],\"models\":" + models + "}";
-
-  detail::AtomicFile file(path);
-  std::FILE* out = file.file();
-  std::fputs(kPage1, out);
-  std::fputs(data.c_str(), out);
+  std::fputs("],\"models\":", out);
+  std::fputs(models.c_str(), out);
+  std::fputs("}", out);
   std::fputs(kPage2, out);
   file.commit();
 }

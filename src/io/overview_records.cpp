@@ -3,6 +3,7 @@
 // that those outputs are, like every run-level file, a function of the records.
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <string>
@@ -159,30 +160,23 @@ std::vector<CityGeometry> parse_feature(const std::string& text, double scale, c
 
 }  // namespace
 
-std::vector<OverviewRecord> overview_records(const std::vector<std::string>& report_json,
-                                             const std::vector<std::string>& features,
-                                             const std::vector<Footprint>& footprints, double scale,
-                                             const Point3& translate) {
-  std::vector<OverviewRecord> records;
-  records.reserve(report_json.size());
-  for (std::size_t k = 0; k < report_json.size(); ++k) {
-    OverviewRecord r;
-    r.report = parse_report(report_json[k], k);
-    if (k < footprints.size()) {
-      r.footprint = footprints[k].polygons;
-      r.footprint_attributes = footprints[k].attributes;
-    }
-    if (k < features.size()) {
-      try {
-        r.lods = parse_feature(features[k], scale, translate, k);
-      } catch (const json::exception& e) {
-        throw IoError("overview: feature " + std::to_string(k) + " (" + r.report.id + ") is not a CityJSONFeature: " +
-                      e.what());
-      }
-    }
-    records.push_back(std::move(r));
+OverviewRecord overview_record(const std::string& report_json, const std::string& feature, Footprint footprint,
+                               double scale, const Point3& translate, std::size_t position, bool levels) {
+  OverviewRecord r;
+  r.report = parse_report(report_json, position);
+  r.footprint = std::move(footprint.polygons);
+  r.footprint_attributes = std::move(footprint.attributes);
+  if (!levels) return r;
+  try {
+    r.lods = parse_feature(feature, scale, translate, position);
+  } catch (const json::exception& e) {
+    throw IoError("overview: feature " + std::to_string(position) + " (" + r.report.id + ") is not a CityJSONFeature: " +
+                  e.what());
   }
-  return records;
+  // Only the highest level is shown or written (report.html's 3D view, the GeoPackage's LoD2.2 roof
+  // parts): the others would only take memory.
+  if (r.lods.size() > 1) r.lods.erase(r.lods.begin(), r.lods.end() - 1);
+  return r;
 }
 
 }  // namespace city3d

@@ -31,7 +31,6 @@
 #include "city3d/point_cloud_io.hpp"
 #include "io/input_check.hpp"
 #include "io/output_folder.hpp"
-#include "city3d/run_outputs.hpp"
 #include "io/atomic_file.hpp"
 #include "pipeline/finalise.hpp"
 #include "pipeline/journal.hpp"
@@ -138,14 +137,23 @@ void crop_tiles(const std::vector<std::string>& files, const Box2& extent, unsig
 // A finished building's record: its model file is written now (and hashed as written), its
 // CityJSONFeature and report rows made now, so that the run-level files need nothing but records.
 // What a building's CityJSON holds is decided here (and in cityjson_writer.cpp).
+// `outline` is the footprint's polygons in world coordinates as read (nullptr for single-building
+// clouds), recorded with its attributes when the overview outputs need them.
 detail::BuildingRecord make_record(std::uint64_t index, BuildingResult result, const BatchOptions& o,
-                                   const detail::RunLayout& layout, const Attributes& footprint_attributes) {
+                                   const detail::RunLayout& layout, const Attributes& footprint_attributes,
+                                   const std::vector<Polygon2>* outline) {
   detail::BuildingRecord record;
   record.index = index;
   record.id = result.report.id;
   record.status = result.report.status;
   record.report_csv = detail::report_csv_row(result.report);
   record.report_json = detail::report_json_row(result.report);
+  if (outline && (layout.gpkg || layout.html)) {
+    record.footprint.emplace();
+    record.footprint->id = record.id;
+    record.footprint->polygons = *outline;
+    record.footprint->attributes = footprint_attributes;
+  }
   if (!result.model) return record;
   if (o.per_building_files) {
     record.model_file = model_file_name(result.model->id, o.format);
@@ -256,6 +264,8 @@ detail::RunLayout layout_of(const BatchOptions& o) {
   l.local_coordinates = o.local_coordinates;
   l.format = o.format;
   l.scale = o.reconstruction.output_grid;  // the grid every model was rounded to and checked on
+  l.gpkg = o.gpkg;
+  l.html = o.html;
   return l;
 }
 
@@ -393,9 +403,11 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   // give the id and input of indices[k], the input made by the worker that reconstructs it.
   std::atomic<std::size_t> done{journal.restored()};
   const std::size_t total = header.expected;
+  // outline_of(k) gives its footprint's polygons in world coordinates (nullptr for clouds).
   auto reconstruct_all = [&](const std::vector<std::uint64_t>& indices,
                              const std::function<BuildingId(std::size_t)>& id_of,
-                             const std::function<BuildingInput(std::size_t)>& make_input) {
+                             const std::function<BuildingInput(std::size_t)>& make_input,
+                             const std::function<const std::vector<Polygon2>*(std::size_t)>& outline_of) {
     std::atomic<std::size_t> next{0};
     std::exception_ptr failure;
     std::mutex failure_mutex;
@@ -415,7 +427,8 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
           }
           const BuildingInput input = make_input(k);
           BuildingResult result = reconstruct_building(input, options.reconstruction);
-          journal.append(make_record(indices[k], std::move(result), options, plan.layout, input.footprint.attributes));
+          journal.append(make_record(indices[k], std::move(result), options, plan.layout, input.footprint.attributes,
+                                     outline_of(k)));
         } catch (...) {
           // Only input and output errors reach here (reconstruct_building never throws for a bad
           // building): the run cannot go on.
@@ -446,7 +459,8 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
       const BuildingId id = fs::path(file).stem().string();
       reconstruct_all(
           indices, [&](std::size_t) { return id; },
-          [&](std::size_t) { return building_from_cloud(id, read_all_points(file), options.ground_z); });
+          [&](std::size_t) { return building_from_cloud(id, read_all_points(file), options.ground_z); },
+          [](std::size_t) { return nullptr; });
       continue;
     }
     // The group's footprints and every other footprint that can reach into their ground buffers
@@ -482,6 +496,11 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
     }
     for (std::size_t k = 0; k < found.size(); ++k)
       if (!taken[k]) footprints.push_back(std::move(found[k].second));
+    // The group's own footprints as read (world coordinates), for the overview outputs' records: the
+    // cropper moves them into each building's local frame.
+    std::vector<std::vector<Polygon2>> outlines;
+    if (plan.layout.gpkg || plan.layout.html)
+      for (std::size_t k = 0; k < indices.size(); ++k) outlines.push_back(footprints[k].polygons);
     Cropper cropper(std::move(footprints), options.crop);
     crop_tiles(files, extent, static_cast<unsigned>(options.threads), cropper);
     // Keep only the group's own inputs (the first indices.size()).
@@ -495,7 +514,8 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
         in.ground_measured = true;
       }
     reconstruct_all(
-        indices, [&](std::size_t k) { return inputs[k].id; }, [&](std::size_t k) { return std::move(inputs[k]); });
+        indices, [&](std::size_t k) { return inputs[k].id; }, [&](std::size_t k) { return std::move(inputs[k]); },
+        [&](std::size_t k) { return outlines.empty() ? nullptr : &outlines[k]; });
   }
   journal.close();
 
@@ -514,32 +534,6 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   const BatchSummary summary =
       detail::finalise_run(options.output_dir, plan.layout, sources, seconds_since(start),
                            sharded ? detail::FinaliseScope::shard : detail::FinaliseScope::whole_run, manifest.outputs);
-  if (!sharded && (options.gpkg || options.html)) {
-    // The overview outputs: the records, and the footprints read once more for their geometry.
-    std::vector<Footprint> footprints;
-    if (source && !extent.empty()) {
-      footprints.resize(plan.buildings);
-      for (auto& [number, f] : source->read_box(extent))
-        if (number < footprints.size()) footprints[number] = std::move(f);
-    }
-    std::vector<std::string> reports, features;
-    for (const detail::RecordSource& r : sources) {
-      detail::BuildingRecord record = r.journal->read(*r.ref);
-      reports.push_back(std::move(record.report_json));
-      features.push_back(std::move(record.feature));
-    }
-    const std::vector<OverviewRecord> overview =
-        overview_records(reports, features, footprints, plan.layout.scale, plan.layout.translate);
-    const fs::path out(options.output_dir);
-    if (options.gpkg) {
-      write_gpkg((out / "buildings.gpkg").string(), overview, plan.layout.crs);
-      manifest.outputs["buildings.gpkg"] = detail::file_stamp_of((out / "buildings.gpkg").string());
-    }
-    if (options.html) {
-      write_report_html((out / "report.html").string(), overview, plan.layout.crs);
-      manifest.outputs["report.html"] = detail::file_stamp_of((out / "report.html").string());
-    }
-  }
   manifest.seconds = seconds_since(start);
   folder.write_manifest(manifest);
   return summary;
@@ -632,9 +626,7 @@ BatchSummary merge_shards(const MergeOptions& options) {
   }
   // Model files, copied and checked against the hash their shard recorded.
   if (layout.per_building_files) fs::create_directories(fs::path(options.output_dir) / "models");
-  std::vector<std::string> lines;
   for (const detail::RecordSource& source : sources) {
-    lines.push_back(source.journal->line(*source.ref));
     const detail::RecordRef& ref = *source.ref;
     if (ref.model_file.empty()) continue;
     const fs::path from = fs::path(source.journal->path()).parent_path() / "models" / ref.model_file;
@@ -648,8 +640,10 @@ BatchSummary merge_shards(const MergeOptions& options) {
     copy.commit();
   }
   // The merged folder's journal, as one process would have left it: a later run of the same inputs
-  // and parameters into it resumes every building.
-  detail::write_journal((fs::path(options.output_dir) / "resume.journal").string(), whole, lines);
+  // and parameters into it resumes every building. Its lines are copied one at a time: the journals of
+  // a region's shards can be gigabytes.
+  detail::write_journal((fs::path(options.output_dir) / "resume.journal").string(), whole, sources.size(),
+                        [&sources](std::size_t k) { return sources[k].journal->line(*sources[k].ref); });
   double seconds = 0.0;
   for (const Shard& s : shards) seconds += s.manifest.seconds;
   detail::RunManifest manifest;

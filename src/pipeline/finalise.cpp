@@ -19,6 +19,7 @@
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
 #include "city3d/model_io.hpp"
+#include "city3d/run_outputs.hpp"
 #include "io/atomic_file.hpp"
 #include "pipeline/report.hpp"
 
@@ -55,6 +56,23 @@ void remove_temporary_files(const fs::path& folder, bool locked) {
     if (fs::remove(entry.path(), ec)) log_info("output: removed " + entry.path().string() + ", left by a killed run");
   }
 }
+
+// The records of a run as the overview outputs read them, one at a time, from their journals.
+class JournalOverview : public OverviewSource {
+ public:
+  JournalOverview(const std::vector<RecordSource>& records, const RunLayout& layout)
+      : records_(records), layout_(layout) {}
+  std::size_t size() const override { return records_.size(); }
+  OverviewRecord at(std::size_t k, bool levels) const override {
+    BuildingRecord r = records_[k].journal->read(*records_[k].ref);
+    return overview_record(r.report_json, r.feature, r.footprint ? std::move(*r.footprint) : Footprint{},
+                           layout_.scale, layout_.translate, k, levels);
+  }
+
+ private:
+  const std::vector<RecordSource>& records_;
+  const RunLayout& layout_;
+};
 
 }  // namespace
 
@@ -227,6 +245,19 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const
   report.close();
   written.push_back("report.csv");
   written.push_back("report.json");
+  // The overview outputs, reading the records again one at a time (a run's records are never all in
+  // memory at once).
+  if (whole && (layout.gpkg || layout.html)) {
+    const JournalOverview overview(records, layout);
+    if (layout.gpkg) {
+      write_gpkg((out / "buildings.gpkg").string(), overview, layout.crs);
+      written.push_back("buildings.gpkg");
+    }
+    if (layout.html) {
+      write_report_html((out / "report.html").string(), overview, layout.crs);
+      written.push_back("report.html");
+    }
+  }
   for (const std::string& name : written) outputs[name] = file_stamp_of((out / name).string());
   return summary;
 }

@@ -1,6 +1,6 @@
 // The end of a run, shared by run_batch() and merge: every run-level file (CityJSON, CityJSONSeq,
-// models.<ext>, report.csv, report.json) is a function of the journal records in index order, so a
-// merge of shards writes exactly what one process writes. Also the output folder's housekeeping: a
+// models.<ext>, report.csv, report.json, buildings.gpkg, report.html) is a function of the journal
+// records in index order, so a merge of shards writes exactly what one process writes. Also the output folder's housekeeping: a
 // lock, temporary files of killed runs, outputs of earlier runs, and run.json (written last: its
 // presence means the run or shard finished).
 #pragma once

@@ -4,9 +4,11 @@
 #include "pipeline/journal.hpp"
 
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -20,7 +22,8 @@ using json = nlohmann::json;
 
 namespace {
 
-constexpr int kJournalVersion = 2;
+// 3: records carry their footprint for buildings.gpkg and report.html, the layout says whether to write them.
+constexpr int kJournalVersion = 3;
 constexpr std::size_t kHashDigits = 16;
 
 std::string dump(const json& j) { return j.dump(-1, ' ', false, json::error_handler_t::replace); }
@@ -57,7 +60,9 @@ json layout_json(const RunLayout& l) {
           {"merged_file", l.merged_file},
           {"per_building_files", l.per_building_files},
           {"local_coordinates", l.local_coordinates},
-          {"format", static_cast<int>(l.format)}};
+          {"format", static_cast<int>(l.format)},
+          {"gpkg", l.gpkg},
+          {"html", l.html}};
 }
 
 RunLayout parse_layout(const json& j) {
@@ -75,6 +80,8 @@ RunLayout parse_layout(const json& j) {
   const int format = j.at("format").get<int>();
   if (format < 0 || format > 2) throw std::runtime_error("bad format");
   l.format = static_cast<MeshFormat>(format);
+  l.gpkg = j.at("gpkg").get<bool>();
+  l.html = j.at("html").get<bool>();
   return l;
 }
 
@@ -96,6 +103,51 @@ JournalHeader parse_header(const json& j) {
   return h;
 }
 
+// A point list as [[x, y], ...]: nlohmann writes doubles in their shortest round-trip form, so the
+// footprint read back is bit-identical to the one read from the source.
+json ring_json(const Ring2& ring) {
+  json points = json::array();
+  for (const Point2& p : ring) points.push_back({p.x, p.y});
+  return points;
+}
+
+Ring2 parse_ring(const json& j) {
+  Ring2 ring;
+  for (const json& p : j) ring.push_back({p.at(0).get<double>(), p.at(1).get<double>()});
+  return ring;
+}
+
+// An attribute as [name, type, value], the type one of "null", "bool", "int", "real", "text", so that
+// every value comes back with its type (a real that happens to be whole stays a real; 64-bit
+// integers stay exact). A real that is not finite, which JSON cannot hold, is written as text.
+json attribute_json(const std::string& name, const AttributeValue& v) {
+  if (const bool* b = std::get_if<bool>(&v)) return {name, "bool", *b};
+  if (const std::int64_t* i = std::get_if<std::int64_t>(&v)) return {name, "int", *i};
+  if (const double* d = std::get_if<double>(&v)) {
+    if (std::isfinite(*d)) return {name, "real", *d};
+    return {name, "real", std::isnan(*d) ? "nan" : *d > 0 ? "inf" : "-inf"};
+  }
+  if (const std::string* t = std::get_if<std::string>(&v)) return {name, "text", *t};
+  return {name, "null", nullptr};
+}
+
+std::pair<std::string, AttributeValue> parse_attribute(const json& j) {
+  const std::string name = j.at(0).get<std::string>();
+  const std::string type = j.at(1).get<std::string>();
+  const json& value = j.at(2);
+  if (type == "null") return {name, std::monostate{}};
+  if (type == "bool") return {name, value.get<bool>()};
+  if (type == "int") return {name, value.get<std::int64_t>()};
+  if (type == "text") return {name, value.get<std::string>()};
+  if (type != "real") throw std::runtime_error("unknown attribute type " + type);
+  if (!value.is_string()) return {name, value.get<double>()};
+  const std::string special = value.get<std::string>();
+  if (special == "nan") return {name, std::numeric_limits<double>::quiet_NaN()};
+  if (special == "inf") return {name, std::numeric_limits<double>::infinity()};
+  if (special == "-inf") return {name, -std::numeric_limits<double>::infinity()};
+  throw std::runtime_error("bad real " + special);
+}
+
 json record_json(const BuildingRecord& r) {
   json j = {{"index", r.index},     {"id", r.id},           {"status", status_name(r.status)},
             {"csv", r.report_csv},  {"json", r.report_json}, {"feature", r.feature},
@@ -110,6 +162,16 @@ json record_json(const BuildingRecord& r) {
                  {"vertices", vertices},
                  {"faces", faces},
                  {"surfaces", surfaces}};
+  }
+  if (r.footprint) {
+    json polygons = json::array(), attributes = json::array();
+    for (const Polygon2& p : r.footprint->polygons) {
+      json rings = json::array({ring_json(p.outer)});
+      for (const Ring2& h : p.holes) rings.push_back(ring_json(h));
+      polygons.push_back(std::move(rings));
+    }
+    for (const auto& [name, value] : r.footprint->attributes) attributes.push_back(attribute_json(name, value));
+    j["footprint"] = {{"polygons", polygons}, {"attributes", attributes}};
   }
   return j;
 }
@@ -143,6 +205,18 @@ BuildingRecord parse_record(const json& j) {
       m.surfaces.push_back(static_cast<SurfaceType>(t));
     }
     r.mesh = std::move(m);
+  }
+  if (const auto it = j.find("footprint"); it != j.end()) {
+    Footprint f;
+    f.id = r.id;
+    for (const json& rings : it->at("polygons")) {
+      Polygon2 p;
+      p.outer = parse_ring(rings.at(0));
+      for (std::size_t k = 1; k < rings.size(); ++k) p.holes.push_back(parse_ring(rings.at(k)));
+      f.polygons.push_back(std::move(p));
+    }
+    for (const json& a : it->at("attributes")) f.attributes.push_back(parse_attribute(a));
+    r.footprint = std::move(f);
   }
   return r;
 }
@@ -325,7 +399,7 @@ Journal::Journal(const std::string& output_dir, JournalHeader header, bool resum
     }
   }
   // Rewrite the journal with its good lines only, then append to it.
-  write_journal(path_, header, kept);
+  write_journal(path_, header, kept.size(), [&kept](std::size_t k) { return kept[k]; });
   file_ = std::fopen(path_.c_str(), "ab");
   if (!file_) throw IoError("resume: cannot append to " + path_ + ": " + std::strerror(errno));
   if (!done_.empty()) log_info("resume: " + std::to_string(done_.size()) + " finished buildings in " + path_);
@@ -351,7 +425,8 @@ void Journal::append(const BuildingRecord& record) {
     throw IoError("resume: cannot append to " + path_ + ": " + std::strerror(errno));
 }
 
-void write_journal(const std::string& path, const JournalHeader& header, const std::vector<std::string>& lines) {
+void write_journal(const std::string& path, const JournalHeader& header, std::size_t count,
+                   const std::function<std::string(std::size_t)>& line_at) {
   // A fixed temporary name: only one run may write into a folder (the folder lock), and a stale one
   // is removed when the next run starts.
   const std::string temp = path + ".tmp";
@@ -359,8 +434,16 @@ void write_journal(const std::string& path, const JournalHeader& header, const s
   if (!f) throw IoError("resume: cannot write " + temp + ": " + std::strerror(errno));
   const std::string first = make_line(header_json(header)) + "\n";
   bool ok = std::fwrite(first.data(), 1, first.size(), f) == first.size();
-  for (const std::string& line : lines)
-    ok = ok && std::fwrite(line.data(), 1, line.size(), f) == line.size() && std::fputc('\n', f) != EOF;
+  try {
+    for (std::size_t k = 0; k < count && ok; ++k) {
+      const std::string line = line_at(k);
+      ok = std::fwrite(line.data(), 1, line.size(), f) == line.size() && std::fputc('\n', f) != EOF;
+    }
+  } catch (...) {
+    std::fclose(f);
+    std::remove(temp.c_str());
+    throw;
+  }
   if (std::fclose(f) != 0 || !ok || std::rename(temp.c_str(), path.c_str()) != 0) {
     const int err = errno;
     std::remove(temp.c_str());

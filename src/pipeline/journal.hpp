@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -31,6 +32,10 @@ struct BuildingRecord {
   std::string model_file;   ///< file name under models/ (empty when none was written)
   std::string model_hash;   ///< content_hash() of that file
   std::optional<BuildingModel> mesh;  ///< the model itself, kept only when a run-level file needs it (--merged)
+  /// The input footprint as read: its polygons (world coordinates) and the source's attributes with
+  /// their types, nothing else of it. Kept only when the overview outputs (buildings.gpkg,
+  /// report.html) need it, so that a merge of shards makes them from the records alone.
+  std::optional<Footprint> footprint;
 };
 
 /// What the run-level files of a run look like: the same for every shard of it.
@@ -45,6 +50,8 @@ struct RunLayout {
   bool per_building_files = true;
   bool local_coordinates = false;
   MeshFormat format = MeshFormat::obj;
+  bool gpkg = false;             ///< buildings.gpkg
+  bool html = false;             ///< report.html
 };
 
 /// The first line of a journal: which run (and which shard of it) the records belong to.
@@ -129,9 +136,11 @@ class Journal {
   std::vector<std::pair<std::string, std::string>> earlier_models_;
 };
 
-/// Writes a journal that holds `header` and the given lines (record lines as JournalReader::line()
-/// returns them), atomically. Used by merge to leave a journal beside the merged output.
-void write_journal(const std::string& path, const JournalHeader& header, const std::vector<std::string>& lines);
+/// Writes a journal that holds `header` and `count` record lines, line_at(k) giving the k-th (as
+/// JournalReader::line() returns it), atomically; one line is held at a time. Used by merge to leave a
+/// journal beside the merged output.
+void write_journal(const std::string& path, const JournalHeader& header, std::size_t count,
+                   const std::function<std::string(std::size_t)>& line_at);
 
 /// A fingerprint of everything that determines the records of a run: the version, the input files
 /// (canonical path, size, modification time) and every option that changes a building's outputs.

@@ -2,7 +2,8 @@
 # The Slurm path on a real Slurm: a private single-node cluster (every file in one temporary folder,
 # no authentication, 127.0.0.1 and free ports only; see ../shared/SLURM.md) is started, used and
 # stopped here. The Delft block as 4 shards (a job array plus a merge job, scripts/slurm/city3d-slurm)
-# gives exactly the output of one process; then one task is killed (kill -9 in the middle of its
+# gives exactly the output of one process (CityJSON, CityJSONSeq, GeoPackage and models byte for byte,
+# the reports and report.html up to their timings); then one task is killed (kill -9 in the middle of its
 # shard), the merge does not run, and `city3d-slurm resubmit` reruns only that shard, which resumes
 # from its journal: the output is still identical.
 # Usage: test_slurm.sh CITY3D REPOSITORY SHARED_DATA. Exit 77: skipped (no Slurm or no data).
@@ -87,16 +88,29 @@ sinfo -h -o %t | grep -qE '^idle' || fail "the private cluster did not come up"
 echo "cluster up: $(sinfo -h -o '%N %c CPUs %t')"
 
 reconstruct_args=("$data/ahn3_cropped_1.las" "$data/ahn3_cropped_2.las" -f "$data/footprints/bgt_pand_laz_area.gpkg"
-  --id-field gml_id --cityjsonseq --block-size 100 -v)
+  --id-field gml_id --cityjsonseq --gpkg --block-size 100 -v)
+
+# What ogrinfo reads from a GeoPackage: every layer, field and feature (values and geometry).
+gpkg_dump() { ogrinfo -ro -al -q "$1" || fail "ogrinfo cannot read $1"; }
 
 same_outputs() {  # the outputs of two folders: byte for byte, the reports up to their timings
   local a="$1" b="$2" f
-  for f in buildings.city.json buildings.city.jsonl; do cmp "$a/$f" "$b/$f" || fail "$f of $b differs from $a"; done
+  for f in buildings.city.json buildings.city.jsonl buildings.gpkg; do
+    cmp "$a/$f" "$b/$f" || fail "$f of $b differs from $a"
+  done
+  if command -v ogrinfo > /dev/null; then
+    diff <(gpkg_dump "$a/buildings.gpkg") <(gpkg_dump "$b/buildings.gpkg") > /dev/null ||
+      fail "buildings.gpkg of $b reads differently from $a"
+  fi
   diff -r "$a/models" "$b/models" > /dev/null || fail "the models of $b differ from $a"
   for f in report.csv report.json; do
     diff <(sed -E 's/,[0-9]+\.[0-9]{4},[0-9]+\.[0-9]{4}$//; s/"(cpu_)?seconds": [0-9.]+//g' "$a/$f") \
       <(sed -E 's/,[0-9]+\.[0-9]{4},[0-9]+\.[0-9]{4}$//; s/"(cpu_)?seconds": [0-9.]+//g' "$b/$f") > /dev/null || fail "$f of $b differs from $a"
   done
+  # report.html up to each building's seconds ("t" in its data).
+  grep -q "city3d report ready" "$a/report.html" || fail "$a/report.html is not a report"
+  diff <(sed -E 's/"t":(null|-?[0-9.]+)/"t":S/g' "$a/report.html") \
+    <(sed -E 's/"t":(null|-?[0-9.]+)/"t":S/g' "$b/report.html") > /dev/null || fail "report.html of $b differs from $a"
   [[ "$(ls "$a/models" | wc -l)" -eq 160 ]] || fail "$a holds $(ls "$a/models" | wc -l) models, not 160"
 }
 
@@ -109,7 +123,8 @@ same_outputs() {  # the outputs of two folders: byte for byte, the reports up to
 same_outputs "$tmp/single" "$tmp/merged1"
 echo "4 shards + merge: identical to one process"
 
-# Again, with shard 3 killed (-9) once it has finished a few buildings.
+# Again, two shards per array task (task 2 runs shards 3 and 4), with shard 3 killed (-9) once it has
+# finished a few buildings: task 2 goes on with shard 4, then fails, so the merge does not run.
 cat > "$tmp/city3d-killed-once" << WRAPPER
 #!/usr/bin/env bash
 if [[ " \$* " == *" --shard 3/4 "* && ! -e "$tmp/killed" ]]; then
@@ -124,7 +139,7 @@ fi
 exec "$city3d" "\$@"
 WRAPPER
 chmod +x "$tmp/city3d-killed-once"
-if "$repo/scripts/slurm/city3d-slurm" submit --work "$tmp/w2" --output "$tmp/merged2" --shards 4 \
+if "$repo/scripts/slurm/city3d-slurm" submit --work "$tmp/w2" --output "$tmp/merged2" --shards 4 --per-task 2 \
   --city3d "$tmp/city3d-killed-once" --sbatch "--cpus-per-task=1" --wait -- "${reconstruct_args[@]}"; then
   fail "the merge ran although shard 3 was killed"
 fi
@@ -137,7 +152,13 @@ echo "$status"
 grep -q "not finished: 3 " <<< "$status" || fail "status does not name shard 3"
 resubmitted="$("$repo/scripts/slurm/city3d-slurm" resubmit --work "$tmp/w2" --wait)" || fail "the re-submission failed"
 echo "$resubmitted"
-grep -q "shard tasks 3 of job" <<< "$resubmitted" || fail "the re-submission did not submit only shard 3"
-grep -q "resume: [1-9][0-9]* finished buildings" "$tmp"/w2/logs/shards-*_3.out || fail "shard 3 did not resume from its journal"
+job="$(sed -nE 's/.*shard tasks 2 of job ([0-9]+).*/\1/p' <<< "$resubmitted")"
+[[ -n "$job" ]] || fail "the re-submission did not submit only task 2 (shards 3 and 4)"
+# In the re-submitted task, shard 3 resumes from its journal and finished shard 4 is only re-assembled.
+section() { awk -v k="$1" '$0 ~ "city3d-slurm: shard " k "/4" {on = 1; next} /city3d-slurm: shard [0-9]+\/4/ {on = 0} on' \
+  "$tmp/w2/logs/shards-${job}_2.out"; }
+section 3 | grep -q "resume: [1-9][0-9]* finished buildings" || fail "shard 3 did not resume from its journal"
+section 4 | grep -q "resume: [1-9][0-9]* finished buildings" || fail "shard 4 was not only re-assembled from its journal"
+section 4 | grep -q "points streamed" && fail "shard 4 read its tiles again"
 same_outputs "$tmp/single" "$tmp/merged2"
 echo "shard 3 killed, re-submitted, resumed + merge: identical to one process"
