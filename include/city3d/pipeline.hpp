@@ -63,6 +63,7 @@ struct ReconstructionParams {
   PolylineParams polylines;
   RegulariseParams regularise;
   WallParams walls;
+  StepLineParams step_lines;
   HypothesisParams hypothesis;
   SelectionParams selection;
   AssembleParams assemble;

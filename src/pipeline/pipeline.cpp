@@ -64,6 +64,7 @@ void ReconstructionParams::validate() const {
   check([&] { polylines.validate(); });
   check([&] { regularise.validate(); });
   check([&] { walls.validate(); });
+  check([&] { step_lines.validate(); });
   check([&] { hypothesis.validate(); });
   check([&] { selection.validate(); });
   check([&] { assemble.validate(); });
@@ -109,6 +110,12 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("walls.footprint_margin", p.walls.footprint_margin);
   put("walls.min_detected_lines", p.walls.min_detected_lines);
   put("walls.detected_length_ratio", p.walls.detected_length_ratio);
+  put("step_lines.enabled", p.step_lines.enabled);
+  put("step_lines.min_step", p.step_lines.min_step);
+  put("step_lines.search_spacings", p.step_lines.search_spacings);
+  put("step_lines.line_tolerance", p.step_lines.line_tolerance);
+  put("step_lines.min_length", p.step_lines.min_length);
+  put("step_lines.min_samples", p.step_lines.min_samples);
   put("hypothesis.support_distance", p.hypothesis.support_distance);
   put("hypothesis.min_face_area", p.hypothesis.min_face_area);
   put("hypothesis.line_support_margin", p.hypothesis.line_support_margin);
@@ -205,6 +212,24 @@ std::pair<Point2, Point2> wall_line(const PlanarSegment& wall, const std::vector
 }
 
 
+// Mean point spacing, metres: sqrt(outline area / points).
+double point_spacing(const std::vector<Polygon2>& outline, std::size_t points) {
+  double area = 0.0;
+  for (const Polygon2& p : outline) {
+    const auto ring_area = [](const Ring2& ring) {
+      double twice = 0;
+      for (std::size_t k = 0; k < ring.size(); ++k) {
+        const Point2 &a = ring[k], &b = ring[(k + 1) % ring.size()];
+        twice += a.x * b.y - b.x * a.y;
+      }
+      return std::fabs(twice) / 2;
+    };
+    area += ring_area(p.outer);
+    for (const Ring2& h : p.holes) area -= ring_area(h);
+  }
+  return points > 0 && area > 0 ? std::sqrt(area / static_cast<double>(points)) : 0.0;
+}
+
 // A LoD2 rung: planes, walls, hypothesis, selection, model. `footprint_walls_only` skips the
 // inferred inner walls (the second rung). Throws Error naming the stage when a stage fails.
 BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& params, bool footprint_walls_only,
@@ -270,7 +295,10 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
   RegularisationResult lines;
   if (!footprint_walls_only) {
     const std::vector<Point2> edges = detect_edges(heightmap, params.heightmap);
-    const std::vector<Polyline2> polylines = extract_polylines(edges, params.polylines);
+    std::vector<Polyline2> polylines = extract_polylines(edges, params.polylines);
+    // Step lines between roof planes join the heightmap's lines (the same regularisation and walls).
+    const std::vector<Polyline2> steps = detect_step_lines(points, roofs, point_spacing(outline, points.size()), params.step_lines);
+    polylines.insert(polylines.end(), steps.begin(), steps.end());
     lines = regularise(polylines, &outline, params.regularise);
     if (debug) {
       write_heightmap_png(heightmap, debug_path(params.debug_dir, input.id, "heightmap.png"));
