@@ -18,6 +18,9 @@ struct PlaneParams {
   int min_points = 20;         ///< points a plane needs to be reported, >= 3
   double max_distance = 0.2;   ///< point-to-plane distance while growing, metres, > 0
   double max_angle = 20.0;     ///< point normal vs plane normal while growing, degrees, in (0, 90]
+  /// Rounds of refitting after the growing: a point in no plane joins the nearest plane (within
+  /// max_distance) among those of its k neighbours; then the planes are refitted. >= 0, 0 = off.
+  int absorb_rounds = 3;
   /// A segment is a wall when |n_z| of its unit normal is below this, in [0, 1). The default 0.17
   /// is sin(9.8 deg): the normal is more than 80.2 deg away from vertical, i.e. the plane is within
   /// 9.8 deg of vertical. Everything else (flat and sloped roofs up to ~80 deg) is a roof.

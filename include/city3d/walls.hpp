@@ -92,8 +92,9 @@ struct StepLineParams {
 };
 
 /// The step lines of one building (local frame): where points of one roof plane meet points of
-/// another (within search_spacings x point_spacing in xy) and the two planes' heights at the midpoint
-/// differ by min_step or more, the midpoints are boundary samples of that pair of planes; straight
+/// another (within search_spacings x point_spacing in xy) and the two planes' heights differ by
+/// min_step or more, with the same sign, at both points (a step, not a crease between them), the
+/// midpoints are boundary samples of that pair of planes; straight
 /// runs of them (within line_tolerance, no gap wider than the search radius, min_samples samples and
 /// min_length long) are the step lines, as two-point polylines, to be regularised with the
 /// heightmap's lines. Pairs whose planes meet at about the same height are left to the roof-roof

@@ -86,6 +86,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("planes.min_points", p.planes.min_points);
   put("planes.max_distance", p.planes.max_distance);
   put("planes.max_angle", p.planes.max_angle);
+  put("planes.absorb_rounds", p.planes.absorb_rounds);
   put("planes.wall_max_normal_z", p.planes.wall_max_normal_z);
   put("heightmap.resolution", p.heightmap.resolution);
   put("heightmap.max_edge_length", p.heightmap.max_edge_length);
@@ -298,6 +299,7 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
     std::vector<Polyline2> polylines = extract_polylines(edges, params.polylines);
     // Step lines between roof planes join the heightmap's lines (the same regularisation and walls).
     const std::vector<Polyline2> steps = detect_step_lines(points, roofs, point_spacing(outline, points.size()), params.step_lines);
+    if (debug) write_polylines_obj(debug_path(params.debug_dir, input.id, "step_lines.obj"), steps, input.ground_z);
     polylines.insert(polylines.end(), steps.begin(), steps.end());
     lines = regularise(polylines, &outline, params.regularise);
     if (debug) {

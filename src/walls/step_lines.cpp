@@ -189,10 +189,15 @@ std::vector<Polyline2> detect_step_lines(const std::vector<Point3>& points, cons
     const auto a = static_cast<std::size_t>(label[i]);
     for (std::size_t b = 0; b < R; ++b) {
       if (!std::isfinite(nearest[b])) continue;
+      // f = height of a - height of b is linear in xy: where the two planes meet in a crease (a
+      // ridge, a hip, a valley) f changes sign between the points, or is small at one of them; at a
+      // step it keeps its sign and its size on both sides.
+      const Point2& p = xy[i];
       const Point2& q = xy[nearest_point[b]];
-      const Point2 m{(xy[i].x + q.x) / 2, (xy[i].y + q.y) / 2};
-      const double step = std::abs(plane_height(roofs[a].plane, m.x, m.y) - plane_height(roofs[b].plane, m.x, m.y));
-      if (step >= params.min_step) samples[std::min(a, b) * R + std::max(a, b)].push_back(m);
+      const double fp = plane_height(roofs[a].plane, p.x, p.y) - plane_height(roofs[b].plane, p.x, p.y);
+      const double fq = plane_height(roofs[a].plane, q.x, q.y) - plane_height(roofs[b].plane, q.x, q.y);
+      if (fp * fq > 0.0 && std::min(std::abs(fp), std::abs(fq)) >= params.min_step)
+        samples[std::min(a, b) * R + std::max(a, b)].push_back({(p.x + q.x) / 2, (p.y + q.y) / 2});
     }
   }
   for (const auto& s : samples)
