@@ -642,7 +642,18 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
     }
     if (!result.model) r.status = BuildingStatus::failed;
     if (result.model) add_levels_of_detail(input, params, result);
-    if (result.model) r.rmse = rmse(result.model->mesh, input.points);
+    if (result.model) {
+      const std::vector<double> distances = point_distances(result.model->mesh, input.points);
+      double sum = 0.0;
+      std::size_t far = 0;
+      for (const double d : distances) {
+        sum += d * d;
+        far += d > kUnexplainedDistance;
+      }
+      r.rmse = distances.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(distances.size()));
+      r.unexplained_points = static_cast<double>(far);
+      r.unexplained_share = distances.empty() ? 0.0 : static_cast<double>(far) / static_cast<double>(distances.size());
+    }
     if (r.status == BuildingStatus::ok) r.stage.clear(), r.reason.clear();
   }
 
