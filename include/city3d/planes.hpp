@@ -10,14 +10,17 @@
 namespace city3d {
 
 /// Parameters of detect_planes(). City3D grows regions with min 40 points, 0.5 m and 30 degrees in
-/// a 1 m sphere; growing here is stricter (0.2 m, 20 degrees, k nearest neighbours), and with the
+/// a 1 m sphere; growing here is stricter in distance (0.2 m, k nearest neighbours), and with the
 /// stricter growth planes of 20 points gave models closer to the points on all three datasets of
 /// the dev set (docs/BENCHMARKS.md, "min_points"), so 20 is the default.
 struct PlaneParams {
   int k_neighbors = 12;        ///< neighbours for the PCA normals and for growing, >= 3
   int min_points = 20;         ///< points a plane needs to be reported, >= 3
   double max_distance = 0.2;   ///< point-to-plane distance while growing, metres, > 0
-  double max_angle = 20.0;     ///< point normal vs plane normal while growing, degrees, in (0, 90]
+  /// Point normal vs plane normal while growing, degrees, in (0, 90]. 30, City3D's value: with the
+  /// refitting below, which brings the crease points into their planes, 20 split slightly bent roofs
+  /// into more planes without fitting the points better (Delft block, docs/BENCHMARKS.md).
+  double max_angle = 30.0;
   /// Rounds of refitting after the growing: a point in no plane joins the nearest plane (within
   /// max_distance) among those of its k neighbours; then the planes are refitted. >= 0, 0 = off.
   int absorb_rounds = 3;

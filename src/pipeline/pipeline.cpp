@@ -117,6 +117,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("step_lines.line_tolerance", p.step_lines.line_tolerance);
   put("step_lines.min_length", p.step_lines.min_length);
   put("step_lines.min_samples", p.step_lines.min_samples);
+  put("step_lines.min_separation", p.step_lines.min_separation);
   put("hypothesis.support_distance", p.hypothesis.support_distance);
   put("hypothesis.min_face_area", p.hypothesis.min_face_area);
   put("hypothesis.line_support_margin", p.hypothesis.line_support_margin);

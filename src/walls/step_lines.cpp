@@ -78,8 +78,9 @@ std::pair<Point2, Point2> fit_line(const std::vector<Point2>& xy, const std::vec
 // Straight pieces through the boundary samples of one pair of planes: repeatedly the line with most
 // samples within `tolerance` (candidate lines: the local fit around each sample), refitted, cut at
 // gaps wider than `max_gap`; the longest run is kept when long enough, its samples removed.
+template <typename Separates>
 void extract_lines(const std::vector<Point2>& samples, const StepLineParams& params, double max_gap,
-                   std::vector<Polyline2>& out) {
+                   Separates separates, std::vector<Polyline2>& out) {
   std::vector<std::uint32_t> left(samples.size());
   std::iota(left.begin(), left.end(), 0u);
   const double tol = params.line_tolerance;
@@ -126,10 +127,11 @@ void extract_lines(const std::vector<Point2>& samples, const StepLineParams& par
         begin = k;
       }
     const double t0 = along[best_begin].first, t1 = along[best_end - 1].first;
-    const bool keep = best_end - best_begin >= static_cast<std::size_t>(params.min_samples) && t1 - t0 >= params.min_length;
-    if (keep)
-      out.push_back({{line.first.x + t0 * line.second.x, line.first.y + t0 * line.second.y},
-                     {line.first.x + t1 * line.second.x, line.first.y + t1 * line.second.y}});
+    const Point2 a{line.first.x + t0 * line.second.x, line.first.y + t0 * line.second.y};
+    const Point2 b{line.first.x + t1 * line.second.x, line.first.y + t1 * line.second.y};
+    if (best_end - best_begin >= static_cast<std::size_t>(params.min_samples) && t1 - t0 >= params.min_length &&
+        separates(a, b))
+      out.push_back({a, b});
     // Remove the run's samples (also when too short: the search moves on to other lines).
     std::vector<bool> drop(xy.size(), false);
     for (std::size_t k = best_begin; k < best_end; ++k) drop[along[k].second] = true;
@@ -149,6 +151,7 @@ void StepLineParams::validate() const {
   if (!(line_tolerance > 0.0)) problems.push_back("line_tolerance must be > 0");
   if (!(min_length >= 0.0)) problems.push_back("min_length must be >= 0");
   if (min_samples < 2) problems.push_back("min_samples must be >= 2");
+  if (!(min_separation >= 0.5 && min_separation <= 1.0)) problems.push_back("min_separation must be in [0.5, 1]");
   if (!(search_spacings > 0.0)) problems.push_back("search_spacings must be > 0");
   if (problems.empty()) return;
   std::string message = "step lines: invalid parameters: ";
@@ -173,8 +176,10 @@ std::vector<Polyline2> detect_step_lines(const std::vector<Point3>& points, cons
   }
   const double radius = params.search_spacings * point_spacing;
   const Grid grid(xy, radius);
-  // Boundary samples per pair of planes (a < b): the midpoint between a point and the nearest point
-  // of another plane within `radius`, where the two planes' heights there differ by min_step or more.
+  // Boundary samples per pair of planes (a < b): from every roof point, the midpoint to the nearest
+  // point of each other plane within `radius`, when the two planes' heights differ by min_step or
+  // more on both sides. The samples form a band a few spacings wide along the boundary; the line
+  // search below finds its middle.
   const std::size_t R = roofs.size();
   std::vector<std::vector<Point2>> samples(R * R);
   std::vector<double> nearest(R);
@@ -200,8 +205,34 @@ std::vector<Polyline2> detect_step_lines(const std::vector<Point3>& points, cons
         samples[std::min(a, b) * R + std::max(a, b)].push_back({(p.x + q.x) / 2, (p.y + q.y) / 2});
     }
   }
-  for (const auto& s : samples)
-    if (s.size() >= static_cast<std::size_t>(params.min_samples)) extract_lines(s, params, radius, lines);
+  // A step line separates its two planes: beside it (within the search radius, along its extent),
+  // at least min_separation of the two planes' points lie on their own plane's side. Planes whose
+  // points interleave (strips of a sawtooth roof grown into one plane) give no line.
+  const auto separation = [&](std::size_t a, std::size_t b, const Point2& p0, const Point2& p1) {
+    const double len = std::hypot(p1.x - p0.x, p1.y - p0.y);
+    const Point2 d{(p1.x - p0.x) / len, (p1.y - p0.y) / len};
+    const Point2 mid{(p0.x + p1.x) / 2, (p0.y + p1.y) / 2};
+    std::size_t a_left = 0, a_right = 0, b_left = 0, b_right = 0;
+    grid.near(mid, len / 2 + radius, [&](std::uint32_t k, double) {
+      const auto l = static_cast<std::size_t>(label[k]);
+      if (l != a && l != b) return;
+      const double along = (xy[k].x - p0.x) * d.x + (xy[k].y - p0.y) * d.y;
+      const double across = -(xy[k].x - p0.x) * d.y + (xy[k].y - p0.y) * d.x;
+      if (along < 0.0 || along > len || std::abs(across) > radius) return;
+      if (l == a)
+        ++(across > 0.0 ? a_left : a_right);
+      else
+        ++(across > 0.0 ? b_left : b_right);
+    });
+    const std::size_t total = a_left + a_right + b_left + b_right;
+    return total > 0 && static_cast<double>(std::max(a_left + b_right, a_right + b_left)) >=
+                            params.min_separation * static_cast<double>(total);
+  };
+  for (std::size_t a = 0; a < R; ++a)
+    for (std::size_t b = a + 1; b < R; ++b)
+      if (samples[a * R + b].size() >= static_cast<std::size_t>(params.min_samples))
+        extract_lines(samples[a * R + b], params, radius,
+                      [&](const Point2& p0, const Point2& p1) { return separation(a, b, p0, p1); }, lines);
   log_debug("walls: " + std::to_string(lines.size()) + " step lines between roof planes");
   return lines;
 }
