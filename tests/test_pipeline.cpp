@@ -171,8 +171,11 @@ TEST(Smoke, tiny_buildings_get_lod2_from_smaller_planes_and_the_convex_hull) {
   // RMSEs, measured as in the test above: 0.0113 and 0.1306.
   const std::tuple<const char*, const char*, double> cases[] = {
       {"02576", "outline: convex hull of the points", 0.06}, {"04992", "planes of at least 20 points", 0.15}};
+  // City3D's 40 points, grown at 20 degrees as before issue 10 (at 30 degrees 04992 has a plane of
+  // 40 points and the retry is not needed).
   ReconstructionParams params;
   params.planes.min_points = 40;
+  params.planes.max_angle = 20.0;
   for (const auto& [name, note, bound] : cases) {
     SCOPED_TRACE(name);
     const PointCloud cloud = read_point_cloud(folder + name + ".ply", kFieldXyz);
