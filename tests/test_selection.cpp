@@ -9,9 +9,16 @@
 #include <thread>
 #include <vector>
 
+#include <csignal>
+#include <cstdlib>
+#include <fstream>
+#include <unistd.h>
+
 #include "../bench/building_problems.hpp"
 #include "city3d/error.hpp"
 #include "city3d/selection.hpp"
+#include "selection/solver.hpp"
+#include "selection/solver_process.hpp"
 
 namespace city3d {
 namespace {
@@ -473,6 +480,95 @@ TEST(Selection, concurrent_solves_from_four_threads_give_identical_results) {
   }
 }
 
+// A program as face selection hands it to a backend, read from the text form of
+// tests/data/selection/ (columns: cost lower upper integer; rows: lower upper count (column value)...;
+// the start).
+detail::MipModel read_mip_model(const std::string& name) {
+  std::ifstream in(std::string(CITY3D_TEST_DATA) + "/selection/" + name);
+  EXPECT_TRUE(in) << name;
+  detail::MipModel model;
+  std::string word;
+  std::size_t count = 0;
+  in >> word >> count;
+  model.columns.resize(count);
+  for (auto& c : model.columns) {
+    int integer = 0;
+    in >> c.cost >> c.lower >> c.upper >> integer;
+    c.integer = integer != 0;
+  }
+  in >> word >> count;
+  model.rows.resize(count);
+  for (auto& r : model.rows) {
+    std::string lower, upper;
+    std::size_t n = 0;
+    in >> lower >> upper >> n;
+    r.lower = std::strtod(lower.c_str(), nullptr);  // "-inf" and "inf" too
+    r.upper = std::strtod(upper.c_str(), nullptr);
+    r.columns.resize(n);
+    r.values.resize(n);
+    for (std::size_t k = 0; k < n; ++k) in >> r.columns[k] >> r.values[k];
+  }
+  in >> word >> count;
+  model.start.resize(count);
+  for (double& v : model.start) in >> v;
+  EXPECT_TRUE(in) << name << " is cut short";
+  return model;
+}
+
+TEST(SolverProcess, child_hands_back_what_the_work_returned) {
+  const auto r = detail::run_in_child([] { return std::string("a\0b", 3) + std::string(200000, 'x'); }, 0.0);
+  ASSERT_TRUE(r.completed) << r.failure;
+  EXPECT_EQ(r.output.size(), 200003u);
+  EXPECT_EQ(r.output.substr(0, 3), std::string("a\0b", 3));
+}
+
+TEST(SolverProcess, child_that_aborts_is_reported_with_its_signal_and_last_words) {
+  const auto r = detail::run_in_child(
+      []() -> std::string {
+        std::fputs("solver.cpp:12: Assertion `lower <= upper' failed.\n", stderr);
+        std::abort();
+      },
+      0.0);
+  EXPECT_FALSE(r.completed);
+  EXPECT_FALSE(r.timed_out);
+  EXPECT_NE(r.failure.find("signal 6"), std::string::npos) << r.failure;
+  EXPECT_EQ(r.stderr_tail, "solver.cpp:12: Assertion `lower <= upper' failed.");
+}
+
+TEST(SolverProcess, child_that_runs_past_the_time_limit_is_stopped_at_it) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto r = detail::run_in_child([]() -> std::string {
+    ::sleep(30);
+    return "late";
+  }, 0.3);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_TRUE(r.timed_out);
+  EXPECT_FALSE(r.completed);
+  EXPECT_LT(seconds, 3.0);
+  EXPECT_GE(seconds, 0.3);
+}
+
+TEST(SolverProcess, child_that_exits_without_a_result_is_not_taken_for_one) {
+  const auto r = detail::run_in_child([]() -> std::string { ::_exit(0); }, 0.0);
+  EXPECT_FALSE(r.completed);
+  EXPECT_NE(r.failure.find("cut short"), std::string::npos) << r.failure;
+}
+
+// Regression (issue 14): with --lambda-complexity 0.15 --lambda-data 0.81, Debian's CBC 2.10.8 hits
+// an assertion in Clp (ClpNonLinearCost.cpp:1064) on this program of Delft footprint
+// b31bbb1ca-00ba-11e6-b420-2bdcc4ab5d7f and aborted the whole run. Now the abort ends the solver's
+// own process, and face selection solves the program with GLPK instead.
+TEST(Selection, cbc_assertion_in_clp_costs_the_solve_not_the_process) {
+  const detail::MipModel model = read_mip_model("cbc_clp_assertion_b31bbb1ca.txt");
+  ASSERT_EQ(model.columns.size(), 244u);
+  const detail::MipSolution cbc = detail::solve_with_cbc(model, detail::MipLimits{});
+  EXPECT_EQ(cbc.status, detail::MipStatus::failed);
+  EXPECT_NE(cbc.message.find("signal 6"), std::string::npos) << cbc.message;
+  EXPECT_NE(cbc.message.find("ClpNonLinearCost"), std::string::npos) << cbc.message;
+  const detail::MipSolution glpk = detail::solve_with_glpk(model, detail::MipLimits{});
+  EXPECT_EQ(glpk.status, detail::MipStatus::optimal) << glpk.message;
+}
+
 TEST(Selection, defaults_are_the_papers_weights) {
   const SelectionParams params;
   EXPECT_EQ(params.lambda_data, 0.34);
@@ -480,7 +576,7 @@ TEST(Selection, defaults_are_the_papers_weights) {
   EXPECT_EQ(params.lambda_complexity, 0.62);
   EXPECT_EQ(params.lambda_roof, 0.04);
   EXPECT_EQ(params.solver, "auto");
-  EXPECT_EQ(params.time_limit, 10.0);
+  EXPECT_EQ(params.time_limit, 0.0);  // no wall-clock limit unless asked for
   EXPECT_EQ(params.node_limit, 100000);
   EXPECT_NO_THROW(params.validate());
 }
@@ -489,7 +585,7 @@ TEST(Selection, validate_lists_every_invalid_field) {
   SelectionParams params;
   params.lambda_data = -1.0;
   params.solver = "scip";
-  params.time_limit = 0.0;
+  params.time_limit = -1.0;
   params.node_limit = 0;
   try {
     params.validate();

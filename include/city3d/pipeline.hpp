@@ -81,9 +81,12 @@ struct ReconstructionParams {
   /// LoD1.3: adjacent roof parts whose heights differ by less than this (metres) become one block,
   /// as 3DBAG's lod13_step_height.
   double lod13_step_height = 3.0;
-  /// Wall-clock limit for one building's LoD2 attempts, seconds: the full rung gets 60% of it, the
-  /// footprint-walls rung the rest, and each selection what is left of its rung's share.
-  double time_limit = 20.0;
+  /// Opt-in wall-clock safety net for one building's LoD2 attempts, seconds; 0 (the default): none.
+  /// The full rung gets 60% of it, the footprint-walls rung the rest, and each selection what is
+  /// left of its rung's share. When it fires the output depends on the machine's speed and load;
+  /// without it, every limit counts work (nodes, faces, points) and the output is a function of
+  /// the inputs and parameters alone.
+  double time_limit = 0.0;
   /// When not empty: per-building intermediate results (heightmap and edge PNGs, polylines before
   /// and after regularisation, walls, planes, candidate faces) are written into <debug_dir>/<id>/.
   std::string debug_dir;
@@ -123,7 +126,10 @@ struct BuildingReport {
   /// rung they came from ("LoD2.2: 204"); empty when every model built was valid as it came.
   std::string validity_found;
   std::string repairs;    ///< what was repaired to make the written model valid, or empty
-  double seconds = 0.0;
+  double seconds = 0.0;      ///< wall clock of reconstruct_building()
+  /// CPU time of reconstruct_building(): its thread's, plus the solver processes it started. Unlike
+  /// the wall clock it does not grow when other work shares the machine.
+  double cpu_seconds = 0.0;
 
   // 3DBAG-style attributes (see README, "Attributes"); world heights in metres, NaN when unknown.
   std::string lods;                 ///< levels written, e.g. "1.2,1.3,2.2"

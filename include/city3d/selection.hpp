@@ -60,8 +60,10 @@ struct SelectionParams {
   /// "auto": components with at least this many variables go to CBC; smaller ones to GLPK first
   /// (then CBC on the time left if GLPK stops on a limit). See selection.cpp for the measurement.
   std::size_t auto_cbc_variables = 200;
-  double time_limit = 10.0;         ///< wall-clock safety limit per solve, seconds
-  long node_limit = 100000;         ///< deterministic work limit (branch-and-bound nodes)
+  /// Opt-in wall-clock safety limit for the whole call, seconds; 0 (the default): none. When it
+  /// fires, the result depends on the machine's speed and load.
+  double time_limit = 0.0;
+  long node_limit = 100000;         ///< deterministic work limit: branch-and-bound nodes per component
   bool use_face_prior = true;
   bool use_single_layer = true;
   /// Throws ConfigError listing every invalid field.
@@ -84,6 +86,9 @@ struct SelectionResult {
   std::size_t variables = 0, constraints = 0;
   std::size_t components = 0;       ///< independent sub-problems solved separately
   std::string message;              ///< why, when not optimal
+  /// A backend that broke on a component (CBC's process crashed) and what it said; GLPK then solved
+  /// that component instead.
+  std::vector<std::string> backend_failures;
 };
 
 /// Evaluates the objective of an assignment (for tests and for checking solver results).
@@ -94,8 +99,13 @@ double selection_energy(const SelectionProblem& problem, const std::vector<bool>
 bool satisfies_constraints(const SelectionProblem& problem, const std::vector<bool>& selected,
                            const SelectionParams& params);
 
-/// Solves the program. Never hangs: limits are always applied. Thread-safe (CBC calls are
-/// serialised internally because CbcMain1 in Debian's 2.10.8 is not thread-safe).
+/// Solves the program. Deterministic: the same problem and parameters give the same result, unless
+/// the opt-in time limit fires. Thread-safe: CBC runs in a child process per call, so calls from
+/// several threads solve at once, and a crash inside CBC costs only that call (backend_failures).
 SelectionResult solve_selection(const SelectionProblem& problem, const SelectionParams& params);
+
+/// CPU seconds (user + system) that the solver processes started from this thread have used so far:
+/// the part of a building's CPU time that is not the thread's own.
+double solver_process_cpu_seconds();
 
 }  // namespace city3d

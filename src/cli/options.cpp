@@ -215,7 +215,8 @@ const std::vector<OptionSpec>& option_table() {
            throw ConfigError("option --solver: '" + v + "' is not auto, glpk or cbc");
          o.batch.reconstruction.selection.solver = v;
        }},
-      {"--time-limit", nullptr, "S", "wall-clock limit per building for LoD2 (then it falls back)",
+      {"--time-limit", nullptr, "S", "opt-in wall-clock safety net per building for LoD2, seconds (then it falls back); "
+       "0: none, the default. When it fires, the output depends on the machine and its load",
        [](const O& o) { return number_text(o.batch.reconstruction.time_limit); },
        [](O& o, V v) { o.batch.reconstruction.time_limit = parse_double("--time-limit", v); }},
       {"--debug", nullptr, "DIR", "write each building's intermediate results (planes, heightmap, edges, "

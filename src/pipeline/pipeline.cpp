@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <sstream>
 
@@ -74,7 +75,8 @@ void ReconstructionParams::validate() const {
   if (!(lod13_step_height > 0)) problems += (problems.empty() ? "" : "; ") + std::string("lod13_step_height must be > 0 (metres)");
   if (!(output_grid >= 0) || !std::isfinite(output_grid))
     problems += (problems.empty() ? "" : "; ") + std::string("output_grid must be >= 0 (metres)");
-  if (!(time_limit > 0)) problems += (problems.empty() ? "" : "; ") + std::string("time_limit must be positive");
+  if (!(time_limit >= 0) || !std::isfinite(time_limit))
+    problems += (problems.empty() ? "" : "; ") + std::string("time_limit must be >= 0 seconds (0: none)");
   if (!problems.empty()) throw ConfigError(problems);
 }
 
@@ -167,6 +169,13 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
+// CPU seconds of the calling thread (user + system).
+double thread_cpu_seconds() {
+  timespec t{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
 // The LoD1 rung: always possible when the building has points and a usable footprint.
 BuildingModel lod1_rung(const BuildingInput& input, const ReconstructionParams& params, BuildingReport& report) {
   const Lod1Heights heights = lod1_heights(input, params.lod1);
@@ -187,9 +196,15 @@ constexpr double kFullRungShare = 0.6;
 // Fewest points a roof plane may have on the retry for small buildings.
 constexpr std::size_t kMinPointsForSmallRoof = 10;
 
-// Throws when the rung's time is used up after `stage`, so the ladder moves on.
+// Adds `note` to the report's notes unless it is there already (a rung can run twice).
+void add_note(BuildingReport& report, const std::string& note) {
+  if (report.note.find(note) == std::string::npos) report.note += (report.note.empty() ? "" : "; ") + note;
+}
+
+// Throws when the rung's time is used up after `stage`, so the ladder moves on (only with the opt-in
+// --time-limit; without it the deadline is time_point::max()).
 void check_time(Clock::time_point deadline, const char* stage) {
-  if (Clock::now() > deadline)
+  if (deadline != Clock::time_point::max() && Clock::now() > deadline)
     throw ReconstructionError(std::string(stage) + ": the building's time limit is used up (see --time-limit)");
 }
 
@@ -256,8 +271,7 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
     if (small.min_points < params.planes.min_points) {
       segments = detect_planes(points, small);
       const std::string note = "small building: planes of at least " + std::to_string(small.min_points) + " points";
-      if (has_roof(segments) && report.note.find(note) == std::string::npos)
-        report.note += (report.note.empty() ? "" : "; ") + note;
+      if (has_roof(segments)) add_note(report, note);
     }
   }
   std::vector<PlanarSegment> roofs;
@@ -288,8 +302,7 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
       // hull of the points (building_from_cloud), regularised like an inferred outline.
       outline.push_back(
           regularise_outline(input.footprint.polygons.front(), params.regularise.angle_threshold));
-      const std::string note = "outline: convex hull of the points";
-      if (report.note.find(note) == std::string::npos) report.note += (report.note.empty() ? "" : "; ") + note;
+      add_note(report, "outline: convex hull of the points");
     }
     if (outline.empty()) throw ReconstructionError("walls: no outline could be inferred from the points");
     outline.resize(1);  // the largest part only: other parts are not modelled (README, known limits)
@@ -326,14 +339,24 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
   check_time(deadline, "hypothesis");
   if (debug) write_candidates_obj(debug_path(params.debug_dir, input.id, "candidates.obj"), candidates);
   SelectionParams selection_params = params.selection;
-  const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
-  selection_params.time_limit = std::max(0.1, std::min(selection_params.time_limit, left));
+  if (deadline != Clock::time_point::max()) {
+    const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
+    const double own = selection_params.time_limit > 0 ? selection_params.time_limit : left;
+    selection_params.time_limit = std::max(0.1, std::min(own, left));
+  }
   SelectionResult selection = solve_selection(candidates.problem, selection_params);
   if (selection.status == SelectionStatus::infeasible && selection_params.use_face_prior) {
     // The face prior is a preference of the paper's, not a necessity: retry without it.
     selection_params.use_face_prior = false;
     selection = solve_selection(candidates.problem, selection_params);
   }
+  // What the report says of the solve: a backend that broke, and a selection not proven optimal
+  // because a limit stopped the search (the deterministic node limit, or the opt-in time limit).
+  // (A feasible selection's message names the failures too.)
+  if (selection.status == SelectionStatus::feasible)
+    add_note(report, selection.message);
+  else
+    for (const std::string& failure : selection.backend_failures) add_note(report, failure + "; solved with glpk instead");
   if (selection.status != SelectionStatus::optimal && selection.status != SelectionStatus::feasible)
     throw ReconstructionError(std::string(selection.status == SelectionStatus::infeasible
                                               ? "selection: infeasible"
@@ -552,6 +575,7 @@ BuildingInput building_from_cloud(const BuildingId& id, const std::vector<Point3
 
 BuildingResult reconstruct_building(const BuildingInput& input, const ReconstructionParams& params) {
   const auto start = Clock::now();
+  const double cpu_start = thread_cpu_seconds() + solver_process_cpu_seconds();
   BuildingResult result;
   BuildingReport& r = result.report;
   r.id = input.id;
@@ -595,10 +619,13 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
       if (rung.level == requested) started = true;
       if (!started) continue;
       try {
-        // The full rung may use 60% of the building's time, the footprint-walls rung the rest.
+        // With --time-limit, the full rung may use 60% of the building's time, the footprint-walls
+        // rung the rest.
         const double share = rung.level == ModelLevel::lod22 ? kFullRungShare : 1.0;
-        const auto deadline = start + std::chrono::duration_cast<Clock::duration>(
-                                          std::chrono::duration<double>(share * params.time_limit));
+        const auto deadline = params.time_limit > 0
+                                  ? start + std::chrono::duration_cast<Clock::duration>(
+                                                std::chrono::duration<double>(share * params.time_limit))
+                                  : Clock::time_point::max();
         BuildingModel model = rung.level == ModelLevel::lod12
                                   ? lod1_rung(input, params, r)
                                   : lod2_rung(input, params, rung.footprint_walls_only, deadline, r);
@@ -659,6 +686,7 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
   }
 
   r.seconds = seconds_since(start);
+  r.cpu_seconds = thread_cpu_seconds() + solver_process_cpu_seconds() - cpu_start;
   return result;
 }
 

@@ -1,4 +1,5 @@
-// COIN-OR CBC backend of face selection: MipModel -> OsiClpSolverInterface -> CbcModel -> CbcMain1.
+// COIN-OR CBC backend of face selection: MipModel -> OsiClpSolverInterface -> CbcModel -> CbcMain1, in
+// a child process per solve (solver_process.hpp).
 #include <algorithm>
 #include <cmath>
 #include <coin/CbcModel.hpp>
@@ -6,40 +7,22 @@
 #include <coin/CoinPackedMatrix.hpp>
 #include <coin/CoinPackedVector.hpp>
 #include <coin/OsiClpSolverInterface.hpp>
-#include <cstdio>
-#include <mutex>
+#include <cstdint>
+#include <cstring>
 #include <string>
 #include <vector>
 
 #include "city3d/error.hpp"
 #include "selection/solver.hpp"
+#include "selection/solver_process.hpp"
 
 namespace city3d::detail {
 namespace {
 
-// CbcMain1 in CBC 2.10.8 keeps its parameter table in static storage: two concurrent calls corrupted
-// each other's parsing (DEPENDENCIES.md). Everything CBC does here runs under this lock.
-std::mutex cbc_mutex;
-
-// std::to_string gives "10.000000"; CBC's parser accepts that, but a short form reads better in logs.
-std::string number(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.3f", value);
-  return buffer;
-}
-
-}  // namespace
-
-MipSolution solve_with_cbc(const MipModel& model, const MipLimits& limits) {
+// The solve itself, as it runs in the child process.
+MipSolution solve_here(const MipModel& model, const MipLimits& limits) {
   MipSolution solution;
   const int n = static_cast<int>(model.columns.size());
-  if (n == 0) {
-    solution.status = MipStatus::optimal;
-    return solution;
-  }
-
-  std::lock_guard<std::mutex> lock(cbc_mutex);
-
   OsiClpSolverInterface lp;
   const double inf = lp.getInfinity();
   std::vector<double> col_lower(n), col_upper(n), cost(n);
@@ -79,18 +62,15 @@ MipSolution solve_with_cbc(const MipModel& model, const MipLimits& limits) {
   cbc.messageHandler()->setLogLevel(0);
   CbcMain0(cbc);
   // Single-threaded with fixed seeds: the same model gives the same search and the same optimum.
-  // -maxNodes is the deterministic work limit, -sec the wall-clock safety limit (CBC counts CPU time
-  // unless -timeMode elapsed, which on a loaded machine lets a solve run far past the limit).
-  const std::string seconds = number(limits.time_limit);
+  // -maxNodes is the deterministic work limit. No -sec: a wall-clock limit is the parent's to apply
+  // (it kills this process), so CBC never decides anything by the clock.
   const std::string nodes = std::to_string(limits.node_limit);
-  const std::vector<std::string> arguments = {"city3d",                     //
-                                              "-log",           "0",        //
-                                              "-threads",       "0",        //
-                                              "-randomSeed",    "1",        //
-                                              "-randomCbcSeed", "1",        //
-                                              "-timeMode",      "elapsed",  //
-                                              "-sec",           seconds,    //
-                                              "-maxNodes",      nodes,      //
+  const std::vector<std::string> arguments = {"city3d",                //
+                                              "-log",           "0",   //
+                                              "-threads",       "0",   //
+                                              "-randomSeed",    "1",   //
+                                              "-randomCbcSeed", "1",   //
+                                              "-maxNodes",      nodes, //
                                               "-solve",         "-quit"};
   if (!names.empty()) {
     std::vector<const char*> start_names;
@@ -115,12 +95,11 @@ MipSolution solve_with_cbc(const MipModel& model, const MipLimits& limits) {
     solution.status = MipStatus::infeasible;
     solution.message = "cbc: proven infeasible";
   } else {
-    // status 1 = stopped on a limit; secondary status 3 = nodes, 4 = time (CbcModel.hpp).
+    // status 1 = stopped on a limit; secondary status 3 = nodes (CbcModel.hpp).
     const int secondary = cbc.secondaryStatus();
-    const std::string why = secondary == 3   ? "node limit " + nodes + " reached"
-                            : secondary == 4 ? "time limit " + seconds + " s reached"
-                                             : "stopped (status " + std::to_string(cbc.status()) + "/" +
-                                                   std::to_string(secondary) + ")";
+    const std::string why = secondary == 3 ? "node limit " + nodes + " reached"
+                                           : "stopped (status " + std::to_string(cbc.status()) + "/" +
+                                                 std::to_string(secondary) + ")";
     if (best != nullptr) {
       solution.status = MipStatus::feasible;
       take_values();
@@ -129,6 +108,70 @@ MipSolution solve_with_cbc(const MipModel& model, const MipLimits& limits) {
       solution.status = MipStatus::no_solution;
       solution.message = "cbc: " + why + " before any feasible solution";
     }
+  }
+  return solution;
+}
+
+// The result crosses the pipe as: status, objective, message length, message, value count, values.
+std::string encode(const MipSolution& solution) {
+  std::string out;
+  const auto put = [&out](const void* data, std::size_t size) { out.append(static_cast<const char*>(data), size); };
+  const std::int32_t status = static_cast<std::int32_t>(solution.status);
+  const std::uint64_t message_size = solution.message.size(), value_count = solution.values.size();
+  put(&status, sizeof status);
+  put(&solution.objective, sizeof solution.objective);
+  put(&message_size, sizeof message_size);
+  put(solution.message.data(), solution.message.size());
+  put(&value_count, sizeof value_count);
+  put(solution.values.data(), value_count * sizeof(double));
+  return out;
+}
+
+bool decode(const std::string& in, std::size_t columns, MipSolution& solution) {
+  std::size_t at = 0;
+  const auto take = [&](void* data, std::size_t size) {
+    if (in.size() - at < size) return false;
+    std::memcpy(data, in.data() + at, size);
+    at += size;
+    return true;
+  };
+  std::int32_t status = 0;
+  std::uint64_t message_size = 0, value_count = 0;
+  if (!take(&status, sizeof status) || status < 0 || status > static_cast<std::int32_t>(MipStatus::no_solution) ||
+      !take(&solution.objective, sizeof solution.objective) || !take(&message_size, sizeof message_size) ||
+      message_size > in.size() - at)
+    return false;
+  solution.status = static_cast<MipStatus>(status);
+  solution.message.assign(in, at, message_size);
+  at += message_size;
+  if (!take(&value_count, sizeof value_count) || (value_count != 0 && value_count != columns)) return false;
+  solution.values.resize(value_count);
+  return take(solution.values.data(), value_count * sizeof(double)) && at == in.size();
+}
+
+}  // namespace
+
+MipSolution solve_with_cbc(const MipModel& model, const MipLimits& limits) {
+  if (model.columns.empty()) {
+    MipSolution solution;
+    solution.status = MipStatus::optimal;
+    return solution;
+  }
+  const ChildResult child = run_in_child([&] { return encode(solve_here(model, limits)); }, limits.time_limit);
+  MipSolution solution;
+  if (child.completed && decode(child.output, model.columns.size(), solution)) return solution;
+  solution = MipSolution{};
+  if (child.timed_out) {
+    solution.status = MipStatus::no_solution;
+    solution.message = "cbc: wall-clock limit reached (the solver process was stopped)";
+    return solution;
+  }
+  solution.status = MipStatus::failed;
+  solution.message = "cbc: the solver process " + (child.completed ? std::string("sent a result that cannot be read") : child.failure);
+  if (!child.stderr_tail.empty()) {
+    // The last line is the one that says what happened (an assertion, say).
+    const std::size_t cut = child.stderr_tail.find_last_of('\n');
+    solution.message += ": " + child.stderr_tail.substr(cut == std::string::npos ? 0 : cut + 1);
   }
   return solution;
 }

@@ -57,6 +57,7 @@
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
 #include "selection/solver.hpp"
+#include "selection/solver_process.hpp"
 
 namespace city3d {
 namespace {
@@ -453,8 +454,8 @@ void SelectionParams::validate() const {
   weight(lambda_roof, "lambda_roof");
   if (solver != "auto" && solver != "glpk" && solver != "cbc")
     errors.push_back("solver = '" + solver + "' (need auto, glpk or cbc)");
-  if (!std::isfinite(time_limit) || time_limit <= 0.0)
-    errors.push_back("time_limit = " + std::to_string(time_limit) + " s (need > 0)");
+  if (!std::isfinite(time_limit) || time_limit < 0.0)
+    errors.push_back("time_limit = " + std::to_string(time_limit) + " s (need >= 0; 0: none)");
   if (node_limit < 1) errors.push_back("node_limit = " + std::to_string(node_limit) + " (need >= 1)");
   if (errors.empty()) return;
   std::string message = "selection: invalid parameters:";
@@ -507,6 +508,10 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
   const auto start = std::chrono::steady_clock::now();
   const auto elapsed = [&start] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  // Seconds the backends may still use: infinity unless the opt-in wall-clock limit is set.
+  const auto time_left = [&] {
+    return params.time_limit > 0.0 ? params.time_limit - elapsed() : std::numeric_limits<double>::infinity();
   };
   params.validate();
   check_problem(problem);
@@ -570,7 +575,7 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
     const bool use_cbc = params.solver == "cbc" || (automatic && model.columns.size() >= params.auto_cbc_variables);
     MipLimits limits;
     limits.node_limit = params.node_limit;
-    limits.time_limit = params.time_limit - elapsed();
+    limits.time_limit = time_left();
     MipSolution part;
     if (limits.time_limit <= 0.0) {
       part.status = MipStatus::no_solution;
@@ -582,23 +587,36 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
       part = detail::solve_with_glpk(model, limits);
       used_glpk = true;
     } else {
-      // "auto" below the threshold: GLPK first with half the time left. GLPK is erratic on some
-      // programs (no incumbent after its root node, or a long search where CBC's preprocessing and
-      // heuristics finish quickly), so when it stops on a limit CBC gets the rest of the time and
-      // the better of the two answers is kept.
-      limits.time_limit *= 0.5;
+      // "auto" below the threshold: GLPK first (with half the time left, when there is a time
+      // limit). GLPK is erratic on some programs (no incumbent after its root node, or a long
+      // search where CBC's preprocessing and heuristics finish quickly), so when it stops on a
+      // limit CBC gets the rest and the better of the two answers is kept.
+      if (std::isfinite(limits.time_limit)) limits.time_limit *= 0.5;
       part = detail::solve_with_glpk(model, limits);
       used_glpk = true;
-      limits.time_limit = params.time_limit - elapsed();
+      limits.time_limit = time_left();
       if ((part.status == MipStatus::feasible || part.status == MipStatus::no_solution) &&
           limits.time_limit > 0.0) {
         MipSolution second = detail::solve_with_cbc(model, limits);
         used_cbc = true;
-        const bool better = second.status == MipStatus::optimal || second.status == MipStatus::infeasible ||
-                            (second.status == MipStatus::feasible &&
-                             (part.status == MipStatus::no_solution || second.objective < part.objective));
-        if (better) part = std::move(second);
+        if (second.status == MipStatus::failed) {
+          notes.push_back(second.message);
+        } else {
+          const bool better = second.status == MipStatus::optimal || second.status == MipStatus::infeasible ||
+                              (second.status == MipStatus::feasible &&
+                               (part.status == MipStatus::no_solution || second.objective < part.objective));
+          if (better) part = std::move(second);
+        }
       }
+    }
+    if (part.status == MipStatus::failed) {
+      // CBC broke (its process crashed: an assertion inside Clp, say). The same program goes to
+      // GLPK under the same node limit, so the building still gets a selection and the run goes on.
+      result.backend_failures.push_back(part.message);
+      notes.push_back(part.message + "; solved with glpk instead");
+      limits.time_limit = time_left();
+      part = limits.time_limit > 0.0 ? detail::solve_with_glpk(model, limits) : MipSolution{};
+      used_glpk = true;
     }
 
     if (!model.start.empty() &&
@@ -660,5 +678,7 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
   log_debug(line.str());
   return result;
 }
+
+double solver_process_cpu_seconds() { return detail::children_cpu_seconds(); }
 
 }  // namespace city3d

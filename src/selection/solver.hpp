@@ -30,13 +30,15 @@ struct MipModel {
   std::vector<double> start;
 };
 
-/// Limits of one solve. Both are always applied.
+/// Limits of one solve. The node limit is the deterministic one; the wall-clock limit is a safety net
+/// that makes the result depend on the machine when it fires.
 struct MipLimits {
-  double time_limit = 10.0;  ///< wall clock, seconds (> 0)
+  double time_limit = std::numeric_limits<double>::infinity();  ///< wall clock, seconds (> 0; infinity: none)
   long node_limit = 100000;  ///< branch-and-bound nodes (>= 1); deterministic
 };
 
-enum class MipStatus { optimal, feasible, infeasible, no_solution };
+/// failed: the backend itself broke (CBC's process crashed or was killed); the message says how.
+enum class MipStatus { optimal, feasible, infeasible, no_solution, failed };
 
 struct MipSolution {
   MipStatus status = MipStatus::no_solution;
@@ -54,8 +56,10 @@ using MipBackend = MipSolution (*)(const MipModel& model, const MipLimits& limit
 MipSolution solve_with_glpk(const MipModel& model, const MipLimits& limits);
 
 /// COIN-OR CBC 2.10 through CbcMain1 (preprocessing, cuts, heuristics), from model.start when given
-/// (CBC's MIP start: its incumbent before the search, so every bound prunes from the first node). Calls are
-/// serialised with a process-wide mutex because CbcMain1 in 2.10.8 is not thread-safe.
+/// (CBC's MIP start: its incumbent before the search, so every bound prunes from the first node). Each
+/// call runs in a child process of its own (solver_process.hpp): CbcMain1 in 2.10.8 is not thread-safe,
+/// and an assertion inside Clp aborts the process it runs in. A crash or the wall-clock limit gives
+/// MipStatus::failed or no_solution with the reason; the calling process goes on.
 MipSolution solve_with_cbc(const MipModel& model, const MipLimits& limits);
 
 }  // namespace city3d::detail
