@@ -134,7 +134,7 @@ TEST(PlaneParams, defaults_are_pinned) {
   EXPECT_EQ(p.k_neighbors, 12);
   EXPECT_EQ(p.min_points, 20);
   EXPECT_DOUBLE_EQ(p.max_distance, 0.2);
-  EXPECT_DOUBLE_EQ(p.max_angle, 30.0);
+  EXPECT_DOUBLE_EQ(p.max_angle, 20.0);
   EXPECT_EQ(p.absorb_rounds, 3);
   EXPECT_DOUBLE_EQ(p.wall_max_normal_z, 0.17);
   EXPECT_NO_THROW(p.validate());
