@@ -901,3 +901,21 @@ TEST_F(Config, every_problem_names_the_file_the_key_and_the_line_and_exits_with_
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_TRUE(contains(r.output, "several.toml line 3: strict must be true or false")) << r.output;
 }
+
+namespace {
+
+// Issue 10: --step-height sets the step lines' least height step; 0 turns them off; negative is an error.
+TEST(CommandLine, step_height_sets_the_step_lines_and_zero_turns_them_off) {
+  const auto step_lines = [](std::vector<std::string> extra) {
+    extra.insert(extra.begin(), {"reconstruct", "x.las"});
+    return parse(extra).batch.reconstruction.step_lines;
+  };
+  EXPECT_TRUE(step_lines({}).enabled);
+  EXPECT_EQ(step_lines({}).min_step, 0.5);
+  EXPECT_EQ(step_lines({"--step-height", "1.2"}).min_step, 1.2);
+  EXPECT_TRUE(step_lines({"--step-height", "1.2"}).enabled);
+  EXPECT_FALSE(step_lines({"--step-height", "0"}).enabled);
+  EXPECT_NE(config_error({"reconstruct", "x.las", "--step-height", "-1"}).find("--step-height"), std::string::npos);
+}
+
+}  // namespace

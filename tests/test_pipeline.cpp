@@ -73,6 +73,35 @@ TEST(Batch, single_building_cloud_gets_a_convex_outline_and_its_lowest_point_as_
   EXPECT_DOUBLE_EQ(given.ground_z, 1.5);
 }
 
+// A cloud of two buildings 6 m apart (a hall and a shed, flat roofs at 8 m and 4 m over a ground at
+// 0): both parts of the inferred outline are modelled, each as its own problem, in one valid model of
+// two shells that leaves no point unexplained.
+TEST(Batch, single_building_cloud_of_two_parts_gets_both_parts_modelled) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  std::vector<Point3> world;
+  const auto roof = [&](double x0, double y0, double w, double d, double z) {
+    const int n = static_cast<int>(w * d * 15.0);
+    for (int i = 0; i < n; ++i) world.push_back({1000 + x0 + w * u(rng), 2000 + y0 + d * u(rng), z + noise(rng)});
+  };
+  roof(0, 0, 20, 12, 8.0);   // the hall
+  roof(26, 2, 6, 5, 4.0);    // the shed, 6 m east of it
+  world.push_back({1010, 2006, 0.0});  // a ground point: the floor at 0
+  const BuildingResult r = reconstruct_building(building_from_cloud("two", world), {});
+  ASSERT_TRUE(r.model.has_value()) << r.report.reason;
+  EXPECT_EQ(r.report.level, ModelLevel::lod22) << r.report.reason;
+  EXPECT_NE(r.report.note.find("outline: 2 parts"), std::string::npos) << r.report.note;
+  EXPECT_TRUE(check_mesh(r.model->mesh).valid());
+  // Two shells: vertices of each lie over one of the two roofs.
+  std::size_t over_hall = 0, over_shed = 0;
+  for (const Point3& v : r.model->mesh.vertices) (v.x + r.model->origin.x < 1023.0 ? over_hall : over_shed)++;
+  EXPECT_GE(over_hall, 8u);
+  EXPECT_GE(over_shed, 8u);
+  EXPECT_LE(r.report.unexplained_points, 1.0);  // the lone ground point at most
+  EXPECT_LT(r.report.rmse, 0.15);
+}
+
 TEST(Batch, building_without_points_is_skipped_with_a_reason_and_no_model) {
   BuildingInput in;
   in.id = "empty";
@@ -171,8 +200,11 @@ TEST(Smoke, tiny_buildings_get_lod2_from_smaller_planes_and_the_convex_hull) {
   // RMSEs, measured as in the test above: 0.0113 and 0.1306.
   const std::tuple<const char*, const char*, double> cases[] = {
       {"02576", "outline: convex hull of the points", 0.06}, {"04992", "planes of at least 20 points", 0.15}};
+  // City3D's 40 points, grown at 20 degrees as before issue 10 (at 30 degrees 04992 has a plane of
+  // 40 points and the retry is not needed).
   ReconstructionParams params;
   params.planes.min_points = 40;
+  params.planes.max_angle = 20.0;
   for (const auto& [name, note, bound] : cases) {
     SCOPED_TRACE(name);
     const PointCloud cloud = read_point_cloud(folder + name + ".ply", kFieldXyz);

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iostream>
 #include <iterator>
 #include <random>
 #include <string>
@@ -28,6 +29,7 @@ using city3d::Heightmap;
 using city3d::HeightmapParams;
 using city3d::PlanarSegment;
 using city3d::PlaneParams;
+using city3d::StepLineParams;
 using city3d::Point2;
 using city3d::Point3;
 
@@ -133,6 +135,7 @@ TEST(PlaneParams, defaults_are_pinned) {
   EXPECT_EQ(p.min_points, 20);
   EXPECT_DOUBLE_EQ(p.max_distance, 0.2);
   EXPECT_DOUBLE_EQ(p.max_angle, 20.0);
+  EXPECT_EQ(p.absorb_rounds, 3);
   EXPECT_DOUBLE_EQ(p.wall_max_normal_z, 0.17);
   EXPECT_NO_THROW(p.validate());
 }
@@ -234,6 +237,82 @@ TEST(DetectPlanes, two_flat_roofs_at_different_heights_give_two_planes) {
   std::sort(heights.begin(), heights.end());
   EXPECT_NEAR(heights[0], 4.0, 0.05);
   EXPECT_NEAR(heights[1], 7.0, 0.05);
+}
+
+// Refitting (absorb_rounds): along the ridge the PCA normals of the k neighbours mix both slopes and
+// fail the angle test, so the growing leaves a band of points out; the refit brings them into the
+// plane they lie on, so that both planes reach the ridge line (the hypothesis clips roof-roof lines
+// to where both planes have points).
+TEST(DetectPlanes, refitting_brings_the_ridge_points_into_the_gable_planes) {
+  const auto points = gable_roof(2);
+  PlaneParams without;
+  without.absorb_rounds = 0;
+  const auto count_near_ridge = [&](const std::vector<PlanarSegment>& segments) {
+    std::size_t in = 0;
+    for (const auto& s : segments)
+      for (auto k : s.points) in += std::abs(points[k].y - 4.0) < 0.3;
+    return in;
+  };
+  std::size_t near_ridge = 0;
+  for (const auto& p : points) near_ridge += std::abs(p.y - 4.0) < 0.3;
+  const auto before = detect_planes(points, without);
+  const auto after = detect_planes(points, PlaneParams{});
+  ASSERT_EQ(before.size(), 2u);
+  ASSERT_EQ(after.size(), 2u);
+  EXPECT_LT(count_near_ridge(before), near_ridge * 85 / 100) << "the growing alone leaves the ridge band out";
+  EXPECT_GE(count_near_ridge(after), near_ridge * 95 / 100);
+  // Each point joined the plane it lies on: the south slope (y < 4) keeps south points.
+  for (const auto& s : after) {
+    const bool south = s.plane.b < 0.0;
+    std::size_t wrong = 0;
+    for (auto k : s.points) wrong += south ? points[k].y > 4.15 : points[k].y < 3.85;
+    EXPECT_EQ(wrong, 0u);
+    EXPECT_NEAR(tilt_degrees(s.plane), kGableSlope, 1.0);
+  }
+}
+
+// Step lines (walls.hpp): two flat roofs 3 m apart meet in one step line along x = 5; a gable's two
+// planes meet in a crease, which gives none.
+TEST(StepLines, two_roofs_at_different_heights_give_a_step_line_along_the_step) {
+  const auto points = two_flat_roofs(3);
+  const auto segments = detect_planes(points, PlaneParams{});
+  ASSERT_EQ(segments.size(), 2u);
+  const auto lines = detect_step_lines(points, segments, std::sqrt(1.0 / kDensity), StepLineParams{});
+  // The longest along the whole step; a short piece of the sample band's edge may come with it
+  // (regularisation merges it into the first).
+  ASSERT_GE(lines.size(), 1u);
+  ASSERT_LE(lines.size(), 2u);
+  for (const auto& line : lines) {
+    ASSERT_EQ(line.size(), 2u);
+    for (const Point2& p : line) EXPECT_NEAR(p.x, kStepX, 0.35);
+  }
+  EXPECT_GT(std::abs(lines[0][1].y - lines[0][0].y), 6.0);
+}
+
+TEST(StepLines, a_ridge_is_a_crease_not_a_step) {
+  const auto points = gable_roof(2);
+  const auto segments = detect_planes(points, PlaneParams{});
+  ASSERT_EQ(segments.size(), 2u);
+  EXPECT_TRUE(detect_step_lines(points, segments, std::sqrt(1.0 / kDensity), StepLineParams{}).empty());
+}
+
+TEST(StepLines, planes_whose_points_interleave_give_few_step_lines) {
+  // Two planes 2 m apart whose points are mixed at random over the whole roof (as strips of a
+  // sawtooth roof narrower than a few point spacings grown into few planes): they differ by 2 m
+  // everywhere, but no line separates them. Short lines can pass the separation test by chance
+  // (about 20 points beside a 1 m line), so the test cuts them down, not to none.
+  const auto points = two_flat_roofs(3);
+  std::vector<PlanarSegment> segments(2);
+  std::mt19937 rng(7);
+  for (std::uint32_t k = 0; k < points.size(); ++k) segments[rng() % 2].points.push_back(k);
+  segments[0].plane = {0.0, 0.0, 1.0, -4.0};
+  segments[1].plane = {0.0, 0.0, 1.0, -6.0};
+  const auto tested = detect_step_lines(points, segments, std::sqrt(1.0 / kDensity), StepLineParams{});
+  StepLineParams no_test;
+  no_test.min_separation = 0.5;
+  const auto untested = detect_step_lines(points, segments, std::sqrt(1.0 / kDensity), no_test);
+  EXPECT_GE(untested.size(), 10u) << "without the separation test the mixed points give many step lines";
+  EXPECT_LE(tested.size() * 4, untested.size());
 }
 
 TEST(DetectPlanes, l_shaped_flat_roof_gives_one_plane_covering_both_wings) {

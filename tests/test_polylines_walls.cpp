@@ -472,6 +472,14 @@ TEST(Defaults, stage_parameters_keep_their_documented_defaults) {
   EXPECT_EQ(w.mode, WallMode::automatic);
   EXPECT_EQ(w.min_wall_length, 0.5);
   EXPECT_EQ(w.footprint_margin, 0.3);
+  const StepLineParams st;
+  EXPECT_TRUE(st.enabled);
+  EXPECT_EQ(st.min_step, 0.5);
+  EXPECT_EQ(st.search_spacings, 3.0);
+  EXPECT_EQ(st.line_tolerance, 0.25);
+  EXPECT_EQ(st.min_length, 1.0);
+  EXPECT_EQ(st.min_samples, 4);
+  EXPECT_EQ(st.min_separation, 0.65);
 }
 
 TEST(Polylines, fewer_than_two_pixels_give_no_polyline) {

@@ -63,6 +63,7 @@ struct ReconstructionParams {
   PolylineParams polylines;
   RegulariseParams regularise;
   WallParams walls;
+  StepLineParams step_lines;
   HypothesisParams hypothesis;
   SelectionParams selection;
   AssembleParams assemble;
@@ -147,7 +148,17 @@ struct BuildingReport {
   double rmse_lod12 = std::numeric_limits<double>::quiet_NaN();    ///< metres, points to the model
   double rmse_lod13 = std::numeric_limits<double>::quiet_NaN();
   double rmse_lod22 = std::numeric_limits<double>::quiet_NaN();
+  /// Building points farther than kUnexplainedDistance from the model written (parts of the
+  /// building the model leaves out, or stray points), count and share of all points; NaN without a
+  /// model.
+  double unexplained_points = std::numeric_limits<double>::quiet_NaN();
+  double unexplained_share = std::numeric_limits<double>::quiet_NaN();
 };
+
+/// A point farther than this from its building's model is "unexplained" (BuildingReport), metres:
+/// well beyond the noise of airborne LiDAR roofs (a few cm) and the misfit of a roof plane over a
+/// slightly bent roof (tens of cm), so what it counts is structure the model does not have.
+constexpr double kUnexplainedDistance = 1.0;
 
 /// One level of detail of a building's model.
 struct LodModel {

@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "city3d/planes.hpp"
 #include "city3d/regularise.hpp"
 #include "city3d/types.hpp"
 
@@ -68,5 +69,46 @@ std::vector<VerticalPlane> infer_walls(const RegularisationResult& lines,
                                        const std::vector<Polygon2>* footprint_local,
                                        const std::vector<std::pair<Point2, Point2>>& detected_wall_lines,
                                        const WallParams& params);
+
+/// Parameters of detect_step_lines().
+struct StepLineParams {
+  bool enabled = true;
+  /// Two planes whose heights differ by at least this where their points meet make a step, metres,
+  /// > 0. 0.5 m: above the 0.3 m support distance (a smaller difference is one roof within the
+  /// points' spread) and below the heightmap's Canny thresholds (0.6 / 1.5 m), whose edges take the
+  /// larger steps only where the TIN does not smear them.
+  double min_step = 0.5;
+  /// Radius of the search for the other plane's points, in point spacings (sqrt(1 / density)), > 0.
+  /// 3 spacings bridge the one or two unsegmented points that usually line a step.
+  double search_spacings = 3.0;
+  /// Boundary samples within this distance of a line belong to it, metres, > 0 (the polylines'
+  /// eps_d).
+  double line_tolerance = 0.25;
+  double min_length = 1.0;  ///< shorter step lines are dropped, metres, >= 0
+  int min_samples = 4;      ///< boundary samples a step line needs, >= 2
+  /// Share of the two planes' points beside a step line (within the search radius) that must lie on
+  /// their own plane's side of it, in [0.5, 1] (0.5 = no test): a line that does not separate the
+  /// planes (their points interleave, as on a sawtooth roof grown into few planes) is no step.
+  /// 0.65, not stricter: unsegmented points and refitted planes make real step borders ragged
+  /// (0.8 lost half of the step lines' gain on the Delft block, docs/BENCHMARKS.md), while
+  /// interleaved strips score about 0.5 (AHN3/07163: 1,972 step lines without the test, 592 with it).
+  double min_separation = 0.65;
+
+  /// Throws ConfigError listing every invalid field.
+  void validate() const;
+};
+
+/// The step lines of one building (local frame): where points of one roof plane meet points of
+/// another (within search_spacings x point_spacing in xy) and the two planes' heights differ by
+/// min_step or more, with the same sign, at both points (a step, not a crease between them), the
+/// midpoints are boundary samples of that pair of planes; straight
+/// runs of them (within line_tolerance, no gap wider than the search radius, min_samples samples and
+/// min_length long, separating the two planes' points, see min_separation) are the step lines, as
+/// two-point polylines, to be regularised with the
+/// heightmap's lines. Pairs whose planes meet at about the same height are left to the roof-roof
+/// intersection lines of the hypothesis. Deterministic. Throws ConfigError for invalid params.
+std::vector<Polyline2> detect_step_lines(const std::vector<Point3>& local_points,
+                                         const std::vector<PlanarSegment>& roof_planes, double point_spacing,
+                                         const StepLineParams& params);
 
 }  // namespace city3d

@@ -172,6 +172,17 @@ const std::vector<OptionSpec>& option_table() {
       {"--plane-angle", nullptr, "DEG", "region growing: normal deviation",
        [](const O& o) { return number_text(o.batch.reconstruction.planes.max_angle); },
        [](O& o, V v) { o.batch.reconstruction.planes.max_angle = parse_double("--plane-angle", v); }},
+      {"--step-height", nullptr, "M", "step lines: height step between two roof planes that makes an inner wall where their points meet; 0 = no step lines",
+       [](const O& o) {
+         const auto& st = o.batch.reconstruction.step_lines;
+         return number_text(st.enabled ? st.min_step : 0.0);
+       },
+       [](O& o, V v) {
+         const double h = parse_double("--step-height", v);
+         if (h < 0.0) throw ConfigError("--step-height: " + std::string(v) + " is negative (give 0 for no step lines)");
+         o.batch.reconstruction.step_lines.enabled = h > 0.0;
+         if (h > 0.0) o.batch.reconstruction.step_lines.min_step = h;
+       }},
       {"--resolution", nullptr, "M", "heightmap resolution r; 0 = from the point density (0.20 m at AHN3 density)",
        [](const O& o) { return number_text(o.batch.reconstruction.heightmap.resolution); },
        [](O& o, V v) { o.batch.reconstruction.heightmap.resolution = parse_double("--resolution", v); }},

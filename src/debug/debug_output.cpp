@@ -170,7 +170,10 @@ void write_candidates_obj(const std::string& path, const CandidateFaces& candida
   static const char* kind_names[] = {"roof", "wall", "floor"};
   for (std::size_t i = 0; i < candidates.faces.size(); ++i) {
     const auto& f = candidates.faces[i];
-    std::fprintf(file, "o %s_%zu\nf", kind_names[static_cast<int>(f.kind)], i);
+    // roof_<face>_plane<roof plane>_cell<cell>, wall_<face>_edge<edge>, floor_<face>_cell<cell>
+    std::fprintf(file, "o %s_%zu", kind_names[static_cast<int>(f.kind)], i);
+    if (f.kind == FaceKind::roof) std::fprintf(file, "_plane%d", f.source);
+    std::fprintf(file, "_%s%u\nf", f.kind == FaceKind::wall ? "edge" : "cell", f.cell_or_edge);
     for (auto v : f.vertices) std::fprintf(file, " %u", v + 1);
     std::fprintf(file, "\n");
   }

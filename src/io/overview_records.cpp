@@ -88,6 +88,8 @@ BuildingReport parse_report(const std::string& text, std::size_t position) {
   r.rmse_lod12 = number_or_nan(o, "rmse_lod12");
   r.rmse_lod13 = number_or_nan(o, "rmse_lod13");
   r.rmse_lod22 = number_or_nan(o, "rmse_lod22");
+  r.unexplained_points = number_or_nan(o, "unexplained_points");
+  r.unexplained_share = number_or_nan(o, "unexplained_share");
   r.validity_found = text_of(o, "validity_found");
   r.repairs = text_of(o, "repairs");
   return r;

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <filesystem>
 #include <sstream>
@@ -65,6 +66,7 @@ void ReconstructionParams::validate() const {
   check([&] { polylines.validate(); });
   check([&] { regularise.validate(); });
   check([&] { walls.validate(); });
+  check([&] { step_lines.validate(); });
   check([&] { hypothesis.validate(); });
   check([&] { selection.validate(); });
   check([&] { assemble.validate(); });
@@ -87,6 +89,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("planes.min_points", p.planes.min_points);
   put("planes.max_distance", p.planes.max_distance);
   put("planes.max_angle", p.planes.max_angle);
+  put("planes.absorb_rounds", p.planes.absorb_rounds);
   put("planes.wall_max_normal_z", p.planes.wall_max_normal_z);
   put("heightmap.resolution", p.heightmap.resolution);
   put("heightmap.max_edge_length", p.heightmap.max_edge_length);
@@ -111,6 +114,13 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("walls.footprint_margin", p.walls.footprint_margin);
   put("walls.min_detected_lines", p.walls.min_detected_lines);
   put("walls.detected_length_ratio", p.walls.detected_length_ratio);
+  put("step_lines.enabled", p.step_lines.enabled);
+  put("step_lines.min_step", p.step_lines.min_step);
+  put("step_lines.search_spacings", p.step_lines.search_spacings);
+  put("step_lines.line_tolerance", p.step_lines.line_tolerance);
+  put("step_lines.min_length", p.step_lines.min_length);
+  put("step_lines.min_samples", p.step_lines.min_samples);
+  put("step_lines.min_separation", p.step_lines.min_separation);
   put("hypothesis.support_distance", p.hypothesis.support_distance);
   put("hypothesis.min_face_area", p.hypothesis.min_face_area);
   put("hypothesis.line_support_margin", p.hypothesis.line_support_margin);
@@ -223,6 +233,121 @@ std::pair<Point2, Point2> wall_line(const PlanarSegment& wall, const std::vector
 }
 
 
+// Smallest area of an inferred outline part other than the largest that is modelled, m2: a garden
+// shed or a silo (infer_outline keeps regions of 2 m2 and more, but a part needs a roof plane).
+constexpr double kMinExtraPartArea = 4.0;
+
+double ring_area(const Ring2& ring) {
+  double twice = 0;
+  for (std::size_t k = 0; k < ring.size(); ++k) {
+    const Point2 &a = ring[k], &b = ring[(k + 1) % ring.size()];
+    twice += a.x * b.y - b.x * a.y;
+  }
+  return std::fabs(twice) / 2;
+}
+
+bool inside_ring(const Ring2& ring, const Point2& p) {
+  bool in = false;
+  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++)
+    if ((ring[i].y > p.y) != (ring[j].y > p.y) &&
+        p.x < (ring[j].x - ring[i].x) * (p.y - ring[i].y) / (ring[j].y - ring[i].y) + ring[i].x)
+      in = !in;
+  return in;
+}
+
+double segment_distance(const Point2& p, const Point2& a, const Point2& b) {
+  const double dx = b.x - a.x, dy = b.y - a.y, len2 = dx * dx + dy * dy;
+  const double t = len2 > 0 ? std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / len2, 0.0, 1.0) : 0.0;
+  return std::hypot(p.x - a.x - t * dx, p.y - a.y - t * dy);
+}
+
+// Two rings closer than `gap` anywhere (crossing, one inside the other, or a vertex near an edge).
+bool rings_near(const Ring2& a, const Ring2& b, double gap) {
+  if (inside_ring(b, a.front()) || inside_ring(a, b.front())) return true;
+  for (const auto& [p, q] : {std::pair{&a, &b}, std::pair{&b, &a}})
+    for (const Point2& v : *p)
+      for (std::size_t k = 0; k < q->size(); ++k)
+        if (segment_distance(v, (*q)[k], (*q)[(k + 1) % q->size()]) < gap) return true;
+  // Crossing edges without a vertex near the other ring cannot happen at this gap unless an edge
+  // passes through; test the crossings too.
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (std::size_t j = 0; j < b.size(); ++j) {
+      const Point2 &p = a[i], &p2 = a[(i + 1) % a.size()], &q = b[j], &q2 = b[(j + 1) % b.size()];
+      const auto side = [](const Point2& o, const Point2& u, const Point2& w) {
+        return (u.x - o.x) * (w.y - o.y) - (u.y - o.y) * (w.x - o.x);
+      };
+      if (side(p, p2, q) * side(p, p2, q2) < 0 && side(q, q2, p) * side(q, q2, p2) < 0) return true;
+    }
+  return false;
+}
+
+// The parts of an inferred outline to model (largest first): the largest, and every further part of
+// kMinExtraPartArea or more that holds most of the points of some roof plane and keeps clear of the
+// parts already kept (fitting an outline to its points can push two parts into each other: then the
+// part as inferred, and if that touches too, it is left out rather than made to touch). Leaving a part out shows in unexplained_points.
+std::vector<Polygon2> separate_parts(const std::vector<Polygon2>& parts, const std::vector<Polygon2>& as_inferred,
+                                     const std::vector<PlanarSegment>& roofs, const std::vector<Point3>& points) {
+  constexpr double kGap = 0.1;  // metres between kept parts
+  std::vector<std::size_t> kept_index{0};
+  std::vector<Polygon2> kept{parts.front()};
+  const auto near_kept = [&](const Polygon2& part) {
+    std::vector<std::size_t> near;
+    for (std::size_t j = 0; j < kept.size(); ++j)
+      if (rings_near(part.outer, kept[j].outer, kGap)) near.push_back(j);
+    return near;
+  };
+  for (std::size_t k = 1; k < parts.size(); ++k) {
+    if (ring_area(parts[k].outer) < kMinExtraPartArea) continue;
+    const bool has_plane = std::any_of(roofs.begin(), roofs.end(), [&](const PlanarSegment& s) {
+      std::size_t in = 0;
+      for (std::uint32_t i : s.points) in += inside_ring(parts[k].outer, {points[i].x, points[i].y});
+      return 2 * in > s.points.size();
+    });
+    if (!has_plane) continue;
+    // The part as regularised and fitted to its points; else as inferred (the regions of the
+    // occupancy raster lie apart, but fitting moves edges out by up to 1.5 m), with the parts it
+    // would touch taken as inferred too.
+    if (near_kept(parts[k]).empty()) {
+      kept.push_back(parts[k]);
+      kept_index.push_back(k);
+      continue;
+    }
+    const std::vector<std::size_t> near = near_kept(as_inferred[k]);
+    std::vector<Polygon2> trial = kept;
+    for (std::size_t j : near) trial[j] = as_inferred[kept_index[j]];
+    bool clear = true;
+    for (std::size_t i = 0; i < trial.size() && clear; ++i) {
+      clear = !rings_near(as_inferred[k].outer, trial[i].outer, kGap);
+      for (std::size_t j : near)
+        if (j != i && rings_near(trial[j].outer, trial[i].outer, kGap)) clear = false;
+    }
+    if (!clear) continue;
+    kept = std::move(trial);
+    kept.push_back(as_inferred[k]);
+    kept_index.push_back(k);
+  }
+  log_debug("outline: " + std::to_string(parts.size()) + " parts inferred, " + std::to_string(kept.size()) + " modelled");
+  return kept;
+}
+
+// Mean point spacing, metres: sqrt(outline area / points).
+double point_spacing(const std::vector<Polygon2>& outline, std::size_t points) {
+  double area = 0.0;
+  for (const Polygon2& p : outline) {
+    const auto ring_area = [](const Ring2& ring) {
+      double twice = 0;
+      for (std::size_t k = 0; k < ring.size(); ++k) {
+        const Point2 &a = ring[k], &b = ring[(k + 1) % ring.size()];
+        twice += a.x * b.y - b.x * a.y;
+      }
+      return std::fabs(twice) / 2;
+    };
+    area += ring_area(p.outer);
+    for (const Ring2& h : p.holes) area -= ring_area(h);
+  }
+  return points > 0 && area > 0 ? std::sqrt(area / static_cast<double>(points)) : 0.0;
+}
+
 // A LoD2 rung: planes, walls, hypothesis, selection, model. `footprint_walls_only` skips the
 // inferred inner walls (the second rung). Throws Error naming the stage when a stage fails.
 BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& params, bool footprint_walls_only,
@@ -271,7 +396,8 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
   std::vector<Polygon2> outline = input.footprint.polygons;
   if (!input.footprint_given) {
     outline.clear();
-    for (const Polygon2& p : infer_outline(heightmap, points, params.polylines.max_hausdorff))
+    const std::vector<Polygon2> inferred = infer_outline(heightmap, points, params.polylines.max_hausdorff);
+    for (const Polygon2& p : inferred)
       outline.push_back(fit_outline_to_points(regularise_outline(p, params.regularise.angle_threshold), points));
     if (outline.empty() && !input.footprint.polygons.empty()) {
       // Too small for the heightmap to hold an outline (under infer_outline's 2 m2): the convex
@@ -281,12 +407,17 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
       add_note(report, "outline: convex hull of the points");
     }
     if (outline.empty()) throw ReconstructionError("walls: no outline could be inferred from the points");
-    outline.resize(1);  // the largest part only: other parts are not modelled (README, known limits)
+    if (outline.size() > 1) outline = separate_parts(outline, inferred, roofs, points);
+    if (outline.size() > 1) add_note(report, "outline: " + std::to_string(outline.size()) + " parts");
   }
   RegularisationResult lines;
   if (!footprint_walls_only) {
     const std::vector<Point2> edges = detect_edges(heightmap, params.heightmap);
-    const std::vector<Polyline2> polylines = extract_polylines(edges, params.polylines);
+    std::vector<Polyline2> polylines = extract_polylines(edges, params.polylines);
+    // Step lines between roof planes join the heightmap's lines (the same regularisation and walls).
+    const std::vector<Polyline2> steps = detect_step_lines(points, roofs, point_spacing(outline, points.size()), params.step_lines);
+    if (debug) write_polylines_obj(debug_path(params.debug_dir, input.id, "step_lines.obj"), steps, input.ground_z);
+    polylines.insert(polylines.end(), steps.begin(), steps.end());
     lines = regularise(polylines, &outline, params.regularise);
     if (debug) {
       write_heightmap_png(heightmap, debug_path(params.debug_dir, input.id, "heightmap.png"));
@@ -297,49 +428,80 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
   }
   WallParams wall_params = params.walls;
   if (wall_params.mode == WallMode::automatic) wall_params.mode = WallMode::footprint;
-  const std::vector<VerticalPlane> walls =
-      infer_walls(lines, &outline, footprint_walls_only ? std::vector<std::pair<Point2, Point2>>{} : detected_walls,
-                  wall_params);
-  report.walls = walls.size();
-  check_time(deadline, "walls");
-  if (debug) write_walls_obj(debug_path(params.debug_dir, input.id, "walls.obj"), walls, input.ground_z, input.ground_z + 20.0);
-
-  // Face hypothesis and selection (paper section 3.3).
-  const CandidateFaces candidates =
-      generate_candidates(points, roofs, walls, outline, input.ground_z, input.ground_measured, params.hypothesis,
-                          params.selection);
-  report.candidate_faces = candidates.faces.size();
-  check_time(deadline, "hypothesis");
-  if (debug) write_candidates_obj(debug_path(params.debug_dir, input.id, "candidates.obj"), candidates);
-  SelectionParams selection_params = params.selection;
-  if (deadline != Clock::time_point::max()) {
-    const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
-    const double own = selection_params.time_limit > 0 ? selection_params.time_limit : left;
-    selection_params.time_limit = std::max(0.1, std::min(own, left));
-  }
-  SelectionResult selection = solve_selection(candidates.problem, selection_params);
-  if (selection.status == SelectionStatus::infeasible && selection_params.use_face_prior) {
-    // The face prior is a preference of the paper's, not a necessity: retry without it.
-    selection_params.use_face_prior = false;
-    selection = solve_selection(candidates.problem, selection_params);
-  }
-  // What the report says of the solve: a backend that broke, and a selection not proven optimal
-  // because a limit stopped the search (the deterministic node limit, or the opt-in time limit).
-  // (A feasible selection's message names the failures too.)
-  if (selection.status == SelectionStatus::feasible)
-    add_note(report, selection.message);
+  // A footprint is one problem, whatever its polygons; the parts of an inferred outline are one
+  // problem each (their own walls, arrangement and selection), and their solids are joined in one
+  // model: the parts of a cloud do not touch, and one arrangement over all of them could leave a
+  // part's floor edge without a partner (AHN3/02523).
+  std::vector<std::vector<Polygon2>> problems;
+  if (input.footprint_given)
+    problems.push_back(outline);
   else
-    for (const std::string& failure : selection.backend_failures) add_note(report, failure + "; solved with glpk instead");
-  if (selection.status != SelectionStatus::optimal && selection.status != SelectionStatus::feasible)
-    throw ReconstructionError(std::string(selection.status == SelectionStatus::infeasible
-                                              ? "selection: infeasible"
-                                              : "selection: no solution within the limits") +
-                              " (" + std::to_string(selection.variables) + " variables): " + selection.message);
+    for (const Polygon2& part : outline) problems.push_back({part});
 
   BuildingModel model;
   model.id = input.id;
   model.origin = input.origin;
-  model.mesh = assemble_model(candidates, selection.selected, params.assemble, &model.surfaces);
+  report.walls = report.candidate_faces = 0;
+  for (std::size_t k = 0; k < problems.size(); ++k) {
+    const std::vector<Polygon2>& part = problems[k];
+    const std::string suffix = problems.size() > 1 ? "_part" + std::to_string(k) : "";
+    try {
+      const std::vector<VerticalPlane> walls =
+          infer_walls(lines, &part, footprint_walls_only ? std::vector<std::pair<Point2, Point2>>{} : detected_walls,
+                      wall_params);
+      report.walls += walls.size();
+      check_time(deadline, "walls");
+      if (debug)
+        write_walls_obj(debug_path(params.debug_dir, input.id, "walls" + suffix + ".obj"), walls, input.ground_z,
+                        input.ground_z + 20.0);
+
+      // Face hypothesis and selection (paper section 3.3).
+      const CandidateFaces candidates =
+          generate_candidates(points, roofs, walls, part, input.ground_z, input.ground_measured, params.hypothesis,
+                              params.selection);
+      report.candidate_faces += candidates.faces.size();
+      check_time(deadline, "hypothesis");
+      if (debug) write_candidates_obj(debug_path(params.debug_dir, input.id, "candidates" + suffix + ".obj"), candidates);
+      SelectionParams selection_params = params.selection;
+      if (deadline != Clock::time_point::max()) {
+        const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
+        const double own = selection_params.time_limit > 0 ? selection_params.time_limit : left;
+        selection_params.time_limit = std::max(0.1, std::min(own, left));
+      }
+      SelectionResult selection = solve_selection(candidates.problem, selection_params);
+      if (selection.status == SelectionStatus::infeasible && selection_params.use_face_prior) {
+        // The face prior is a preference of the paper's, not a necessity: retry without it.
+        selection_params.use_face_prior = false;
+        selection = solve_selection(candidates.problem, selection_params);
+      }
+      // What the report says of the solve: a backend that broke, and a selection not proven optimal
+      // because a limit stopped the search (the deterministic node limit, or the opt-in time limit).
+      // (A feasible selection's message names the failures too.)
+      if (selection.status == SelectionStatus::feasible)
+        add_note(report, selection.message);
+      else
+        for (const std::string& failure : selection.backend_failures) add_note(report, failure + "; solved with glpk instead");
+      if (selection.status != SelectionStatus::optimal && selection.status != SelectionStatus::feasible)
+        throw ReconstructionError(std::string(selection.status == SelectionStatus::infeasible
+                                                  ? "selection: infeasible"
+                                                  : "selection: no solution within the limits") +
+                                  " (" + std::to_string(selection.variables) + " variables): " + selection.message);
+
+      std::vector<SurfaceType> surfaces;
+      const PolygonMesh mesh = assemble_model(candidates, selection.selected, params.assemble, &surfaces);
+      const auto offset = static_cast<std::uint32_t>(model.mesh.vertices.size());
+      model.mesh.vertices.insert(model.mesh.vertices.end(), mesh.vertices.begin(), mesh.vertices.end());
+      for (auto face : mesh.faces) {
+        for (auto& v : face) v += offset;
+        model.mesh.faces.push_back(std::move(face));
+      }
+      model.surfaces.insert(model.surfaces.end(), surfaces.begin(), surfaces.end());
+    } catch (const ReconstructionError& e) {
+      // The largest part decides the rung; a further part that cannot be built is left out and said.
+      if (k == 0) throw;
+      add_note(report, "outline part " + std::to_string(k) + " left out: " + e.what());
+    }
+  }
   return model;
 }
 
@@ -475,7 +637,17 @@ void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams
   if (kept.empty()) kept.push_back({lod2 ? "2.2" : "1.2", primary});
   for (const LodModel& m : kept) {
     const double volume = check_mesh(m.model.mesh).signed_volume;
-    const double error = rmse(m.model.mesh, input.points);
+    const std::vector<double> distances = point_distances(m.model.mesh, input.points);
+    double sum = 0.0;
+    std::size_t far = 0;
+    for (const double d : distances) {
+      sum += d * d;
+      far += d > kUnexplainedDistance;
+    }
+    const double error = distances.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(distances.size()));
+    // The unexplained points of the model the OBJ/PLY files hold: the last level kept.
+    r.unexplained_points = static_cast<double>(far);
+    r.unexplained_share = distances.empty() ? 0.0 : static_cast<double>(far) / static_cast<double>(distances.size());
     (m.lod == "1.2" ? r.volume_lod12 : m.lod == "1.3" ? r.volume_lod13 : r.volume_lod22) = volume;
     (m.lod == "1.2" ? r.rmse_lod12 : m.lod == "1.3" ? r.rmse_lod13 : r.rmse_lod22) = error;
     r.lods += (r.lods.empty() ? "" : ",") + m.lod;

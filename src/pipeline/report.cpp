@@ -83,6 +83,8 @@ const Extra kExtras[] = {
     {"rmse_lod12", 4, &BuildingReport::rmse_lod12, nullptr},
     {"rmse_lod13", 4, &BuildingReport::rmse_lod13, nullptr},
     {"rmse_lod22", 4, &BuildingReport::rmse_lod22, nullptr},
+    {"unexplained_points", 0, &BuildingReport::unexplained_points, nullptr},
+    {"unexplained_share", 4, &BuildingReport::unexplained_share, nullptr},
     {"validity_found", -1, nullptr, &BuildingReport::validity_found},
     {"repairs", -1, nullptr, &BuildingReport::repairs},
 };
@@ -192,6 +194,10 @@ Attributes building_attributes(const BuildingReport& r, bool timings) {
       {"b3_rmse_lod12", rounded(r.rmse_lod12, 4)},
       {"b3_rmse_lod13", rounded(r.rmse_lod13, 4)},
       {"b3_rmse_lod22", rounded(r.rmse_lod22, 4)},
+      {"unexplained_points", std::isfinite(r.unexplained_points)
+                                 ? AttributeValue{static_cast<std::int64_t>(r.unexplained_points)}
+                                 : AttributeValue{}},
+      {"unexplained_share", rounded(r.unexplained_share, 4)},
       {"b3_val3dity_lod12", val3dity("1.2")},
       {"b3_val3dity_lod13", val3dity("1.3")},
       {"b3_val3dity_lod22", val3dity("2.2")},

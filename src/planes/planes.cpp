@@ -34,6 +34,8 @@ void PlaneParams::validate() const {
     problems.push_back("max_distance = " + std::to_string(max_distance) + " m, need > 0");
   if (!(max_angle > 0.0 && max_angle <= 90.0))
     problems.push_back("max_angle = " + std::to_string(max_angle) + " deg, need in (0, 90]");
+  if (absorb_rounds < 0)
+    problems.push_back("absorb_rounds = " + std::to_string(absorb_rounds) + ", need >= 0");
   if (!(wall_max_normal_z >= 0.0 && wall_max_normal_z < 1.0))
     problems.push_back("wall_max_normal_z = " + std::to_string(wall_max_normal_z) +
                        ", need in [0, 1)");
@@ -134,6 +136,43 @@ std::vector<PlanarSegment> detect_planes(const std::vector<Point3>& local_points
   RegionGrowing region_growing(range, neighbor_query, region_type, sorting.seed_map());
   std::vector<std::vector<std::size_t>> regions;
   region_growing.detect(std::back_inserter(regions));
+
+  // Refitting: the points the growing left out (mostly along creases and steps, where the PCA
+  // normals mix two planes and fail the angle test) join the plane of a neighbour when they lie
+  // within max_distance of it, the nearest such plane first; absorb_rounds rounds let the planes
+  // grow a few points into a crease, so that both planes of a ridge or a hip reach its line.
+  // Each round decides on the planes as they were at its start, so the order of the points does
+  // not matter; the planes are refitted at the end.
+  if (params.absorb_rounds > 0 && !regions.empty()) {
+    constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+    std::vector<std::uint32_t> label(range.size(), kNone);
+    for (std::size_t r = 0; r < regions.size(); ++r)
+      for (std::size_t i : regions[r]) label[i] = static_cast<std::uint32_t>(r);
+    std::vector<Fit> fits;
+    for (const auto& region : regions) fits.push_back(fit_plane(region, point_at));
+    for (int round = 0; round < params.absorb_rounds; ++round) {
+      std::vector<std::pair<std::size_t, std::uint32_t>> joins;
+      for (std::size_t i = 0; i < range.size(); ++i) {
+        if (label[i] != kNone) continue;
+        neighbors.clear();
+        neighbor_query(i, neighbors);
+        double best = params.max_distance;
+        std::uint32_t best_label = kNone;
+        for (std::size_t k : neighbors) {
+          const std::uint32_t l = label[k];
+          if (l == kNone) continue;
+          const double d = std::abs(fits[l].normal.dot(point_at(i) - fits[l].centroid));
+          if (d < best || (d == best && l < best_label)) best = d, best_label = l;
+        }
+        if (best_label != kNone) joins.emplace_back(i, best_label);
+      }
+      if (joins.empty()) break;
+      for (const auto& [i, l] : joins) {
+        label[i] = l;
+        regions[l].push_back(i);
+      }
+    }
+  }
 
   Eigen::Vector3d building_centroid = Eigen::Vector3d::Zero();
   for (std::size_t i = 0; i < local_points.size(); ++i) building_centroid += point_at(i);

@@ -1,0 +1,240 @@
+// Step lines: the horizontal lines where one roof plane's points end and another plane's begin at a
+// different height (a step edge: a lower roof beside a higher one, a dormer, an annex). They become
+// inner walls like the heightmap's lines; the heightmap misses steps lower than its Canny thresholds
+// and steps whose TIN triangles smear them, and roof-roof intersection lines cannot stand in for them
+// (two planes at a step meet far away, or never when they are parallel).
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "city3d/error.hpp"
+#include "city3d/log.hpp"
+#include "city3d/walls.hpp"
+
+namespace city3d {
+namespace {
+
+double plane_height(const Plane3& p, double x, double y) { return -(p.a * x + p.b * y + p.d) / p.c; }
+
+// A uniform grid over xy positions for radius searches.
+class Grid {
+ public:
+  Grid(const std::vector<Point2>& xy, double cell) : xy_(xy), cell_(cell) {
+    Box2 box;
+    for (const Point2& p : xy) box.add(p);
+    if (box.empty()) return;
+    origin_ = box.min;
+    nx_ = static_cast<long>((box.max.x - box.min.x) / cell_) + 1;
+    ny_ = static_cast<long>((box.max.y - box.min.y) / cell_) + 1;
+    bins_.assign(static_cast<std::size_t>(nx_ * ny_), {});
+    for (std::size_t i = 0; i < xy.size(); ++i) bins_[index(xy[i])].push_back(static_cast<std::uint32_t>(i));
+  }
+  template <typename Visit>
+  void near(const Point2& p, double radius, Visit visit) const {
+    if (bins_.empty()) return;
+    const long i0 = std::max(0L, col(p.x - radius)), i1 = std::min(nx_ - 1, col(p.x + radius));
+    const long j0 = std::max(0L, row(p.y - radius)), j1 = std::min(ny_ - 1, row(p.y + radius));
+    for (long j = j0; j <= j1; ++j)
+      for (long i = i0; i <= i1; ++i)
+        for (std::uint32_t k : bins_[static_cast<std::size_t>(j * nx_ + i)]) {
+          const double d = std::hypot(xy_[k].x - p.x, xy_[k].y - p.y);
+          if (d <= radius) visit(k, d);
+        }
+  }
+
+ private:
+  long col(double x) const { return static_cast<long>(std::floor((x - origin_.x) / cell_)); }
+  long row(double y) const { return static_cast<long>(std::floor((y - origin_.y) / cell_)); }
+  std::size_t index(const Point2& p) const {
+    return static_cast<std::size_t>(std::clamp(row(p.y), 0L, ny_ - 1) * nx_ + std::clamp(col(p.x), 0L, nx_ - 1));
+  }
+  const std::vector<Point2>& xy_;
+  double cell_;
+  Point2 origin_;
+  long nx_ = 0, ny_ = 0;
+  std::vector<std::vector<std::uint32_t>> bins_;
+};
+
+// Least-squares line through `pts` (indices into xy): centre and unit direction.
+std::pair<Point2, Point2> fit_line(const std::vector<Point2>& xy, const std::vector<std::uint32_t>& pts) {
+  double cx = 0, cy = 0;
+  for (auto k : pts) cx += xy[k].x, cy += xy[k].y;
+  cx /= pts.size();
+  cy /= pts.size();
+  double sxx = 0, sxy = 0, syy = 0;
+  for (auto k : pts) {
+    const double dx = xy[k].x - cx, dy = xy[k].y - cy;
+    sxx += dx * dx, sxy += dx * dy, syy += dy * dy;
+  }
+  const double angle = 0.5 * std::atan2(2 * sxy, sxx - syy);
+  return {{cx, cy}, {std::cos(angle), std::sin(angle)}};
+}
+
+// Straight pieces through the boundary samples of one pair of planes: repeatedly the line with most
+// samples within `tolerance` (candidate lines: the local fit around each sample), refitted, cut at
+// gaps wider than `max_gap`; the longest run is kept when long enough, its samples removed.
+template <typename Separates>
+void extract_lines(const std::vector<Point2>& samples, const StepLineParams& params, double max_gap,
+                   Separates separates, std::vector<Polyline2>& out) {
+  std::vector<std::uint32_t> left(samples.size());
+  std::iota(left.begin(), left.end(), 0u);
+  const double tol = params.line_tolerance;
+  while (left.size() >= static_cast<std::size_t>(params.min_samples)) {
+    std::vector<Point2> xy;
+    for (auto k : left) xy.push_back(samples[k]);
+    const Grid grid(xy, std::max(tol, max_gap));
+    std::size_t best_count = 0;
+    std::pair<Point2, Point2> best_line;
+    for (std::uint32_t i = 0; i < xy.size(); ++i) {
+      std::vector<std::uint32_t> local;
+      grid.near(xy[i], max_gap, [&](std::uint32_t k, double) { local.push_back(k); });
+      if (local.size() < 3) continue;
+      std::sort(local.begin(), local.end());
+      const auto line = fit_line(xy, local);
+      std::size_t count = 0;
+      for (const Point2& p : xy)
+        if (std::abs(-(p.x - line.first.x) * line.second.y + (p.y - line.first.y) * line.second.x) <= tol) ++count;
+      if (count > best_count) best_count = count, best_line = line;
+    }
+    if (best_count < static_cast<std::size_t>(params.min_samples)) return;
+    const auto inliers_of = [&](const std::pair<Point2, Point2>& line) {
+      std::vector<std::uint32_t> in;
+      for (std::uint32_t k = 0; k < xy.size(); ++k) {
+        const Point2& p = xy[k];
+        if (std::abs(-(p.x - line.first.x) * line.second.y + (p.y - line.first.y) * line.second.x) <= tol)
+          in.push_back(k);
+      }
+      return in;
+    };
+    std::vector<std::uint32_t> in = inliers_of(best_line);
+    const auto line = fit_line(xy, in);
+    in = inliers_of(line);
+    if (in.size() < 2) return;
+    // Runs along the line, cut at gaps.
+    std::vector<std::pair<double, std::uint32_t>> along;
+    for (auto k : in)
+      along.push_back({(xy[k].x - line.first.x) * line.second.x + (xy[k].y - line.first.y) * line.second.y, k});
+    std::sort(along.begin(), along.end());
+    std::size_t best_begin = 0, best_end = 0, begin = 0;
+    for (std::size_t k = 1; k <= along.size(); ++k)
+      if (k == along.size() || along[k].first - along[k - 1].first > max_gap) {
+        if (k - begin > best_end - best_begin) best_begin = begin, best_end = k;
+        begin = k;
+      }
+    const double t0 = along[best_begin].first, t1 = along[best_end - 1].first;
+    const Point2 a{line.first.x + t0 * line.second.x, line.first.y + t0 * line.second.y};
+    const Point2 b{line.first.x + t1 * line.second.x, line.first.y + t1 * line.second.y};
+    if (best_end - best_begin >= static_cast<std::size_t>(params.min_samples) && t1 - t0 >= params.min_length &&
+        separates(a, b))
+      out.push_back({a, b});
+    // Remove the run's samples (also when too short: the search moves on to other lines).
+    std::vector<bool> drop(xy.size(), false);
+    for (std::size_t k = best_begin; k < best_end; ++k) drop[along[k].second] = true;
+    std::vector<std::uint32_t> rest;
+    for (std::uint32_t k = 0; k < xy.size(); ++k)
+      if (!drop[k]) rest.push_back(left[k]);
+    if (rest.size() == left.size()) return;
+    left = std::move(rest);
+  }
+}
+
+}  // namespace
+
+void StepLineParams::validate() const {
+  std::vector<std::string> problems;
+  if (!(min_step > 0.0)) problems.push_back("min_step must be > 0");
+  if (!(line_tolerance > 0.0)) problems.push_back("line_tolerance must be > 0");
+  if (!(min_length >= 0.0)) problems.push_back("min_length must be >= 0");
+  if (min_samples < 2) problems.push_back("min_samples must be >= 2");
+  if (!(min_separation >= 0.5 && min_separation <= 1.0)) problems.push_back("min_separation must be in [0.5, 1]");
+  if (!(search_spacings > 0.0)) problems.push_back("search_spacings must be > 0");
+  if (problems.empty()) return;
+  std::string message = "step lines: invalid parameters: ";
+  for (std::size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];
+  throw ConfigError(message);
+}
+
+std::vector<Polyline2> detect_step_lines(const std::vector<Point3>& points, const std::vector<PlanarSegment>& roofs,
+                                         double point_spacing, const StepLineParams& params) {
+  params.validate();
+  std::vector<Polyline2> lines;
+  if (!params.enabled || roofs.size() < 2 || !(point_spacing > 0.0)) return lines;
+  // Every roof point with its plane.
+  std::vector<Point2> xy;
+  std::vector<int> label;
+  for (std::size_t r = 0; r < roofs.size(); ++r) {
+    if (std::abs(roofs[r].plane.c) < 1e-6) continue;
+    for (std::uint32_t k : roofs[r].points) {
+      xy.push_back({points[k].x, points[k].y});
+      label.push_back(static_cast<int>(r));
+    }
+  }
+  const double radius = params.search_spacings * point_spacing;
+  const Grid grid(xy, radius);
+  // Boundary samples per pair of planes (a < b): from every roof point, the midpoint to the nearest
+  // point of each other plane within `radius`, when the two planes' heights differ by min_step or
+  // more on both sides. The samples form a band a few spacings wide along the boundary; the line
+  // search below finds its middle.
+  const std::size_t R = roofs.size();
+  std::vector<std::vector<Point2>> samples(R * R);
+  std::vector<double> nearest(R);
+  std::vector<std::uint32_t> nearest_point(R);
+  for (std::uint32_t i = 0; i < xy.size(); ++i) {
+    std::fill(nearest.begin(), nearest.end(), std::numeric_limits<double>::infinity());
+    grid.near(xy[i], radius, [&](std::uint32_t k, double d) {
+      const auto b = static_cast<std::size_t>(label[k]);
+      if (label[k] == label[i]) return;
+      if (d < nearest[b] || (d == nearest[b] && k < nearest_point[b])) nearest[b] = d, nearest_point[b] = k;
+    });
+    const auto a = static_cast<std::size_t>(label[i]);
+    for (std::size_t b = 0; b < R; ++b) {
+      if (!std::isfinite(nearest[b])) continue;
+      // f = height of a - height of b is linear in xy: where the two planes meet in a crease (a
+      // ridge, a hip, a valley) f changes sign between the points, or is small at one of them; at a
+      // step it keeps its sign and its size on both sides.
+      const Point2& p = xy[i];
+      const Point2& q = xy[nearest_point[b]];
+      const double fp = plane_height(roofs[a].plane, p.x, p.y) - plane_height(roofs[b].plane, p.x, p.y);
+      const double fq = plane_height(roofs[a].plane, q.x, q.y) - plane_height(roofs[b].plane, q.x, q.y);
+      if (fp * fq > 0.0 && std::min(std::abs(fp), std::abs(fq)) >= params.min_step)
+        samples[std::min(a, b) * R + std::max(a, b)].push_back({(p.x + q.x) / 2, (p.y + q.y) / 2});
+    }
+  }
+  // A step line separates its two planes: beside it (within the search radius, along its extent),
+  // at least min_separation of the two planes' points lie on their own plane's side. Planes whose
+  // points interleave (strips of a sawtooth roof grown into one plane) give no line.
+  const auto separation = [&](std::size_t a, std::size_t b, const Point2& p0, const Point2& p1) {
+    const double len = std::hypot(p1.x - p0.x, p1.y - p0.y);
+    const Point2 d{(p1.x - p0.x) / len, (p1.y - p0.y) / len};
+    const Point2 mid{(p0.x + p1.x) / 2, (p0.y + p1.y) / 2};
+    std::size_t a_left = 0, a_right = 0, b_left = 0, b_right = 0;
+    grid.near(mid, len / 2 + radius, [&](std::uint32_t k, double) {
+      const auto l = static_cast<std::size_t>(label[k]);
+      if (l != a && l != b) return;
+      const double along = (xy[k].x - p0.x) * d.x + (xy[k].y - p0.y) * d.y;
+      const double across = -(xy[k].x - p0.x) * d.y + (xy[k].y - p0.y) * d.x;
+      if (along < 0.0 || along > len || std::abs(across) > radius) return;
+      if (l == a)
+        ++(across > 0.0 ? a_left : a_right);
+      else
+        ++(across > 0.0 ? b_left : b_right);
+    });
+    const std::size_t total = a_left + a_right + b_left + b_right;
+    return total > 0 && static_cast<double>(std::max(a_left + b_right, a_right + b_left)) >=
+                            params.min_separation * static_cast<double>(total);
+  };
+  for (std::size_t a = 0; a < R; ++a)
+    for (std::size_t b = a + 1; b < R; ++b)
+      if (samples[a * R + b].size() >= static_cast<std::size_t>(params.min_samples))
+        extract_lines(samples[a * R + b], params, radius,
+                      [&](const Point2& p0, const Point2& p1) { return separation(a, b, p0, p1); }, lines);
+  log_debug("walls: " + std::to_string(lines.size()) + " step lines between roof planes");
+  return lines;
+}
+
+}  // namespace city3d
