@@ -9,6 +9,7 @@
 
 #include "city3d/error.hpp"
 #include "city3d/evaluation.hpp"
+#include "city3d/model_io.hpp"
 
 namespace city3d {
 namespace {
@@ -222,3 +223,16 @@ TEST(Evaluation, face_with_an_index_out_of_range_is_reported_not_crashed_on) {
 
 }  // namespace
 }  // namespace city3d
+
+// A Delft LoD2.2 model (b31bbff5e) whose faces have runs of collinear vertices: ear clipping finds no
+// ear in one of them and fans it, and the fan overlapped itself. The solid is valid under val3dity's
+// rules (each polygon triangulated by constraints, exact predicates), and the check says so.
+TEST(Evaluation, collinear_runs_are_not_taken_for_a_self_intersection) {
+  const city3d::BuildingModel model =
+      city3d::read_obj_model(std::string(CITY3D_TEST_DATA) + "/model/delft_b31bbff5e_collinear_runs.obj");
+  const city3d::MeshValidity v = city3d::check_validity(model.mesh);
+  EXPECT_TRUE(v.errors.empty()) << v.problem;
+  EXPECT_TRUE(v.self_intersecting_checked);
+  EXPECT_FALSE(v.self_intersects) << v.problem;
+  EXPECT_TRUE(v.valid()) << v.problem;
+}

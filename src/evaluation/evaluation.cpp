@@ -305,9 +305,19 @@ MeshValidity check_validity(const PolygonMesh& mesh, double planarity_tolerance)
     append(result.problem, s.str());
   }
 
-  // Self-intersection on the triangulated surface; PMP's test wants a valid triangle mesh, which
-  // closed + manifold guarantees here.
-  if (result.closed && result.manifold) {
+  // Self-intersection. When val3dity's rules found nothing, their test has run on each polygon's
+  // constrained triangulation (exact predicates) and decides; a 306 "polygons intersect" decides too.
+  // Otherwise (they stopped at an earlier error) the ear-clipped surface is tested; PMP's test wants a
+  // valid triangle mesh, which closed + manifold guarantees here. (Ear clipping can fall back to a fan
+  // on a polygon with collinear runs, and a fan may overlap itself where the polygon does not.)
+  const bool solid_intersects = std::any_of(result.errors.begin(), result.errors.end(), [](const ValidityError& e) {
+    return e.code == 306 && e.info.find("polygons intersect") != std::string::npos;
+  });
+  if (result.errors.empty() || solid_intersects) {
+    result.self_intersecting_checked = true;
+    result.self_intersects = solid_intersects;
+    if (solid_intersects) append(result.problem, "self-intersecting");
+  } else if (result.closed && result.manifold) {
     using Mesh = CGAL::Surface_mesh<Kernel::Point_3>;
     std::vector<Kernel::Point_3> points;
     points.reserve(mesh.vertices.size());
