@@ -57,6 +57,21 @@ FootprintSet read_footprints(const std::string& path, const FootprintReadOptions
 /// Names of the layers of an OGR source (one entry "obj" for an OBJ file). Throws IoError.
 std::vector<std::string> list_footprint_layers(const std::string& path);
 
+/// A footprint simplified for reconstruction: the polygons, and what was done (empty when nothing).
+struct SimplifiedFootprint {
+  std::vector<Polygon2> polygons;
+  std::size_t vertices_before = 0, vertices_after = 0;
+  double tolerance = 0.0;  ///< metres; 0 when the footprint was kept as it is
+};
+
+/// Footprint polygons of more than `max_vertices` vertices in all (outer rings and holes) are
+/// simplified by GEOS's topology-preserving simplifier (no ring made to cross itself or another),
+/// with a tolerance of 0.01 m doubled until at most `max_vertices` vertices remain; at most
+/// `max_vertices` ones are returned as they are. Deterministic. Each vertex stays within the
+/// tolerance of the original boundary. Throws ReconstructionError when no tolerance up to the
+/// footprint's size brings it down (not expected for any polygon).
+SimplifiedFootprint simplify_footprint(const std::vector<Polygon2>& polygons, std::size_t max_vertices);
+
 /// A footprint source read block by block, for sources too large to hold in memory (a country's
 /// footprints): scan() reads every feature once and numbers the footprints it keeps, without keeping
 /// their geometry; read_box() then reads the kept footprints of a region through an OGR spatial

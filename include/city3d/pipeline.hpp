@@ -81,6 +81,11 @@ struct ReconstructionParams {
   /// LoD1.3: adjacent roof parts whose heights differ by less than this (metres) become one block,
   /// as 3DBAG's lod13_step_height.
   double lod13_step_height = 3.0;
+  /// Footprints of more vertices than this (holes included) are simplified before reconstruction,
+  /// within a tolerance from 0.01 m doubled until they fit (simplify_footprint); the report's note
+  /// says so. A deterministic work limit: the walls, the arrangement and the program grow with the
+  /// footprint's edges (a 10,000-vertex circle took 25 s). Real footprints have far fewer.
+  std::size_t max_footprint_vertices = 1000;
   /// Opt-in wall-clock safety net for one building's LoD2 attempts, seconds; 0 (the default): none.
   /// The full rung gets 60% of it, the footprint-walls rung the rest, and each selection what is
   /// left of its rung's share. When it fires the output depends on the machine's speed and load;

@@ -67,10 +67,9 @@ struct SelectionParams {
   /// faces) and on every dataset of the dev set (docs/BENCHMARKS.md, "RMSE against faces").
   double lambda_complexity = 0.3;
   double lambda_roof = 0.04;        ///< lambda_r
-  std::string solver = "auto";      ///< "auto", "glpk" or "cbc"
-  /// "auto": components with at least this many variables go to CBC; smaller ones to GLPK first
-  /// (then CBC on the time left if GLPK stops on a limit). See selection.cpp for the measurement.
-  std::size_t auto_cbc_variables = 200;
+  /// "auto": GLPK, then CBC where GLPK stops on its node limit or breaks; "glpk" or "cbc": that
+  /// backend (the other one only where it breaks). See selection.cpp for the measurement.
+  std::string solver = "auto";
   /// Opt-in wall-clock safety limit for the whole call, seconds; 0 (the default): none. When it
   /// fires, the result depends on the machine's speed and load.
   double time_limit = 0.0;

@@ -241,6 +241,12 @@ const std::vector<OptionSpec>& option_table() {
        [](O& o, V v) {
          o.batch.reconstruction.selection.window_variables = static_cast<std::size_t>(parse_int("--window-variables", v, 2));
        }},
+      {"--max-footprint-vertices", nullptr, "N", "footprints of more vertices are simplified (tolerance from 0.01 m, "
+       "doubled until they fit; the report says so)",
+       [](const O& o) { return std::to_string(o.batch.reconstruction.max_footprint_vertices); },
+       [](O& o, V v) {
+         o.batch.reconstruction.max_footprint_vertices = static_cast<std::size_t>(parse_int("--max-footprint-vertices", v, 3));
+       }},
       {"--time-limit", nullptr, "S", "opt-in wall-clock safety net per building for LoD2, seconds (then it falls back); "
        "0: none, the default. When it fires, the output depends on the machine and its load",
        [](const O& o) { return number_text(o.batch.reconstruction.time_limit); },

@@ -572,4 +572,55 @@ std::vector<std::string> list_footprint_layers(const std::string& path) {
   return detail::list_ogr_layers(path);
 }
 
+SimplifiedFootprint simplify_footprint(const std::vector<Polygon2>& polygons, std::size_t max_vertices) {
+  const auto count = [](const std::vector<Polygon2>& ps) {
+    std::size_t n = 0;
+    for (const Polygon2& p : ps) {
+      n += p.outer.size();
+      for (const Ring2& h : p.holes) n += h.size();
+    }
+    return n;
+  };
+  SimplifiedFootprint out;
+  out.vertices_before = out.vertices_after = count(polygons);
+  if (out.vertices_before <= max_vertices) {
+    out.polygons = polygons;
+    return out;
+  }
+  detail::QuietGdalErrors quiet;
+  OGRMultiPolygon multi;
+  Box2 box;
+  const auto ring_of = [&box](const Ring2& ring) {
+    auto r = std::make_unique<OGRLinearRing>();
+    for (const Point2& v : ring) {
+      r->addPoint(v.x, v.y);
+      box.add(v);
+    }
+    if (!ring.empty()) r->addPoint(ring.front().x, ring.front().y);  // OGR rings are closed
+    return r.release();
+  };
+  for (const Polygon2& p : polygons) {
+    OGRPolygon polygon;
+    polygon.addRingDirectly(ring_of(p.outer));
+    for (const Ring2& hole : p.holes) polygon.addRingDirectly(ring_of(hole));
+    multi.addGeometry(&polygon);
+  }
+  const double size = box.empty() ? 0.0 : std::max(box.max.x - box.min.x, box.max.y - box.min.y);
+  for (double tolerance = 0.01; tolerance <= size; tolerance *= 2) {
+    std::unique_ptr<OGRGeometry> simple(multi.SimplifyPreserveTopology(tolerance));
+    if (!simple) continue;
+    OGRGeometry* forced = OGRGeometryFactory::forceToMultiPolygon(simple.release());
+    std::unique_ptr<OGRMultiPolygon> result(forced->toMultiPolygon());
+    std::vector<Polygon2> simplified = detail::polygons_from_ogr(*result);
+    const std::size_t n = count(simplified);
+    if (simplified.empty() || n > max_vertices) continue;
+    out.polygons = std::move(simplified);
+    out.vertices_after = n;
+    out.tolerance = tolerance;
+    return out;
+  }
+  throw ReconstructionError("footprint: " + std::to_string(out.vertices_before) +
+                            " vertices could not be simplified to " + std::to_string(max_vertices));
+}
+
 }  // namespace city3d

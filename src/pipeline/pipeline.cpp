@@ -9,11 +9,13 @@
 #include <cstdlib>
 #include <ctime>
 #include <filesystem>
+#include <optional>
 #include <sstream>
 
 #include "city3d/debug_output.hpp"
 #include "city3d/error.hpp"
 #include "city3d/evaluation.hpp"
+#include "city3d/footprint_io.hpp"
 #include "city3d/log.hpp"
 #include "city3d/mesh_check.hpp"
 #include "city3d/model_io.hpp"
@@ -76,6 +78,8 @@ void ReconstructionParams::validate() const {
   if (!(lod13_step_height > 0)) problems += (problems.empty() ? "" : "; ") + std::string("lod13_step_height must be > 0 (metres)");
   if (!(output_grid >= 0) || !std::isfinite(output_grid))
     problems += (problems.empty() ? "" : "; ") + std::string("output_grid must be >= 0 (metres)");
+  if (max_footprint_vertices < 3)
+    problems += (problems.empty() ? "" : "; ") + std::string("max_footprint_vertices must be >= 3");
   if (!(time_limit >= 0) || !std::isfinite(time_limit))
     problems += (problems.empty() ? "" : "; ") + std::string("time_limit must be >= 0 seconds (0: none)");
   if (!problems.empty()) throw ConfigError(problems);
@@ -142,7 +146,6 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("selection.lambda_complexity", p.selection.lambda_complexity);
   put("selection.lambda_roof", p.selection.lambda_roof);
   put("selection.solver", p.selection.solver);
-  put("selection.auto_cbc_variables", p.selection.auto_cbc_variables);
   put("selection.time_limit", p.selection.time_limit);
   put("selection.node_limit", p.selection.node_limit);
   put("selection.max_exact_variables", p.selection.max_exact_variables);
@@ -161,6 +164,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("validity.planarity_distance", p.validity.planarity_distance);
   put("validity.planarity_normals", p.validity.planarity_normals);
   put("max_level", to_string(p.max_level));
+  put("max_footprint_vertices", p.max_footprint_vertices);
   put("time_limit", p.time_limit);
   return s.str();
 }
@@ -480,7 +484,7 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
       if (selection.status == SelectionStatus::feasible)
         add_note(report, selection.message);
       else
-        for (const std::string& failure : selection.backend_failures) add_note(report, failure + "; solved with glpk instead");
+        for (const std::string& failure : selection.backend_failures) add_note(report, failure);
       if (selection.status != SelectionStatus::optimal && selection.status != SelectionStatus::feasible)
         throw ReconstructionError(std::string(selection.status == SelectionStatus::infeasible
                                                   ? "selection: infeasible"
@@ -725,9 +729,30 @@ BuildingInput building_from_cloud(const BuildingId& id, const std::vector<Point3
   return input;
 }
 
-BuildingResult reconstruct_building(const BuildingInput& input, const ReconstructionParams& params) {
+BuildingResult reconstruct_building(const BuildingInput& given, const ReconstructionParams& params) {
   const auto start = Clock::now();
   const double cpu_start = thread_cpu_seconds() + solver_process_cpu_seconds();
+  // A footprint of very many vertices is simplified first (a work limit: walls, arrangement and
+  // program grow with its edges); the copy of the input is made only then.
+  std::optional<BuildingInput> simplified;
+  std::string simplify_note;
+  if (given.footprint_given) {
+    std::size_t vertices = 0;
+    for (const Polygon2& p : given.footprint.polygons) {
+      vertices += p.outer.size();
+      for (const Ring2& h : p.holes) vertices += h.size();
+    }
+    if (vertices > params.max_footprint_vertices) {
+      SimplifiedFootprint s = simplify_footprint(given.footprint.polygons, params.max_footprint_vertices);
+      simplified = given;
+      simplified->footprint.polygons = std::move(s.polygons);
+      std::ostringstream note;
+      note << "footprint: " << s.vertices_before << " vertices simplified to " << s.vertices_after << " (tolerance "
+           << s.tolerance << " m; max_footprint_vertices " << params.max_footprint_vertices << ")";
+      simplify_note = note.str();
+    }
+  }
+  const BuildingInput& input = simplified ? *simplified : given;
   BuildingResult result;
   BuildingReport& r = result.report;
   r.id = input.id;
@@ -736,6 +761,7 @@ BuildingResult reconstruct_building(const BuildingInput& input, const Reconstruc
   r.ground_z = input.ground_z + input.origin.z;
   r.ground_method = input.ground_method;
   r.note = input.footprint.note;
+  if (!simplify_note.empty()) add_note(r, simplify_note);
   describe_points(input, params, r);
   if (!input.points.empty()) {
     try {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <csetjmp>
 #include <memory>
 #include <string>
 #include <vector>
@@ -13,10 +14,6 @@
 
 namespace city3d::detail {
 namespace {
-
-struct ProblemDeleter {
-  void operator()(glp_prob* p) const { glp_delete_prob(p); }
-};
 
 struct NodeBudget {
   long limit = 0;
@@ -45,19 +42,26 @@ int row_type(const MipModel::Row& row) {
   return GLP_FR;
 }
 
-}  // namespace
+// Everything one glp_intopt run reads and writes, trivially destructible: the run may be left by
+// longjmp (see solve_with_glpk), which must not skip a destructor.
+struct GlpkRun {
+  const MipModel* model = nullptr;
+  const std::vector<int>* ia = nullptr;
+  const std::vector<int>* ja = nullptr;
+  const std::vector<double>* ar = nullptr;
+  int tm_lim = INT_MAX;
+  NodeBudget budget;
+  int ret = 0, mip_status = 0;
+  double objective = 0.0;
+  double* values = nullptr;  // n values, written when the run has a solution
+};
 
-MipSolution solve_with_glpk(const MipModel& model, const MipLimits& limits) {
-  MipSolution solution;
+// The GLPK part of a solve: problem, parameters, glp_intopt, the answer copied out, problem deleted.
+void run_glpk(GlpkRun& run) {
+  const MipModel& model = *run.model;
   const int n = static_cast<int>(model.columns.size());
-  if (n == 0) {
-    solution.status = MipStatus::optimal;
-    return solution;
-  }
-  std::unique_ptr<glp_prob, ProblemDeleter> lp(glp_create_prob());
-  glp_prob* p = lp.get();
+  glp_prob* p = glp_create_prob();
   glp_set_obj_dir(p, GLP_MIN);
-
   glp_add_cols(p, n);
   for (int j = 0; j < n; ++j) {
     const auto& c = model.columns[j];
@@ -65,25 +69,14 @@ MipSolution solve_with_glpk(const MipModel& model, const MipLimits& limits) {
     glp_set_col_bnds(p, j + 1, c.lower == c.upper ? GLP_FX : GLP_DB, c.lower, c.upper);
     glp_set_obj_coef(p, j + 1, c.cost);
   }
-
-  // glp_load_matrix takes 1-based triplets; index 0 is unused by GLPK's convention.
-  std::vector<int> ia{0}, ja{0};
-  std::vector<double> ar{0.0};
   if (!model.rows.empty()) glp_add_rows(p, static_cast<int>(model.rows.size()));
   for (std::size_t i = 0; i < model.rows.size(); ++i) {
     const auto& r = model.rows[i];
-    const int type = row_type(r);
-    glp_set_row_bnds(p, static_cast<int>(i) + 1, type, std::isfinite(r.lower) ? r.lower : 0.0,
+    glp_set_row_bnds(p, static_cast<int>(i) + 1, row_type(r), std::isfinite(r.lower) ? r.lower : 0.0,
                      std::isfinite(r.upper) ? r.upper : 0.0);
-    for (std::size_t k = 0; k < r.columns.size(); ++k) {
-      ia.push_back(static_cast<int>(i) + 1);
-      ja.push_back(r.columns[k] + 1);
-      ar.push_back(r.values[k]);
-    }
   }
-  glp_load_matrix(p, static_cast<int>(ia.size()) - 1, ia.data(), ja.data(), ar.data());
+  glp_load_matrix(p, static_cast<int>(run.ia->size()) - 1, run.ia->data(), run.ja->data(), run.ar->data());
 
-  NodeBudget budget{limits.node_limit, false};
   glp_iocp parm;
   glp_init_iocp(&parm);
   parm.msg_lev = GLP_MSG_OFF;
@@ -94,21 +87,84 @@ MipSolution solve_with_glpk(const MipModel& model, const MipLimits& limits) {
   // With Gomory + MIR it solves ~2,000 variables in 0.1-0.2 s and ~5,500 in 1.5-2.2 s.
   parm.gmi_cuts = GLP_ON;
   parm.mir_cuts = GLP_ON;
-  const double ms = std::ceil(limits.time_limit * 1000.0);
-  parm.tm_lim = ms >= static_cast<double>(INT_MAX) ? INT_MAX : static_cast<int>(std::max(1.0, ms));
+  parm.tm_lim = run.tm_lim;
   parm.cb_func = count_nodes;
-  parm.cb_info = &budget;
-
+  parm.cb_info = &run.budget;
   // msg_lev does not silence everything: the clique-cut code prints "Constructing conflict graph..."
   // through GLPK's terminal hook. glp_term_out acts on this thread's GLPK environment only.
   const int previous_term_out = glp_term_out(GLP_OFF);
-  const int ret = glp_intopt(p, &parm);
+  run.ret = glp_intopt(p, &parm);
   glp_term_out(previous_term_out);
-  const int mip_status = glp_mip_status(p);
+  run.mip_status = glp_mip_status(p);
+  if (run.mip_status == GLP_OPT || run.mip_status == GLP_FEAS) {
+    for (int j = 0; j < n; ++j) run.values[j] = glp_mip_col_val(p, j + 1);
+    run.objective = glp_mip_obj_val(p);
+  }
+  glp_delete_prob(p);
+}
+
+// GLPK reports an internal error (a failed assertion, a bad argument) through glp_error, which
+// aborts the process unless the error hook leaves by longjmp: solve_with_glpk then frees the
+// thread's GLPK environment (glp_free_env, as GLPK's manual prescribes) and reports the program
+// as failed, so the other backend gets it and the run goes on.
+thread_local std::jmp_buf* glpk_error_exit = nullptr;
+
+void on_glpk_error(void*) {
+  if (glpk_error_exit != nullptr) std::longjmp(*glpk_error_exit, 1);
+}
+
+}  // namespace
+
+MipSolution solve_with_glpk(const MipModel& model, const MipLimits& limits) {
+  MipSolution solution;
+  const int n = static_cast<int>(model.columns.size());
+  if (n == 0) {
+    solution.status = MipStatus::optimal;
+    return solution;
+  }
+  // glp_load_matrix takes 1-based triplets; index 0 is unused by GLPK's convention.
+  std::vector<int> ia{0}, ja{0};
+  std::vector<double> ar{0.0};
+  for (std::size_t i = 0; i < model.rows.size(); ++i)
+    for (std::size_t k = 0; k < model.rows[i].columns.size(); ++k) {
+      ia.push_back(static_cast<int>(i) + 1);
+      ja.push_back(model.rows[i].columns[k] + 1);
+      ar.push_back(model.rows[i].values[k]);
+    }
+  std::vector<double> values(static_cast<std::size_t>(n), 0.0);
+  GlpkRun run;
+  run.model = &model;
+  run.ia = &ia;
+  run.ja = &ja;
+  run.ar = &ar;
+  run.values = values.data();
+  run.budget = NodeBudget{limits.node_limit, false};
+  const double ms = std::ceil(limits.time_limit * 1000.0);
+  run.tm_lim = ms >= static_cast<double>(INT_MAX) ? INT_MAX : static_cast<int>(std::max(1.0, ms));
+
+  // Nothing of this frame changes between setjmp and the end of run_glpk except through `run`,
+  // which is not read after a longjmp.
+  std::jmp_buf error_exit;
+  if (setjmp(error_exit) != 0) {
+    glpk_error_exit = nullptr;
+    glp_error_hook(nullptr, nullptr);
+    glp_free_env();  // every GLPK object of this thread, the half-solved problem included
+    solution.status = MipStatus::failed;
+    solution.message = "glpk: internal error on " + std::to_string(n) + " columns, " +
+                       std::to_string(model.rows.size()) + " rows";
+    return solution;
+  }
+  glpk_error_exit = &error_exit;
+  glp_error_hook(on_glpk_error, nullptr);
+  run_glpk(run);
+  glp_error_hook(nullptr, nullptr);
+  glpk_error_exit = nullptr;
+
+  const int ret = run.ret, mip_status = run.mip_status;
+  const NodeBudget& budget = run.budget;
   const auto take_values = [&] {
-    solution.values.resize(n);
-    for (int j = 0; j < n; ++j) solution.values[j] = glp_mip_col_val(p, j + 1);
-    solution.objective = glp_mip_obj_val(p);
+    solution.values = values;
+    solution.objective = run.objective;
   };
 
   switch (ret) {
@@ -151,9 +207,10 @@ MipSolution solve_with_glpk(const MipModel& model, const MipLimits& limits) {
       return solution;
     }
     default:
-      throw ReconstructionError("selection: glpk glp_intopt failed with code " + std::to_string(ret) +
-                                " on " + std::to_string(n) + " columns, " +
-                                std::to_string(model.rows.size()) + " rows");
+      solution.status = MipStatus::failed;
+      solution.message = "glpk: glp_intopt failed with code " + std::to_string(ret) + " on " + std::to_string(n) +
+                         " columns, " + std::to_string(model.rows.size()) + " rows";
+      return solution;
   }
 }
 

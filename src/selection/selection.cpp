@@ -6,14 +6,17 @@
 //   variables  x_i in {0,1}   per free face (faces forced equal by a two-face edge share one variable)
 //              y_e in {0,1}   per edge with three or more free faces and none fixed on
 //              c_e in [0,1]   per edge whose corner indicator is not constant (continuous: at any
-//                             integral x the cheapest c_e is max(0, max_pairs x_i + x_j - 1), already
-//                             integral, so a binary would only add branching)
+//                             integral x its cheapest value is already 0 or 1, so a binary would only
+//                             add branching)
 //   minimise   sum_i x_i (-lambda_d support_i / |P| + lambda_r (z_max - z_i) / ((z_max - z_min) |F|))
 //              + lambda_c / |E| sum_e c_e          (the constant lambda_d and the terms of faces
 //                                                   fixed on stay out; selection_energy() adds them)
 //   subject to sum_{j in N(e)} x_j - 2 y_e = 0     edge used by 0 or 2 faces
 //              sum_{j in N(e), free} x_j = 1       edge with exactly one face fixed on
-//              c_e >= x_i + x_j - 1                each sharp pair (i, j) of e (c_e >= x_j when x_i = 1)
+//              c_e >= x_i - sum_{j ~ i} x_j        each face i of e with a sharp partner, j ~ i its
+//                                                  coplanar partners (edges with y_e; see build_program)
+//              c_e >= x_i + x_j - 1                each sharp pair (i, j) of an edge with one face on or
+//                                                  two free faces (c_e >= x_j when x_i = 1)
 //              x_i + x_j <= 1                      each vertically overlapping pair (single layer)
 //
 // Single layer: the paper writes sum_{k in V(f_i)} x_k = 1. With partially overlapping candidate faces
@@ -39,11 +42,12 @@
 //
 // Limits: node_limit applies to each component's search; time_limit to the whole call (each
 // component gets the time left; backends can overshoot it by their root processing). solver = "auto"
-// uses CBC for components of auto_cbc_variables variables or more, else GLPK with half the time left,
-// then CBC on the rest of the time if GLPK stopped on a limit.
+// uses GLPK (with half the time left, when there is a time limit), then CBC on the rest if GLPK
+// stopped on a limit. Components of more than max_exact_variables are solved by windows.
 #include "city3d/selection.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -69,13 +73,13 @@ using detail::MipModel;
 using detail::MipSolution;
 using detail::MipStatus;
 
-// Why SelectionParams::auto_cbc_variables defaults to 200 (the variable count at and above which
-// solver = "auto" uses CBC instead of GLPK, per component):
-// synthetic building-like programs (bench_selection) favoured GLPK up to ~2,000 variables, but the
-// real programs of the hypothesis do not: on the 10 smoke + 20 Vaihingen buildings (2026-11-23, one
-// thread, `city3d reconstruct ... --solver glpk|cbc`) GLPK took 56.7 s in all and CBC 14.2 s, GLPK
-// needing 5 s where CBC needed 0.3 s on programs of a few hundred variables (Vaihingen 00039, 00049).
-// Below ~200 variables both take milliseconds and GLPK avoids CBC's 5-30 ms per-call overhead.
+// Why solver = "auto" gives every program to GLPK first (CBC only after GLPK's node limit): with the
+// corner rows per face (build_program) the LP relaxation is tight and GLPK, in this process, solves
+// the hypothesis' programs fastest at every size measured. 2026-11-24, one run each side by side
+// (docs/BENCHMARKS.md, "Solvers"): Delft block selection 0.42 s with GLPK for all against 1.37 s with
+// CBC from 200 variables; city3d_dev (197 clouds) 60.5 s of CPU in all against 151.5 s, p99 3.3 s
+// against 8.6 s. (With the pairwise corner rows CBC had been faster from ~200 variables: GLPK needed
+// 5 s where CBC needed 0.3 s on Vaihingen 00039 and 00049.)
 
 constexpr std::int8_t kFree = -1;
 
@@ -368,6 +372,35 @@ GlobalProgram build_program(const SelectionProblem& problem, const SelectionPara
     }
     const std::size_t c = program.columns.size();
     program.columns.push_back({corner, 0.0, 1.0, false});
+    if (on == 0 && !merged) {
+      // An edge of three or more free faces (sum x = 2 y_e): per face i with a sharp partner,
+      // c_e >= x_i - sum of x_j over i's non-sharp (coplanar) partners j. At an integral point it
+      // says what the pairs say (with i on, c_e = 1 unless i's partner is coplanar with it), but it
+      // is far tighter for the LP relaxation: two sharp faces at 1/2 each give c_e >= 1/2, where
+      // c_e >= x_i + x_j - 1 gives 0. Measured: the Delft block's programs 3.3 s -> 0.4 s in all,
+      // the same optima (docs/BENCHMARKS.md).
+      for (auto i : open) {
+        bool has_sharp_partner = false;
+        GlobalRow row;
+        row.add(c, 1.0);
+        row.add(program.class_of_face[i], -1.0);
+        for (auto j : open) {
+          if (j == i) continue;
+          const bool sharp = std::any_of(edge.sharp_pairs.begin(), edge.sharp_pairs.end(), [&](const auto& p) {
+            return (p.first == i && p.second == j) || (p.first == j && p.second == i);
+          });
+          if (sharp)
+            has_sharp_partner = true;
+          else
+            row.add(program.class_of_face[j], 1.0);
+        }
+        if (!has_sharp_partner) continue;
+        row.lower = 0.0;
+        row.upper = inf;
+        program.rows.push_back(std::move(row));
+      }
+      continue;
+    }
     for (const auto& [a, b] : pairs) {
       GlobalRow row;
       row.add(c, 1.0);
@@ -500,41 +533,44 @@ struct Backends {
   std::vector<std::string> failures;
 };
 
-/// One program through the backends `params` choose, under the node limit and the time left: CBC
-/// for auto_cbc_variables variables or more (or always / never with solver cbc / glpk), else GLPK
-/// first. A CBC failure hands the program to GLPK; a limit that stops the search keeps the start
-/// when it is better than what was found.
+/// One program through the backends `params` choose, under the node limit and the time left: "auto"
+/// gives it to GLPK, then to CBC when GLPK stopped on a limit (the better answer is kept) or broke;
+/// "glpk" and "cbc" use that backend alone, and a broken backend hands the program to the other.
+/// A limit that stops the search keeps the start when it is better than what was found.
 MipSolution solve_program(const MipModel& model, const SelectionParams& params,
                           const std::function<double()>& time_left, Backends& used) {
   const bool automatic = params.solver == "auto";
-  const bool use_cbc = params.solver == "cbc" || (automatic && model.columns.size() >= params.auto_cbc_variables);
   MipLimits limits;
   limits.node_limit = params.node_limit;
   limits.time_limit = time_left();
   MipSolution part;
+  const auto glpk = [&] {
+    used.glpk = true;
+    return detail::solve_with_glpk(model, limits);
+  };
+  const auto cbc = [&] {
+    used.cbc = true;
+    return detail::solve_with_cbc(model, limits);
+  };
   if (limits.time_limit <= 0.0) {
     part.status = MipStatus::no_solution;
     part.message = "time limit " + std::to_string(params.time_limit) + " s reached before this program";
-  } else if (use_cbc) {
-    part = detail::solve_with_cbc(model, limits);
-    used.cbc = true;
+  } else if (params.solver == "cbc") {
+    part = cbc();
   } else if (!automatic) {
-    part = detail::solve_with_glpk(model, limits);
-    used.glpk = true;
+    part = glpk();
   } else {
-    // "auto" below the threshold: GLPK first (with half the time left, when there is a time
-    // limit). GLPK is erratic on some programs (no incumbent after its root node, or a long
-    // search where CBC's preprocessing and heuristics finish quickly), so when it stops on a
-    // limit CBC gets the rest and the better of the two answers is kept.
+    // GLPK first (with half the time left, when there is a time limit): with the tight corner rows
+    // it solves the real programs fastest (docs/BENCHMARKS.md), in this process, without CBC's
+    // per-call process. Where it stops on its node limit, CBC (preprocessing, cuts, heuristics)
+    // gets the program too and the better answer is kept.
     if (std::isfinite(limits.time_limit)) limits.time_limit *= 0.5;
-    part = detail::solve_with_glpk(model, limits);
-    used.glpk = true;
+    part = glpk();
     limits.time_limit = time_left();
     if ((part.status == MipStatus::feasible || part.status == MipStatus::no_solution) && limits.time_limit > 0.0) {
-      MipSolution second = detail::solve_with_cbc(model, limits);
-      used.cbc = true;
+      MipSolution second = cbc();
       if (second.status == MipStatus::failed) {
-        used.failures.push_back(second.message);
+        used.failures.push_back(second.message + "; glpk's selection kept");
       } else {
         const bool better = second.status == MipStatus::optimal || second.status == MipStatus::infeasible ||
                             (second.status == MipStatus::feasible &&
@@ -544,12 +580,17 @@ MipSolution solve_program(const MipModel& model, const SelectionParams& params,
     }
   }
   if (part.status == MipStatus::failed) {
-    // CBC broke (its process crashed: an assertion inside Clp, say). The same program goes to
-    // GLPK under the same node limit, so the building still gets a selection and the run goes on.
-    used.failures.push_back(part.message);
+    // The backend broke (CBC's process crashed on an assertion inside Clp, or GLPK reported an
+    // internal error): the same program goes to the other backend under the same node limit, so
+    // the building still gets a selection and the run goes on.
+    const bool was_glpk = part.message.rfind("glpk", 0) == 0;
+    used.failures.push_back(part.message + (was_glpk ? "; solved with cbc instead" : "; solved with glpk instead"));
     limits.time_limit = time_left();
-    part = limits.time_limit > 0.0 ? detail::solve_with_glpk(model, limits) : MipSolution{};
-    used.glpk = true;
+    part = limits.time_limit > 0.0 ? (was_glpk ? cbc() : glpk()) : MipSolution{};
+    if (part.status == MipStatus::failed) {
+      used.failures.push_back(part.message);
+      part.status = MipStatus::no_solution;
+    }
   }
   if (!model.start.empty() && (part.status == MipStatus::no_solution || part.status == MipStatus::feasible)) {
     // A limit stopped the backend: the start is feasible, so keep whichever is better.
@@ -737,7 +778,7 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
     if (std::find(result.backend_failures.begin(), result.backend_failures.end(), text) == result.backend_failures.end())
       result.backend_failures.push_back(text);
   }
-  for (const std::string& failure : result.backend_failures) notes.push_back(failure + "; solved with glpk instead");
+  for (const std::string& failure : result.backend_failures) notes.push_back(failure);
 
   if (result.status == SelectionStatus::optimal || result.status == SelectionStatus::feasible) {
     result.selected.assign(problem.face_count, false);
