@@ -224,6 +224,38 @@ const std::map<std::string, std::function<fs::path(const fs::path&)>>& generator
          if (std::system(command.c_str()) != 0) throw std::runtime_error("ogr2ogr failed: " + command);
          return out;
        }},
+      {"footprint_circle_100000_vertices",
+       [](const fs::path& dir) {
+         // A circle of radius 9 m over a building of the sample block, as 100,000 vertices.
+         std::ostringstream g;
+         g.precision(12);
+         g << "{\"type\":\"FeatureCollection\",\"features\":[{\"type\":\"Feature\",\"properties\":{\"id\":"
+              "\"circle_100000\"},\"geometry\":{\"type\":\"Polygon\",\"coordinates\":[[";
+         constexpr int n = 100000;
+         for (int i = 0; i <= n; ++i) {
+           const double a = 2.0 * M_PI * (i % n) / n;
+           g << (i ? "," : "") << "[" << 84985.0 + 9.0 * std::cos(a) << "," << 447560.0 + 9.0 * std::sin(a) << "]";
+         }
+         g << "]]}}]}";
+         write_text(dir / "circle_100000.geojson", g.str());
+         return dir / "circle_100000.geojson";
+       }},
+      {"footprint_of_1e15_metres",
+       [](const fs::path& dir) {
+         write_text(dir / "huge.geojson",
+                    "{\"type\":\"FeatureCollection\",\"features\":[{\"type\":\"Feature\",\"properties\":{\"id\":"
+                    "\"huge\"},\"geometry\":{\"type\":\"Polygon\",\"coordinates\":[[[-1e15,-1e15],[1e15,-1e15],"
+                    "[1e15,1e15],[-1e15,1e15],[-1e15,-1e15]]]}}]}");
+         return dir / "huge.geojson";
+       }},
+      {"footprint_over_the_whole_delft_block",
+       [](const fs::path& dir) {
+         write_text(dir / "whole_block.geojson",
+                    "{\"type\":\"FeatureCollection\",\"features\":[{\"type\":\"Feature\",\"properties\":{\"id\":"
+                    "\"whole_block\"},\"geometry\":{\"type\":\"Polygon\",\"coordinates\":[[[84810,447415],"
+                    "[85070,447415],[85070,447640],[84810,447640],[84810,447415]]]}}]}");
+         return dir / "whole_block.geojson";
+       }},
       {"output_with_damaged_journal",
        [](const fs::path& dir) {
          // One changed digit inside the third line's record (issue 14 item 4).

@@ -27,6 +27,10 @@ struct FootprintReadOptions {
   /// known and differs, every footprint is reprojected into this one (through OGR/PROJ) and
   /// FootprintSet::srs / reprojected_from say so. --bbox still applies in the source's CRS.
   std::string target_srs;
+  /// Footprints wider or longer than this (metres, bounding box) are skipped: no building is 5 km
+  /// across, and one such footprint (a wrong unit or CRS, a placeholder) would take every point of
+  /// the tiles into one building.
+  double max_extent = 5000.0;
 };
 
 /// A footprint that was not kept, and why.

@@ -119,6 +119,14 @@ const std::vector<OptionSpec>& option_table() {
       {"--ground-field", nullptr, "NAME", "footprint attribute with the floor height (world z); overrides the ground "
        "points where set", [](const O& o) { return o.batch.footprint.ground_field; },
        [](O& o, V v) { o.batch.footprint.ground_field = v; }},
+      {"--max-footprint-size", nullptr, "M", "skip footprints wider or longer than this, metres (no building is; "
+       "one such footprint would take every point of the tiles)",
+       [](const O& o) { return number_text(o.batch.footprint.max_extent); },
+       [](O& o, V v) {
+         const double m = parse_double("--max-footprint-size", v);
+         if (!(m > 0)) throw ConfigError("option --max-footprint-size: '" + v + "' is not a size > 0 (metres)");
+         o.batch.footprint.max_extent = m;
+       }},
       {"--no-repair", nullptr, nullptr, "skip invalid footprints instead of repairing them with MakeValid",
        [](const O& o) { return yes_no(!o.batch.footprint.repair); },
        [](O& o, V) { o.batch.footprint.repair = false; }},

@@ -116,64 +116,81 @@ std::size_t merge_thin_cells(Arrangement& arr, double min_width) {
   auto usable = [](Arrangement::Face_const_handle f) {
     return !f->is_unbounded() && f->data() == 1 && f->number_of_inner_ccbs() == 0;
   };
+  // One merge attempt at face f: true when f was merged (f's handle is then not to be used again).
+  const auto try_merge = [&](Arrangement::Face_handle f) {
+    if (!usable(f)) return false;
+    double twice_area = 0.0, perimeter = 0.0;
+    auto he = f->outer_ccb(), first = he;
+    do {
+      const Point2 a = point_of(he->source()), b = point_of(he->target());
+      twice_area += a.x * b.y - b.x * a.y;
+      perimeter += std::hypot(b.x - a.x, b.y - a.y);
+    } while (++he != first);
+    if (std::abs(twice_area) >= min_width * perimeter) return false;
+    // The neighbour with the longest shared boundary (first in boundary order on ties).
+    std::vector<std::pair<Arrangement::Face_handle, double>> shared;
+    do {
+      auto other = he->twin()->face();
+      if (!usable(other) || other == f) continue;  // to the next boundary edge
+      const Point2 a = point_of(he->source()), b = point_of(he->target());
+      auto it = std::find_if(shared.begin(), shared.end(), [&](const auto& s) { return s.first == other; });
+      if (it == shared.end()) shared.emplace_back(other, 0.0), it = std::prev(shared.end());
+      it->second += std::hypot(b.x - a.x, b.y - a.y);
+    } while (++he != first);
+    if (shared.empty()) return false;
+    auto best = shared.front();
+    for (const auto& s : shared)
+      if (s.second > best.second) best = s;
+    const auto neighbour = best.first;
+    // One chain: the boundary switches between shared and not shared exactly twice.
+    std::vector<Arrangement::Halfedge_handle> chain;
+    std::vector<Arrangement::Vertex_handle> chain_vertices, other_vertices;
+    int switches = 0;
+    do {
+      const bool on = he->twin()->face() == neighbour;
+      const bool next_on = he->next()->twin()->face() == neighbour;
+      if (on != next_on) ++switches;
+      if (on) {
+        chain.push_back(he);
+        chain_vertices.push_back(he->source());
+        chain_vertices.push_back(he->target());
+      } else {
+        other_vertices.push_back(he->target());
+      }
+    } while (++he != first);
+    if (switches != 2) return false;
+    bool pinched = false;
+    auto nh = neighbour->outer_ccb(), nfirst = nh;
+    do {
+      const auto v = nh->target();
+      if (std::find(chain_vertices.begin(), chain_vertices.end(), v) == chain_vertices.end() &&
+          std::find(other_vertices.begin(), other_vertices.end(), v) != other_vertices.end())
+        pinched = true;
+    } while (++nh != nfirst && !pinched);
+    if (pinched) return false;
+    for (auto e : chain) arr.remove_edge(e);
+    ++merges;
+    return true;
+  };
+  // Sweeps over the faces in arrangement order; after a merge the sweep goes on from the same
+  // position (the faces before it were checked, and a merge deletes one face and keeps the order of
+  // the others) instead of starting over: 4,000 merges among 12,000 faces took 41 s that way (a
+  // footprint over the whole Delft block). Sweeps repeat until one merges nothing.
   for (;;) {
-    bool merged = false;
-    for (auto f = arr.faces_begin(); f != arr.faces_end() && !merged; ++f) {
-      if (!usable(f)) continue;
-      double twice_area = 0.0, perimeter = 0.0;
-      auto he = f->outer_ccb(), first = he;
-      do {
-        const Point2 a = point_of(he->source()), b = point_of(he->target());
-        twice_area += a.x * b.y - b.x * a.y;
-        perimeter += std::hypot(b.x - a.x, b.y - a.y);
-      } while (++he != first);
-      if (std::abs(twice_area) >= min_width * perimeter) continue;
-      // The neighbour with the longest shared boundary (first in boundary order on ties).
-      std::vector<std::pair<Arrangement::Face_handle, double>> shared;
-      do {
-        auto other = he->twin()->face();
-        if (!usable(other) || other == f) continue;
-        const Point2 a = point_of(he->source()), b = point_of(he->target());
-        auto it = std::find_if(shared.begin(), shared.end(), [&](const auto& s) { return s.first == other; });
-        if (it == shared.end()) shared.emplace_back(other, 0.0), it = std::prev(shared.end());
-        it->second += std::hypot(b.x - a.x, b.y - a.y);
-      } while (++he != first);
-      if (shared.empty()) continue;
-      auto best = shared.front();
-      for (const auto& s : shared)
-        if (s.second > best.second) best = s;
-      const auto neighbour = best.first;
-      // One chain: the boundary switches between shared and not shared exactly twice.
-      std::vector<Arrangement::Halfedge_handle> chain;
-      std::vector<Arrangement::Vertex_handle> chain_vertices, other_vertices;
-      int switches = 0;
-      do {
-        const bool on = he->twin()->face() == neighbour;
-        const bool next_on = he->next()->twin()->face() == neighbour;
-        if (on != next_on) ++switches;
-        if (on) {
-          chain.push_back(he);
-          chain_vertices.push_back(he->source());
-          chain_vertices.push_back(he->target());
-        } else {
-          other_vertices.push_back(he->target());
-        }
-      } while (++he != first);
-      if (switches != 2) continue;
-      bool pinched = false;
-      auto nh = neighbour->outer_ccb(), nfirst = nh;
-      do {
-        const auto v = nh->target();
-        if (std::find(chain_vertices.begin(), chain_vertices.end(), v) == chain_vertices.end() &&
-            std::find(other_vertices.begin(), other_vertices.end(), v) != other_vertices.end())
-          pinched = true;
-      } while (++nh != nfirst && !pinched);
-      if (pinched) continue;
-      for (auto e : chain) arr.remove_edge(e);
-      ++merges;
-      merged = true;
+    bool merged_in_sweep = false;
+    std::size_t position = 0;
+    auto f = arr.faces_begin();
+    while (f != arr.faces_end()) {
+      if (!try_merge(f)) {
+        ++f;
+        ++position;
+        continue;
+      }
+      merged_in_sweep = true;
+      f = arr.faces_begin();
+      for (std::size_t k = 0; k < position && f != arr.faces_end(); ++k) ++f;
     }
-    if (!merged) return merges;
+    if (!merged_in_sweep) return merges;
   }
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdio>
 #include <functional>
 #include <string>
 #include <utility>
@@ -103,6 +104,27 @@ inline bool normalise_polygon(Polygon2& polygon) {
   }
   polygon.holes = std::move(holes);
   return true;
+}
+
+/// Why polygons cannot be a building's footprint for their size (their bounding box wider or longer
+/// than `max_extent` metres), or empty.
+inline std::string extent_problem(const std::vector<Polygon2>& polygons, double max_extent) {
+  double min_x = 0, max_x = 0, min_y = 0, max_y = 0;
+  bool first = true;
+  for (const Polygon2& p : polygons)
+    for (const Point2& v : p.outer) {
+      min_x = first ? v.x : std::min(min_x, v.x);
+      max_x = first ? v.x : std::max(max_x, v.x);
+      min_y = first ? v.y : std::min(min_y, v.y);
+      max_y = first ? v.y : std::max(max_y, v.y);
+      first = false;
+    }
+  const double extent = std::max(max_x - min_x, max_y - min_y);
+  if (extent <= max_extent) return {};
+  char text[160];
+  std::snprintf(text, sizeof text, "%.6g m across, more than the %.6g m a building can be (wrong unit or CRS?)",
+                extent, max_extent);
+  return text;
 }
 
 }  // namespace city3d::detail

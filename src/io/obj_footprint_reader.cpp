@@ -184,6 +184,10 @@ FootprintSet read_obj_footprints(const std::string& path, const FootprintReadOpt
       skip(where + ": " + outcome.skip_reason);
       continue;
     }
+    if (const std::string too_big = extent_problem(outcome.polygons, options.max_extent); !too_big.empty()) {
+      skip(where + ": " + too_big);
+      continue;
+    }
     Footprint footprint;
     footprint.id = std::move(id);
     footprint.polygons = std::move(outcome.polygons);

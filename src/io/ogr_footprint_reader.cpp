@@ -491,6 +491,10 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
       skip(id, outcome.skip_reason);
       continue;
     }
+    if (const std::string too_big = extent_problem(outcome.polygons, options.max_extent); !too_big.empty()) {
+      skip(id, too_big);
+      continue;
+    }
     if (!outcome.repair_note.empty()) {
       ++set.repaired;
       warn(kModule + std::string("repaired ") + id + " in " + where + ": " + outcome.repair_note);

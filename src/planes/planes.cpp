@@ -85,12 +85,81 @@ Fit fit_plane(const IndexRange& indices, PointAt point_at) {
 }
 
 }  // namespace
+
+std::vector<PlanarSegment> detect_planes_of_distinct_points(const std::vector<Point3>& local_points,
+                                                            const PlaneParams& params);
+
 }  // namespace detail
 
-std::vector<PlanarSegment> detect_planes(const std::vector<Point3>& local_points,
-                                         const PlaneParams& params) {
-  using namespace detail;
+std::vector<PlanarSegment> detect_planes(const std::vector<Point3>& local_points, const PlaneParams& params) {
   params.validate();
+  for (std::size_t i = 0; i < local_points.size(); ++i) {
+    const Point3& p = local_points[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      throw ReconstructionError("planes: point " + std::to_string(i) + " has a non-finite coordinate");
+  }
+  // Identical points: the neighbour searches see one of each. CGAL's kd-tree cannot split equal
+  // points, so 200,000 of them made every k-neighbour query scan all of them (hours); each copy
+  // joins the plane of the point it copies. Without copies the points go through as they are.
+  std::vector<std::uint32_t> order(local_points.size());
+  std::iota(order.begin(), order.end(), 0u);
+  const auto less = [&](std::uint32_t a, std::uint32_t b) {
+    const Point3 &p = local_points[a], &q = local_points[b];
+    if (p.x != q.x) return p.x < q.x;
+    if (p.y != q.y) return p.y < q.y;
+    if (p.z != q.z) return p.z < q.z;
+    return a < b;
+  };
+  const auto same = [&](std::uint32_t a, std::uint32_t b) {
+    const Point3 &p = local_points[a], &q = local_points[b];
+    return p.x == q.x && p.y == q.y && p.z == q.z;
+  };
+  std::sort(order.begin(), order.end(), less);
+  std::vector<std::uint32_t> original_of(local_points.size());  // each point's first copy
+  std::size_t copies = 0;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const bool repeat = k > 0 && same(order[k - 1], order[k]);
+    original_of[order[k]] = repeat ? original_of[order[k - 1]] : order[k];
+    copies += repeat;
+  }
+  if (copies == 0) return detail::detect_planes_of_distinct_points(local_points, params);
+
+  std::vector<Point3> distinct;
+  std::vector<std::uint32_t> distinct_index(local_points.size());
+  std::vector<std::vector<std::uint32_t>> members;
+  for (std::uint32_t i = 0; i < local_points.size(); ++i) {
+    if (original_of[i] == i) {
+      distinct_index[i] = static_cast<std::uint32_t>(distinct.size());
+      distinct.push_back(local_points[i]);
+      members.emplace_back();
+    }
+    members[distinct_index[original_of[i]]].push_back(i);
+  }
+  log_debug("planes: " + std::to_string(copies) + " copies of identical points set aside for the searches");
+  std::vector<PlanarSegment> segments = detail::detect_planes_of_distinct_points(distinct, params);
+  for (PlanarSegment& segment : segments) {
+    std::vector<std::uint32_t> points;
+    for (std::uint32_t u : segment.points) points.insert(points.end(), members[u].begin(), members[u].end());
+    std::sort(points.begin(), points.end());
+    double sum_squares = 0.0;
+    for (std::uint32_t i : points) {
+      const double d = segment.plane.signed_distance(local_points[i]);
+      sum_squares += d * d;
+    }
+    segment.rms = std::sqrt(sum_squares / static_cast<double>(points.size()));
+    segment.points = std::move(points);
+  }
+  std::sort(segments.begin(), segments.end(), [](const PlanarSegment& l, const PlanarSegment& r) {
+    if (l.points.size() != r.points.size()) return l.points.size() > r.points.size();
+    return l.points.front() < r.points.front();
+  });
+  return segments;
+}
+
+namespace detail {
+
+std::vector<PlanarSegment> detect_planes_of_distinct_points(const std::vector<Point3>& local_points,
+                                                            const PlaneParams& params) {
   if (local_points.size() > std::numeric_limits<std::uint32_t>::max())
     throw ReconstructionError("planes: " + std::to_string(local_points.size()) +
                               " points, at most 2^32 - 1 supported");
@@ -223,4 +292,5 @@ std::vector<PlanarSegment> detect_planes(const std::vector<Point3>& local_points
   return segments;
 }
 
+}  // namespace detail
 }  // namespace city3d
