@@ -227,7 +227,7 @@ const std::vector<OptionSpec>& option_table() {
       {"--lambda-roof", nullptr, "W", "weight of the roof-preference term",
        [](const O& o) { return number_text(o.batch.reconstruction.selection.lambda_roof); },
        [](O& o, V v) { o.batch.reconstruction.selection.lambda_roof = parse_double("--lambda-roof", v); }},
-      {"--solver", nullptr, "auto|glpk|cbc", "integer-program solver (auto: GLPK for small problems, CBC for large)",
+      {"--solver", nullptr, "auto|glpk|cbc", "integer-program solver (auto: GLPK, then CBC where GLPK stops at its node limit)",
        [](const O& o) { return o.batch.reconstruction.selection.solver; },
        [](O& o, V v) {
          if (v != "auto" && v != "glpk" && v != "cbc")
