@@ -555,12 +555,23 @@ TEST_F(Reconstruct, unusable_output_or_debug_folder_is_an_input_error_naming_the
   fs::create_directories(dir_ / "locked");
   fs::permissions(dir_ / "locked", ::geteuid() == 0 ? fs::perms::owner_all | fs::perms::others_read | fs::perms::others_exec
                                                     : fs::perms::owner_read | fs::perms::owner_exec);
-  // nobody must reach the inputs and the executable, and write the other folder.
+  // nobody must reach the inputs and the executable (copied here: the checkout may sit in a folder
+  // only root can enter, as a fresh clone in a mktemp -d folder does), and write the other folder.
   fs::permissions(dir_, fs::perms::others_read | fs::perms::others_exec, fs::perm_options::add);
+  fs::create_directories(dir_ / "inputs");
+  for (const char* f : {"delft_sample_1.las", "delft_sample_footprints.gpkg"})
+    fs::copy_file(d + "/" + f, dir_ / "inputs" / f, fs::copy_options::overwrite_existing);
+  fs::copy_file(CITY3D_EXE, dir_ / "inputs" / "city3d", fs::copy_options::overwrite_existing);
+  for (const auto& e : fs::directory_iterator(dir_ / "inputs"))
+    fs::permissions(e.path(), fs::perms::others_read | fs::perms::others_exec, fs::perm_options::add);
+  fs::permissions(dir_ / "inputs", fs::perms::others_read | fs::perms::others_exec, fs::perm_options::add);
+  const std::string exe = (dir_ / "inputs" / "city3d").string();
+  const std::string local_args = "reconstruct " + (dir_ / "inputs" / "delft_sample_1.las").string() + " -f " +
+                                 (dir_ / "inputs" / "delft_sample_footprints.gpkg").string() + " --no-progress";
   fs::create_directories(dir_ / "open");
   fs::permissions(dir_ / "open", fs::perms::all);
-  const Result out = run_shell(as_user + CITY3D_EXE + " " + args + " -o " + (dir_ / "locked" / "out").string());
-  const Result debug = run_shell(as_user + CITY3D_EXE + " " + args + " -o " + (dir_ / "open" / "out").string() +
+  const Result out = run_shell(as_user + exe + " " + local_args + " -o " + (dir_ / "locked" / "out").string());
+  const Result debug = run_shell(as_user + exe + " " + local_args + " -o " + (dir_ / "open" / "out").string() +
                                  " --debug " + (dir_ / "locked" / "debug").string());
   fs::permissions(dir_ / "locked", fs::perms::owner_all);
   EXPECT_EQ(out.exit_code, 1) << out.output;
