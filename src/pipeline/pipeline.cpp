@@ -250,6 +250,16 @@ double ring_area(const Ring2& ring) {
   return std::fabs(twice) / 2;
 }
 
+// Area of polygons with holes, m2.
+double polygons_area(const std::vector<Polygon2>& polygons) {
+  double area = 0.0;
+  for (const Polygon2& p : polygons) {
+    area += ring_area(p.outer);
+    for (const Ring2& h : p.holes) area -= ring_area(h);
+  }
+  return area;
+}
+
 bool inside_ring(const Ring2& ring, const Point2& p) {
   bool in = false;
   for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++)
@@ -336,19 +346,7 @@ std::vector<Polygon2> separate_parts(const std::vector<Polygon2>& parts, const s
 
 // Mean point spacing, metres: sqrt(outline area / points).
 double point_spacing(const std::vector<Polygon2>& outline, std::size_t points) {
-  double area = 0.0;
-  for (const Polygon2& p : outline) {
-    const auto ring_area = [](const Ring2& ring) {
-      double twice = 0;
-      for (std::size_t k = 0; k < ring.size(); ++k) {
-        const Point2 &a = ring[k], &b = ring[(k + 1) % ring.size()];
-        twice += a.x * b.y - b.x * a.y;
-      }
-      return std::fabs(twice) / 2;
-    };
-    area += ring_area(p.outer);
-    for (const Ring2& h : p.holes) area -= ring_area(h);
-  }
+  const double area = polygons_area(outline);
   return points > 0 && area > 0 ? std::sqrt(area / static_cast<double>(points)) : 0.0;
 }
 
@@ -534,19 +532,7 @@ Ring2 convex_hull(std::vector<Point2> pts) {
 
 // Heights, footprint area and point density of the report (3DBAG's b3_h_* attributes).
 void describe_points(const BuildingInput& input, const ReconstructionParams& params, BuildingReport& r) {
-  double area = 0.0;
-  for (const Polygon2& p : input.footprint.polygons) {
-    const auto ring_area = [](const Ring2& ring) {
-      double twice = 0;
-      for (std::size_t k = 0; k < ring.size(); ++k) {
-        const Point2 &a = ring[k], &b = ring[(k + 1) % ring.size()];
-        twice += a.x * b.y - b.x * a.y;
-      }
-      return std::fabs(twice) / 2;
-    };
-    area += ring_area(p.outer);
-    for (const Ring2& h : p.holes) area -= ring_area(h);
-  }
+  const double area = polygons_area(input.footprint.polygons);
   r.footprint_area = area;
   r.point_density = area > 0 ? input.points.size() / area : 0.0;
   if (input.points.empty()) {
