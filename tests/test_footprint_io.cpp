@@ -649,4 +649,31 @@ TEST(ObjFootprints, bow_tie_face_is_repaired_into_the_same_two_triangles_as_from
   }
 }
 
+// Footprints of too many vertices are simplified within a stated tolerance: a circle of 20,000
+// vertices (radius 9 m) comes back with at most 1,000, every vertex still on the circle within the
+// tolerance reported; a footprint within the cap comes back as it is.
+TEST(SimplifyFootprint, many_vertices_within_the_tolerance_and_few_untouched) {
+  Polygon2 circle;
+  constexpr int n = 20000;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2.0 * M_PI * i / n;
+    circle.outer.push_back({9.0 * std::cos(a), 9.0 * std::sin(a)});
+  }
+  const SimplifiedFootprint s = simplify_footprint({circle}, 1000);
+  EXPECT_EQ(s.vertices_before, static_cast<std::size_t>(n));
+  ASSERT_EQ(s.polygons.size(), 1u);
+  EXPECT_LE(s.vertices_after, 1000u);
+  EXPECT_GE(s.vertices_after, 16u);  // still a circle, not a triangle
+  EXPECT_EQ(s.vertices_after, s.polygons[0].outer.size());
+  EXPECT_GT(s.tolerance, 0.0);
+  EXPECT_LE(s.tolerance, 0.1);
+  for (const Point2& v : s.polygons[0].outer) EXPECT_NEAR(std::hypot(v.x, v.y), 9.0, s.tolerance);
+
+  const Polygon2 square{{{0, 0}, {4, 0}, {4, 4}, {0, 4}}, {}};
+  const SimplifiedFootprint same = simplify_footprint({square}, 1000);
+  EXPECT_EQ(same.tolerance, 0.0);
+  ASSERT_EQ(same.polygons.size(), 1u);
+  EXPECT_EQ(same.polygons[0].outer.size(), 4u);
+}
+
 }  // namespace city3d

@@ -239,6 +239,28 @@ TEST(DetectPlanes, two_flat_roofs_at_different_heights_give_two_planes) {
   EXPECT_NEAR(heights[1], 7.0, 0.05);
 }
 
+// Identical points: the searches see one of each and every copy joins its original's plane. A gable
+// roof with each point three times gives the planes of the roof once, each holding all copies of its
+// points (indices into the input as given), with the same planes as without the copies.
+TEST(DetectPlanes, copies_of_points_join_the_plane_of_the_point_they_copy) {
+  const auto once = gable_roof(2);
+  std::vector<Point3> thrice;
+  for (int copy = 0; copy < 3; ++copy) thrice.insert(thrice.end(), once.begin(), once.end());
+  const auto plain = detect_planes(once, PlaneParams{});
+  const auto copied = detect_planes(thrice, PlaneParams{});
+  ASSERT_EQ(copied.size(), plain.size());
+  for (std::size_t k = 0; k < plain.size(); ++k) {
+    ASSERT_EQ(copied[k].points.size(), 3 * plain[k].points.size());
+    EXPECT_TRUE(std::is_sorted(copied[k].points.begin(), copied[k].points.end()));
+    for (std::uint32_t i : plain[k].points)
+      for (std::uint32_t copy = 0; copy < 3; ++copy)
+        EXPECT_TRUE(std::binary_search(copied[k].points.begin(), copied[k].points.end(),
+                                       i + copy * static_cast<std::uint32_t>(once.size())));
+    EXPECT_NEAR(copied[k].plane.a, plain[k].plane.a, 1e-9);
+    EXPECT_NEAR(copied[k].plane.d, plain[k].plane.d, 1e-9);
+  }
+}
+
 // Refitting (absorb_rounds): along the ridge the PCA normals of the k neighbours mix both slopes and
 // fail the angle test, so the growing leaves a band of points out; the refit brings them into the
 // plane they lie on, so that both planes reach the ridge line (the hypothesis clips roof-roof lines

@@ -5,11 +5,9 @@
 #include <climits>
 #include <cmath>
 #include <csetjmp>
-#include <memory>
 #include <string>
 #include <vector>
 
-#include "city3d/error.hpp"
 #include "selection/solver.hpp"
 
 namespace city3d::detail {

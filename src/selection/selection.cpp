@@ -47,7 +47,6 @@
 #include "city3d/selection.hpp"
 
 #include <algorithm>
-#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -210,17 +209,25 @@ std::string propagate_fixings(const SelectionProblem& problem, const SelectionPa
     for (auto f : problem.face_prior) fix(f, 1, "face prior");
   for (auto f : problem.forced_off) fix(f, 0, "forced off");
 
-  const auto settle_edge = [&](std::uint32_t e) {
-    const auto& faces = problem.edges[e].faces;
+  // How many of `faces` are on and how many free, and the last free one.
+  struct Tally {
     int on = 0, open = 0;
     std::uint32_t last_open = 0;
+  };
+  const auto tally = [&](const std::vector<std::uint32_t>& faces) {
+    Tally t;
     for (auto f : faces) {
-      if (value[f] == 1) ++on;
+      if (value[f] == 1) ++t.on;
       if (value[f] == kFree) {
-        ++open;
-        last_open = f;
+        ++t.open;
+        t.last_open = f;
       }
     }
+    return t;
+  };
+  const auto settle_edge = [&](std::uint32_t e) {
+    const auto& faces = problem.edges[e].faces;
+    const auto [on, open, last_open] = tally(faces);
     const std::string where = "edge " + std::to_string(e);
     if (on > 2 && conflict.empty()) conflict = where + " has " + std::to_string(on) + " faces on";
     if (on == 1 && open == 0 && conflict.empty()) conflict = where + " has one face on and no partner left";
@@ -233,15 +240,7 @@ std::string propagate_fixings(const SelectionProblem& problem, const SelectionPa
   // A group: a face on => the rest off; none on and one left open => that one on.
   const auto settle_group = [&](std::uint32_t g) {
     const auto& faces = problem.exactly_one[g];
-    int on = 0, open = 0;
-    std::uint32_t last_open = 0;
-    for (auto f : faces) {
-      if (value[f] == 1) ++on;
-      if (value[f] == kFree) {
-        ++open;
-        last_open = f;
-      }
-    }
+    const auto [on, open, last_open] = tally(faces);
     const std::string where = "roof group " + std::to_string(g);
     if (on > 1 && conflict.empty()) conflict = where + " has " + std::to_string(on) + " faces on";
     if (on == 0 && open == 0 && conflict.empty()) conflict = where + " has no face left";
@@ -544,6 +543,7 @@ MipSolution solve_program(const MipModel& model, const SelectionParams& params,
   limits.node_limit = params.node_limit;
   limits.time_limit = time_left();
   MipSolution part;
+  bool from_cbc = false;  // which backend gave `part`
   const auto glpk = [&] {
     used.glpk = true;
     return detail::solve_with_glpk(model, limits);
@@ -557,6 +557,7 @@ MipSolution solve_program(const MipModel& model, const SelectionParams& params,
     part.message = "time limit " + std::to_string(params.time_limit) + " s reached before this program";
   } else if (params.solver == "cbc") {
     part = cbc();
+    from_cbc = true;
   } else if (!automatic) {
     part = glpk();
   } else {
@@ -575,7 +576,10 @@ MipSolution solve_program(const MipModel& model, const SelectionParams& params,
         const bool better = second.status == MipStatus::optimal || second.status == MipStatus::infeasible ||
                             (second.status == MipStatus::feasible &&
                              (part.status == MipStatus::no_solution || second.objective < part.objective));
-        if (better) part = std::move(second);
+        if (better) {
+          part = std::move(second);
+          from_cbc = true;
+        }
       }
     }
   }
@@ -583,10 +587,9 @@ MipSolution solve_program(const MipModel& model, const SelectionParams& params,
     // The backend broke (CBC's process crashed on an assertion inside Clp, or GLPK reported an
     // internal error): the same program goes to the other backend under the same node limit, so
     // the building still gets a selection and the run goes on.
-    const bool was_glpk = part.message.rfind("glpk", 0) == 0;
-    used.failures.push_back(part.message + (was_glpk ? "; solved with cbc instead" : "; solved with glpk instead"));
+    used.failures.push_back(part.message + (from_cbc ? "; solved with glpk instead" : "; solved with cbc instead"));
     limits.time_limit = time_left();
-    part = limits.time_limit > 0.0 ? (was_glpk ? cbc() : glpk()) : MipSolution{};
+    part = limits.time_limit > 0.0 ? (from_cbc ? glpk() : cbc()) : MipSolution{};
     if (part.status == MipStatus::failed) {
       used.failures.push_back(part.message);
       part.status = MipStatus::no_solution;
