@@ -846,6 +846,21 @@ TEST_F(Config, print_config_read_back_gives_identical_effective_parameters) {
   EXPECT_NE(effective(from_file), effective(parse({"reconstruct", "x.las"})));
 }
 
+// Found by the config fuzzer (fuzz/regressions/config/): a path that strtod reads as a number ("\t333...",
+// 30 digits, "1.50", "0x1F") was written as a bare TOML number, which --config refuses or rewrites.
+TEST_F(Config, number_like_paths_are_written_as_strings_and_read_back_unchanged) {
+  for (const std::string path : {std::string("\t\t3333333333333333333333333333333"), std::string("1.50"),
+                                 std::string("0x1F"), std::string(" 12"), std::string("1e5")}) {
+    const city3d::RunOptions direct = parse({"reconstruct", "x.las", "--footprints", path});
+    const std::string text = city3d::config_text(direct);
+    const std::string file = write("number_like.toml", text);
+    city3d::RunOptions from_file;
+    ASSERT_NO_THROW(from_file = parse({"reconstruct", "x.las", "--config", file})) << path;
+    EXPECT_EQ(from_file.batch.footprints, path);
+    EXPECT_EQ(city3d::config_text(from_file), text);
+  }
+}
+
 TEST_F(Config, executable_reads_back_what_it_prints) {
   const Result printed = run("--print-config");
   ASSERT_EQ(printed.exit_code, 0) << printed.output;

@@ -21,11 +21,26 @@ namespace {
 
 enum class ValueType { boolean, array, number, string, number_or_string };
 
+/// True when `text` is written as a bare TOML number that reads back as the same text: a decimal
+/// integer within 64 bits or a finite float in the form number_text gives. Anything else ("\t3",
+/// "0x1F", "1.50", an integer of 30 digits) is written as a quoted string, which any option taking
+/// text accepts; a bare number that TOML refuses or rewrites would break the --print-config round trip.
 bool is_number_text(const std::string& text) {
-  if (text.empty()) return false;
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  return *end == '\0' && std::isfinite(v);
+  if (text.empty() || text.size() > 64) return false;
+  toml::table table;
+  try {
+    table = toml::parse("v = " + text);
+  } catch (const toml::parse_error&) {
+    return false;
+  }
+  const toml::node* node = table.get("v");
+  if (node == nullptr || table.size() != 1) return false;
+  if (node->is_integer()) return std::to_string(node->as_integer()->get()) == text;
+  if (node->is_floating_point()) {
+    const double v = node->as_floating_point()->get();
+    return std::isfinite(v) && number_text(v) == text;
+  }
+  return false;
 }
 
 ValueType value_type(const OptionSpec& spec) {
