@@ -13,6 +13,7 @@
 
 #include "city3d/batch.hpp"
 #include "city3d/crop.hpp"
+#include "city3d/evaluation.hpp"
 #include "city3d/footprint_io.hpp"
 #include "city3d/mesh_check.hpp"
 #include "city3d/pipeline.hpp"
@@ -216,6 +217,76 @@ TEST(Smoke, tiny_buildings_get_lod2_from_smaller_planes_and_the_convex_hull) {
     EXPECT_TRUE(check_mesh(r.model->mesh).valid());
     EXPECT_LT(r.report.rmse, bound);
   }
+}
+
+// Issue 10, "every point explained": three clouds of city3d_dev_large whose first model left more
+// than 5% of the points farther than 1 m (City3D's own models: 0.0%, 0.0%, 0.9%), each fixed by a
+// different rebuild: 00731's ground points form a plane whose face prior put a third of a flat roof
+// at ground level; 08171's flat roof has a band without returns that cut the outline; 05389 has a
+// roof part of fewer points than a plane needs. With the rebuilds off (retry_unexplained_share 1)
+// each leaves more than 5%.
+TEST(Smoke, poorly_explained_models_are_rebuilt_until_their_points_are_explained) {
+  const std::string folder = std::string(CITY3D_SHARED_DATA) + "/city3d_dev_large/AHN3/";
+  if (!fs::exists(folder)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  const std::pair<const char*, const char*> cases[] = {{"00731", "rebuilt (without the face prior)"},
+                                                       {"08171", "rebuilt (an outline closing gaps"},
+                                                       {"05389", "rebuilt (roof planes of at least 10 points"}};
+  for (const auto& [name, note] : cases) {
+    SCOPED_TRACE(name);
+    const PointCloud cloud = read_point_cloud(folder + name + ".ply", kFieldXyz);
+    const BuildingInput input = building_from_cloud(name, cloud.points);
+    ReconstructionParams off;
+    off.retry_unexplained_share = 1.0;
+    const BuildingResult before = reconstruct_building(input, off);
+    EXPECT_GT(before.report.unexplained_share, 0.05);
+    EXPECT_EQ(before.report.note.find("rebuilt"), std::string::npos) << before.report.note;
+
+    const BuildingResult r = reconstruct_building(input, {});
+    EXPECT_EQ(r.report.status, BuildingStatus::ok) << r.report.reason;
+    EXPECT_EQ(r.report.level, ModelLevel::lod22);
+    ASSERT_TRUE(r.model.has_value());
+    EXPECT_TRUE(check_mesh(r.model->mesh).valid());
+    EXPECT_NE(r.report.note.find(note), std::string::npos) << r.report.note;
+    EXPECT_LT(r.report.unexplained_share, 0.05);
+    EXPECT_LT(r.report.rmse, before.report.rmse);
+    // The share the report gives is the written model's.
+    std::size_t far = 0;
+    for (const double d : point_distances(r.model->mesh, input.points)) far += d > kUnexplainedDistance;
+    EXPECT_DOUBLE_EQ(r.report.unexplained_points, static_cast<double>(far));
+  }
+}
+
+// A building the rebuilds cannot help says so in its report, with the share it leaves.
+TEST(Smoke, a_model_no_rebuild_improves_is_kept_and_reported) {
+  const std::string file = std::string(CITY3D_SHARED_DATA) + "/city3d_dev_large/AHN3/09083.ply";
+  if (!fs::exists(file)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  const PointCloud cloud = read_point_cloud(file, kFieldXyz);
+  const BuildingInput input = building_from_cloud("09083", cloud.points);
+  ReconstructionParams off;
+  off.retry_unexplained_share = 1.0;
+  const BuildingResult before = reconstruct_building(input, off);
+  const BuildingResult r = reconstruct_building(input, {});
+  ASSERT_TRUE(r.model.has_value());
+  EXPECT_GT(r.report.unexplained_share, 0.05);
+  EXPECT_NE(r.report.note.find("no rebuild explained more"), std::string::npos) << r.report.note;
+  EXPECT_EQ(r.model->mesh.faces, before.model->mesh.faces);
+}
+
+// The rebuilds are bounded by work, not time: AHN3/13894 (6,628 points) leaves 5.0% unexplained, and
+// its smaller planes make 5,852 candidate faces (a 37 s selection); variants over the limit are not
+// selected, and the note names them with their size.
+TEST(Smoke, rebuild_variants_over_the_work_limit_are_not_selected_and_said) {
+  const std::string file = std::string(CITY3D_SHARED_DATA) + "/city3d_dev/AHN3/13894.ply";
+  if (!fs::exists(file)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  const PointCloud cloud = read_point_cloud(file, kFieldXyz);
+  const BuildingResult r = reconstruct_building(building_from_cloud("13894", cloud.points), {});
+  ASSERT_TRUE(r.model.has_value());
+  EXPECT_EQ(r.report.level, ModelLevel::lod22);
+  EXPECT_LE(r.report.candidate_faces, 3000u);
+  EXPECT_GT(r.report.unexplained_share, 0.05);
+  EXPECT_NE(r.report.note.find("not tried (more than 3000 candidate faces): roof planes of at least 10 points: "),
+            std::string::npos)
+      << r.report.note;
 }
 
 namespace {

@@ -524,6 +524,38 @@ TEST(InferOutline, l_shape_outline_has_six_corners_near_the_truth_and_its_area) 
   }
 }
 
+// A flat roof of 10 x 6 m with a 1.5 m wide band of no returns across it (dark roofing): the
+// default closing (1.5 point spacings) keeps the two halves apart; closing over 4 spacings joins
+// them into one outline over the whole roof.
+TEST(InferOutline, a_wider_closing_joins_a_roof_cut_by_a_gap_in_its_returns) {
+  std::vector<Point3> points;
+  for (double y = 0.15; y < 6.0; y += 0.35)
+    for (double x = 0.15; x < 10.0; x += 0.35)
+      if (x < 4.0 || x > 5.5) points.push_back({x, y, 4.0});
+  const Heightmap map = rasterise_tin(points, {});
+  const std::vector<city3d::Polygon2> apart = infer_outline(map, points);
+  ASSERT_EQ(apart.size(), 2u);
+  const std::vector<city3d::Polygon2> joined = infer_outline(map, points, 0.25, 2.0, 4.0);
+  ASSERT_EQ(joined.size(), 1u);
+  city3d::Box2 box;
+  for (const city3d::Point2& p : joined[0].outer) box.add(p);
+  EXPECT_LT(box.min.x, 0.3);
+  EXPECT_GT(box.max.x, 9.7);
+  // The whole roof, the gap included: as large as the default outline of the roof without a gap.
+  std::vector<Point3> whole;
+  for (double y = 0.15; y < 6.0; y += 0.35)
+    for (double x = 0.15; x < 10.0; x += 0.35) whole.push_back({x, y, 4.0});
+  const std::vector<city3d::Polygon2> reference = infer_outline(rasterise_tin(whole, {}), whole);
+  ASSERT_EQ(reference.size(), 1u);
+  const auto area = [](const city3d::Ring2& ring) {
+    double area2 = 0;
+    for (std::size_t i = 0; i < ring.size(); ++i)
+      area2 += ring[i].x * ring[(i + 1) % ring.size()].y - ring[(i + 1) % ring.size()].x * ring[i].y;
+    return area2 / 2;
+  };
+  EXPECT_NEAR(area(joined[0].outer), area(reference[0].outer), 0.05 * area(reference[0].outer));
+}
+
 TEST(InferOutline, empty_heightmap_gives_no_outline) { EXPECT_TRUE(infer_outline(Heightmap{}, {}).empty()); }
 
 // A 10 x 6 house: roof points on a jittered 0.35 m grid (about AHN3's density) over x in [0, 10],

@@ -77,15 +77,15 @@ Heightmap rasterise_tin(const std::vector<Point3>& local_points, const Heightmap
 std::vector<Point2> detect_edges(const Heightmap& heightmap, const HeightmapParams& params);
 
 /// The outline of the building for a cloud without footprint. The points are binned into the
-/// heightmap's pixel grid and the occupancy closed morphologically over about 1.5 point spacings
-/// (the spacing from the points per heightmap data area), so the outline follows the points and not
+/// heightmap's pixel grid and the occupancy closed morphologically over about `gap_spacings` point
+/// spacings (1.5; the spacing from the points per heightmap data area), so the outline follows the points and not
 /// the TIN, whose long triangles cut inner corners. The outer boundary of each connected region runs
 /// through its boundary pixels' centres, simplified by Douglas-Peucker with `tolerance` metres plus
 /// the point spacing, then moved outward by half a pixel and half a point spacing (where the true
 /// wall lies on average); regions under `min_area` m2 are dropped. Polygons are counter-clockwise, in the heightmap's
 /// (local) frame, without holes; largest first.
 std::vector<Polygon2> infer_outline(const Heightmap& heightmap, const std::vector<Point3>& local_points,
-                                    double tolerance = 0.25, double min_area = 2.0);
+                                    double tolerance = 0.25, double min_area = 2.0, double gap_spacings = 1.5);
 
 /// Writes the heightmap (grey, as above) with `edges` (points in the heightmap's frame, e.g. from
 /// detect_edges()) painted red, as an RGB PNG, north up. Edges outside the raster are ignored.

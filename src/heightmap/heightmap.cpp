@@ -290,14 +290,14 @@ std::vector<Point2> detect_edges(const Heightmap& heightmap, const HeightmapPara
 }
 
 std::vector<Polygon2> infer_outline(const Heightmap& heightmap, const std::vector<Point3>& local_points,
-                                    double tolerance, double min_area) {
+                                    double tolerance, double min_area, double gap_spacings) {
   std::vector<Polygon2> outline;
   if (heightmap.width <= 0 || heightmap.height <= 0 || local_points.empty()) return outline;
   std::size_t data_pixels = 0;
   for (float z : heightmap.z) data_pixels += !std::isnan(z);
   const double r = heightmap.resolution;
   const double spacing = std::sqrt(std::max<double>(data_pixels, 1) * r * r / local_points.size());
-  const int radius = std::max(1, static_cast<int>(std::ceil(1.5 * spacing / r)));
+  const int radius = std::max(1, static_cast<int>(std::ceil(gap_spacings * spacing / r)));
   // Occupancy with a border of `radius` empty pixels, so the closing never touches the image edge.
   cv::Mat mask = cv::Mat::zeros(heightmap.height + 2 * radius, heightmap.width + 2 * radius, CV_8U);
   for (const Point3& p : local_points) {

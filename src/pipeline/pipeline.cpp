@@ -1,5 +1,6 @@
 // The pipeline of one building, from points to model (reconstruct_building): the paper's stages in
-// order (lod2_rung) and the fallback ladder. The batch job around it is in batch.cpp.
+// order (lod2_hypothesis, then lod2_model), the rebuilds of a model that leaves points unexplained
+// (explain_more) and the fallback ladder. The batch job around it is in batch.cpp.
 #include "city3d/pipeline.hpp"
 
 #include <algorithm>
@@ -80,6 +81,8 @@ void ReconstructionParams::validate() const {
     problems += (problems.empty() ? "" : "; ") + std::string("output_grid must be >= 0 (metres)");
   if (max_footprint_vertices < 3)
     problems += (problems.empty() ? "" : "; ") + std::string("max_footprint_vertices must be >= 3");
+  if (!(retry_unexplained_share >= 0) || !std::isfinite(retry_unexplained_share))
+    problems += (problems.empty() ? "" : "; ") + std::string("retry_unexplained_share must be a share >= 0 (1: never retry)");
   if (!(time_limit >= 0) || !std::isfinite(time_limit))
     problems += (problems.empty() ? "" : "; ") + std::string("time_limit must be >= 0 seconds (0: none)");
   if (!problems.empty()) throw ConfigError(problems);
@@ -165,6 +168,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("validity.planarity_normals", p.validity.planarity_normals);
   put("max_level", to_string(p.max_level));
   put("max_footprint_vertices", p.max_footprint_vertices);
+  put("retry_unexplained_share", p.retry_unexplained_share);
   put("time_limit", p.time_limit);
   return s.str();
 }
@@ -236,6 +240,11 @@ std::pair<Point2, Point2> wall_line(const PlanarSegment& wall, const std::vector
   return {{cx + (lo - tc) * dx, cy + (lo - tc) * dy}, {cx + (hi - tc) * dx, cy + (hi - tc) * dy}};
 }
 
+
+// Gaps in a roof's returns (dark or wet roofing, glass) that explain_more's wide outline closes: the
+// occupancy is closed with a disc of this many point spacings in radius, which fills gaps and
+// concavities up to twice as wide (about 3 m at AHN3's 8 points per m2) and keeps wider ones.
+constexpr double kWideGapSpacings = 4.0;
 
 // Smallest area of an inferred outline part other than the largest that is modelled, m2: a garden
 // shed or a silo (infer_outline keeps regions of 2 m2 and more, but a part needs a roof plane).
@@ -350,10 +359,21 @@ double point_spacing(const std::vector<Polygon2>& outline, std::size_t points) {
   return points > 0 && area > 0 ? std::sqrt(area / static_cast<double>(points)) : 0.0;
 }
 
-// A LoD2 rung: planes, walls, hypothesis, selection, model. `footprint_walls_only` skips the
-// inferred inner walls (the second rung). Throws Error naming the stage when a stage fails.
-BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& params, bool footprint_walls_only,
-                        Clock::time_point deadline, BuildingReport& report) {
+// The candidate faces of a LoD2 rung, one problem per part (a footprint is one part, whatever its
+// polygons; an inferred outline has a part per region modelled, the largest first).
+struct Lod2Hypothesis {
+  std::vector<CandidateFaces> parts;
+  std::vector<std::size_t> part_numbers;  // each part's number among the outline's parts (for notes)
+};
+
+// A LoD2 rung up to its face hypothesis: planes, walls, candidate faces (paper sections 3.1-3.3).
+// `footprint_walls_only` skips the inferred inner walls (the second rung). `wide_outline`: without a
+// footprint, the outline is inferred closing gaps of kWideGapSpacings point spacings instead of 1.5
+// (explain_more's variant for roofs whose returns have gaps). Throws Error naming the stage when a
+// stage fails for the largest part; a further part that fails is left out and said.
+Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionParams& params,
+                               bool footprint_walls_only, bool wide_outline, Clock::time_point deadline,
+                               BuildingReport& report) {
   const bool debug = !params.debug_dir.empty();
   const auto& points = input.points;
 
@@ -398,7 +418,8 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
   std::vector<Polygon2> outline = input.footprint.polygons;
   if (!input.footprint_given) {
     outline.clear();
-    const std::vector<Polygon2> inferred = infer_outline(heightmap, points, params.polylines.max_hausdorff);
+    const std::vector<Polygon2> inferred =
+        infer_outline(heightmap, points, params.polylines.max_hausdorff, 2.0, wide_outline ? kWideGapSpacings : 1.5);
     for (const Polygon2& p : inferred)
       outline.push_back(fit_outline_to_points(regularise_outline(p, params.regularise.angle_threshold), points));
     if (outline.empty() && !input.footprint.polygons.empty()) {
@@ -440,9 +461,7 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
   else
     for (const Polygon2& part : outline) problems.push_back({part});
 
-  BuildingModel model;
-  model.id = input.id;
-  model.origin = input.origin;
+  Lod2Hypothesis hypothesis;
   report.walls = report.candidate_faces = 0;
   for (std::size_t k = 0; k < problems.size(); ++k) {
     const std::vector<Polygon2>& part = problems[k];
@@ -457,13 +476,38 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
         write_walls_obj(debug_path(params.debug_dir, input.id, "walls" + suffix + ".obj"), walls, input.ground_z,
                         input.ground_z + 20.0);
 
-      // Face hypothesis and selection (paper section 3.3).
-      const CandidateFaces candidates =
+      // Face hypothesis (paper section 3.3).
+      CandidateFaces candidates =
           generate_candidates(points, roofs, walls, part, input.ground_z, input.ground_measured, params.hypothesis,
                               params.selection);
       report.candidate_faces += candidates.faces.size();
       check_time(deadline, "hypothesis");
       if (debug) write_candidates_obj(debug_path(params.debug_dir, input.id, "candidates" + suffix + ".obj"), candidates);
+      hypothesis.parts.push_back(std::move(candidates));
+      hypothesis.part_numbers.push_back(k);
+    } catch (const ReconstructionError& e) {
+      // The largest part decides the rung; a further part that cannot be built is left out and said.
+      if (k == 0) throw;
+      add_note(report, "outline part " + std::to_string(k) + " left out: " + e.what());
+    }
+  }
+  return hypothesis;
+}
+
+// A LoD2 rung's selection (paper section 3.3) and model: each part's faces selected and assembled,
+// the parts' solids joined in one model. Throws Error when the largest part has no selection; a
+// further part without one is left out and said. `without_prior` (when given) tells whether every
+// part's selection had to drop the face prior (its program was infeasible with it).
+BuildingModel lod2_model(const BuildingInput& input, const Lod2Hypothesis& hypothesis,
+                         const ReconstructionParams& params, Clock::time_point deadline, BuildingReport& report,
+                         bool* without_prior = nullptr) {
+  std::size_t dropped = 0;
+  BuildingModel model;
+  model.id = input.id;
+  model.origin = input.origin;
+  for (std::size_t k = 0; k < hypothesis.parts.size(); ++k) {
+    const CandidateFaces& candidates = hypothesis.parts[k];
+    try {
       SelectionParams selection_params = params.selection;
       if (deadline != Clock::time_point::max()) {
         const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
@@ -475,6 +519,7 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
         // The face prior is a preference of the paper's, not a necessity: retry without it.
         selection_params.use_face_prior = false;
         selection = solve_selection(candidates.problem, selection_params);
+        ++dropped;
       }
       // What the report says of the solve: a backend that broke, and a selection not proven optimal
       // because a limit stopped the search (the deterministic node limit, or the opt-in time limit).
@@ -499,12 +544,199 @@ BuildingModel lod2_rung(const BuildingInput& input, const ReconstructionParams& 
       }
       model.surfaces.insert(model.surfaces.end(), surfaces.begin(), surfaces.end());
     } catch (const ReconstructionError& e) {
-      // The largest part decides the rung; a further part that cannot be built is left out and said.
-      if (k == 0) throw;
-      add_note(report, "outline part " + std::to_string(k) + " left out: " + e.what());
+      if (hypothesis.part_numbers[k] == 0) throw;
+      add_note(report, "outline part " + std::to_string(hypothesis.part_numbers[k]) + " left out: " + e.what());
     }
   }
+  if (without_prior) *without_prior = dropped == hypothesis.parts.size();
   return model;
+}
+
+// A rung's model as the writers will write it (rounded to the output grid), passing every val3dity
+// rule: a model that does not is repaired (spikes cut, warped faces split), or this throws and the
+// ladder moves on: an invalid model is never written.
+BuildingModel checked_model(const BuildingInput& input, const ReconstructionParams& params, ModelLevel level,
+                            bool footprint_walls_only, BuildingModel model, BuildingReport& r) {
+  const WrittenValidity validity = validate_as_written(model, params.output_grid, params.validity);
+  if (!validity.found.empty()) {
+    const std::string found = std::string(to_string(level)) + ": " + validity_codes(validity.found);
+    r.validity_found += (r.validity_found.empty() ? "" : "; ") + found;
+  }
+  if (!validity.remaining.empty()) {
+    if (!params.debug_dir.empty()) {
+      ModelWriteOptions local;
+      local.local_coordinates = true;
+      write_model(debug_path(params.debug_dir, input.id,
+                             std::string("rejected_") +
+                                 (level == ModelLevel::lod12 ? "lod12" : footprint_walls_only ? "footprint_walls" : "lod22") +
+                                 ".obj"),
+                  model, local);
+    }
+    std::string problems;
+    for (std::size_t k = 0; k < validity.remaining.size() && k < 3; ++k)
+      problems += (k ? "; " : "") + validity.remaining[k].text();
+    if (validity.remaining.size() > 3) problems += "; ...";
+    throw ReconstructionError("model: not a valid solid as written: " + problems);
+  }
+  r.repairs = validity.repairs;
+  return model;
+}
+
+// How well a model explains the building's points: how many lie farther than kUnexplainedDistance,
+// and the sum of the squared distances.
+struct Explained {
+  std::size_t far = 0;
+  double squares = 0.0;
+};
+
+Explained explained(const PolygonMesh& mesh, const std::vector<Point3>& points) {
+  Explained e;
+  for (const double d : point_distances(mesh, points)) {
+    e.far += d > kUnexplainedDistance;
+    e.squares += d * d;
+  }
+  return e;
+}
+
+std::string percent(std::size_t part, std::size_t whole) {
+  std::ostringstream s;
+  s.precision(1);
+  s << std::fixed << 100.0 * static_cast<double>(part) / static_cast<double>(whole) << "%";
+  return s.str();
+}
+
+// A work limit of explain_more: a building whose hypothesis has more candidate faces than this is not
+// rebuilt, and a variant hypothesis with more is not selected. Each rebuild is a selection at least as
+// large as the rung's, and the smaller planes make larger programs: the two 40,000-point clouds of
+// city3d_dev (8,312 and 13,874 candidate faces) took 521 s and 110 s with their rebuilds, against 14 s
+// and 10 s without, and AHN3/13894's smaller planes turned 1,933 candidate faces into 5,852 and 1 s
+// into 38 s (docs/BENCHMARKS.md).
+constexpr std::size_t kMaxRebuildFaces = 3000;
+
+// Issue 10's "every point explained, or reported": when a LoD2 model leaves more than
+// retry_unexplained_share of the points unexplained, the rung is rebuilt with variants that address
+// what leaves points out, each a deterministic function of the input. Hypotheses:
+//  - roof planes of half min_points: an upper part or a small tier whose few points form no plane of
+//    min_points is otherwise covered by the roof below it;
+//  - without a footprint, an outline closing wider gaps (kWideGapSpacings): a roof whose returns have
+//    gaps (dark or wet roofing, glass) is otherwise cut at the gap, and a changed outline changes
+//    the lines regularised against it; and both.
+// Selections over each hypothesis (the first hypothesis is reused from the rung, so these cost a
+// selection each, not a rebuild):
+//  - without the face prior: the paper's hard constraint keeps the best face of every roof plane, so
+//    a plane fitted to ground or clutter points can force its face over a cell the roof above
+//    explains (a flat roof modelled at ground level over a third of the building);
+//  - half the complexity weight: a roof part of few points costs more edges than its points weigh;
+//  - both.
+// A variant replaces the model only if it leaves fewer points unexplained and fits the points better
+// (smaller sum of squared distances). The report says which variant was kept, or that none helped.
+// `before_hypothesis` and `before_selection` are the report as it was before the rung's hypothesis
+// and before its selection; debug files are written for the rung's own hypothesis only.
+void explain_more(const BuildingInput& input, const ReconstructionParams& params, ModelLevel level,
+                  bool footprint_walls_only, const Lod2Hypothesis& hypothesis, const BuildingReport& before_hypothesis,
+                  const BuildingReport& before_selection, bool own_without_prior, Clock::time_point deadline,
+                  BuildingReport& r, BuildingModel& model) {
+  const std::size_t n = input.points.size();
+  if (n == 0) return;
+  Explained best = explained(model.mesh, input.points);
+  if (!(static_cast<double>(best.far) > params.retry_unexplained_share * static_cast<double>(n))) return;
+  const auto candidate_faces = [](const Lod2Hypothesis& h) {
+    std::size_t faces = 0;
+    for (const CandidateFaces& part : h.parts) faces += part.faces.size();
+    return faces;
+  };
+  const std::size_t faces = candidate_faces(hypothesis);
+  if (faces > kMaxRebuildFaces) {
+    add_note(r, "unexplained points " + percent(best.far, n) + ": not rebuilt (" + std::to_string(faces) +
+                    " candidate faces, more than " + std::to_string(kMaxRebuildFaces) + ")");
+    return;
+  }
+  const int small_points = std::max<int>(kMinPointsForSmallRoof, params.planes.min_points / 2);
+  struct HypothesisVariant {
+    bool smaller_planes;
+    bool wide_outline;
+  };
+  std::vector<HypothesisVariant> hypotheses{{false, false}};
+  if (small_points < params.planes.min_points) hypotheses.push_back({true, false});
+  if (!input.footprint_given) {
+    hypotheses.push_back({false, true});
+    if (small_points < params.planes.min_points) hypotheses.push_back({true, true});
+  }
+  struct SelectionVariant {
+    bool without_prior;
+    bool half_complexity;
+  };
+  const SelectionVariant selections[] = {{false, false}, {true, false}, {false, true}, {true, true}};
+  const auto name = [&](const HypothesisVariant& h, const SelectionVariant& v) {
+    std::string text;
+    const auto add = [&text](const std::string& part) { text += (text.empty() ? "" : ", ") + part; };
+    if (h.smaller_planes) add("roof planes of at least " + std::to_string(small_points) + " points");
+    if (h.wide_outline)
+      add("an outline closing gaps of " + std::to_string(static_cast<int>(kWideGapSpacings)) + " point spacings");
+    if (v.without_prior) add("without the face prior");
+    if (v.half_complexity) add("half the complexity weight");
+    return text;
+  };
+
+  const std::size_t before = best.far;
+  std::string kept;
+  std::string over_limit;  // variant hypotheses not selected: more than kMaxRebuildFaces candidate faces
+  BuildingReport kept_report;
+  for (const HypothesisVariant& h : hypotheses) {
+    const bool own = !h.smaller_planes && !h.wide_outline;
+    ReconstructionParams hp = params;
+    hp.debug_dir.clear();
+    if (h.smaller_planes) hp.planes.min_points = small_points;
+    BuildingReport after_hypothesis = own ? before_selection : before_hypothesis;
+    std::optional<Lod2Hypothesis> built;
+    if (!own) {
+      try {
+        built = lod2_hypothesis(input, hp, footprint_walls_only, h.wide_outline, deadline, after_hypothesis);
+      } catch (const Error& e) {
+        log_debug("explain: building " + input.id + ": " + name(h, {}) + ": " + e.what());
+        continue;
+      }
+      if (candidate_faces(*built) > kMaxRebuildFaces) {
+        over_limit += (over_limit.empty() ? "" : ", ") + name(h, {}) + ": " + std::to_string(candidate_faces(*built));
+        continue;
+      }
+    }
+    // Selections with the prior that had to drop it equal those without: those are skipped.
+    bool prior_dropped = own && own_without_prior;
+    for (const SelectionVariant& v : selections) {
+      if (own && !v.without_prior && !v.half_complexity) continue;  // the rung's own model
+      if (v.without_prior && prior_dropped) continue;
+      ReconstructionParams p = hp;
+      if (v.without_prior) p.selection.use_face_prior = false;
+      if (v.half_complexity) p.selection.lambda_complexity /= 2;
+      BuildingReport trial = after_hypothesis;
+      try {
+        bool dropped = false;
+        BuildingModel m = checked_model(input, p, level, footprint_walls_only,
+                                        lod2_model(input, own ? hypothesis : *built, p, deadline, trial, &dropped),
+                                        trial);
+        if (!v.without_prior && !v.half_complexity) prior_dropped = dropped;
+        const Explained e = explained(m.mesh, input.points);
+        if (e.far < best.far && e.squares < best.squares) {
+          best = e;
+          model = std::move(m);
+          kept = name(h, v);
+          kept_report = std::move(trial);
+        }
+      } catch (const Error& e) {
+        // A variant that cannot be built leaves the model as it was.
+        log_debug("explain: building " + input.id + ": " + name(h, v) + ": " + e.what());
+      }
+    }
+  }
+  if (!kept.empty()) {
+    r = std::move(kept_report);
+    add_note(r, "rebuilt (" + kept + "): unexplained points " + percent(before, n) + " -> " + percent(best.far, n));
+  } else {
+    add_note(r, "unexplained points " + percent(before, n) + ": no rebuild explained more");
+  }
+  if (!over_limit.empty())
+    add_note(r, "not tried (more than " + std::to_string(kMaxRebuildFaces) + " candidate faces): " + over_limit);
 }
 
 // Monotone-chain convex hull, counter-clockwise, without collinear points.
@@ -790,34 +1022,19 @@ BuildingResult reconstruct_building(const BuildingInput& given, const Reconstruc
                                   ? start + std::chrono::duration_cast<Clock::duration>(
                                                 std::chrono::duration<double>(share * params.time_limit))
                                   : Clock::time_point::max();
-        BuildingModel model = rung.level == ModelLevel::lod12
-                                  ? lod1_rung(input, params, r)
-                                  : lod2_rung(input, params, rung.footprint_walls_only, deadline, r);
-        // The model as the writers will write it (rounded to the output grid) must pass every
-        // val3dity rule; a model that does not is repaired (spikes cut, warped faces split) or the
-        // ladder moves on: an invalid model is never written.
-        const WrittenValidity validity = validate_as_written(model, params.output_grid, params.validity);
-        if (!validity.found.empty()) {
-          const std::string found = std::string(to_string(rung.level)) + ": " + validity_codes(validity.found);
-          r.validity_found += (r.validity_found.empty() ? "" : "; ") + found;
+        BuildingModel model;
+        if (rung.level == ModelLevel::lod12) {
+          model = checked_model(input, params, rung.level, false, lod1_rung(input, params, r), r);
+        } else {
+          const BuildingReport before_hypothesis = r;
+          const Lod2Hypothesis hypothesis = lod2_hypothesis(input, params, rung.footprint_walls_only, false, deadline, r);
+          const BuildingReport before_selection = r;
+          bool without_prior = false;
+          model = checked_model(input, params, rung.level, rung.footprint_walls_only,
+                                lod2_model(input, hypothesis, params, deadline, r, &without_prior), r);
+          explain_more(input, params, rung.level, rung.footprint_walls_only, hypothesis, before_hypothesis,
+                       before_selection, without_prior, deadline, r, model);
         }
-        if (!validity.remaining.empty()) {
-          if (!params.debug_dir.empty()) {
-            ModelWriteOptions local;
-            local.local_coordinates = true;
-            write_model(debug_path(params.debug_dir, input.id,
-                                   std::string("rejected_") +
-                                       (rung.level == ModelLevel::lod12 ? "lod12"
-                                        : rung.footprint_walls_only ? "footprint_walls" : "lod22") + ".obj"),
-                        model, local);
-          }
-          std::string problems;
-          for (std::size_t k = 0; k < validity.remaining.size() && k < 3; ++k)
-            problems += (k ? "; " : "") + validity.remaining[k].text();
-          if (validity.remaining.size() > 3) problems += "; ...";
-          throw ReconstructionError("model: not a valid solid as written: " + problems);
-        }
-        r.repairs = validity.repairs;
         r.level = rung.level;
         r.status = rung.level == requested ? BuildingStatus::ok : BuildingStatus::fallback;
         r.faces = model.mesh.faces.size();
