@@ -859,6 +859,12 @@ TEST_F(Config, number_like_paths_are_written_as_strings_and_read_back_unchanged)
     EXPECT_EQ(from_file.batch.footprints, path);
     EXPECT_EQ(city3d::config_text(from_file), text);
   }
+  // And a negative zero, which TOML reads as the integer 0: written as 0.
+  const std::string file = write("negative_zero.toml", "lambda-data = -0.0\n");
+  const std::string text = city3d::config_text(parse({"reconstruct", "x.las", "--config", file}));
+  EXPECT_NE(text.find("\nlambda-data = 0\n"), std::string::npos);
+  const std::string again = write("negative_zero_again.toml", text);
+  EXPECT_EQ(city3d::config_text(parse({"reconstruct", "x.las", "--config", again})), text);
 }
 
 TEST_F(Config, executable_reads_back_what_it_prints) {

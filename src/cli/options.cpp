@@ -362,6 +362,9 @@ bool in_config_file(const OptionSpec& spec) {
 
 std::string number_text(double v) {
   // The fewest significant digits that read back to the same double: 0.34, not 0.34000000000000002.
+  // Zero is "0" whatever its sign: TOML reads "-0" as the integer 0, so --print-config would not read
+  // back as it was written (found by the config fuzzer: lambda-data = -0.0).
+  if (v == 0) v = 0.0;
   char buf[40];
   for (int digits = 6; digits <= 17; ++digits) {
     std::snprintf(buf, sizeof buf, "%.*g", digits, v);
