@@ -35,10 +35,11 @@ seeds_of() {
 run_one() {
   local h="$1" corpus="$build/corpus/$1" artifacts="fuzz/regressions/$1/" log="$build/logs/$1.log"
   mkdir -p "$corpus" "$artifacts" "$build/logs"
+  # (|| keeps set -e from ending this background function before the failure is printed)
+  local status=0
   # shellcheck disable=SC2046
   nice -n 19 "$build/fuzz_$h" -max_total_time="$seconds" -timeout="${FUZZ_TIMEOUT:-60}" -rss_limit_mb=2048 -max_len=65536 \
-    -print_final_stats=1 -artifact_prefix="$artifacts" "$corpus" $(seeds_of "$h") >"$log" 2>&1
-  local status=$?
+    -print_final_stats=1 -artifact_prefix="$artifacts" "$corpus" $(seeds_of "$h") >"$log" 2>&1 || status=$?
   local done_line runs eps rss
   done_line=$(grep -E '^#[0-9]+[[:space:]]+DONE' "$log" | tail -1 || true)
   runs=$(grep -oE 'number_of_executed_units: *[0-9]+' "$log" | grep -oE '[0-9]+$' || echo "?")
