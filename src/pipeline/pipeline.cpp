@@ -682,7 +682,12 @@ void explain_more(const BuildingInput& input, const ReconstructionParams& params
   std::string kept;
   std::string over_limit;  // variant hypotheses not selected: more than kMaxRebuildFaces candidate faces
   BuildingReport kept_report;
+  // The opt-in --time-limit bounds the rebuilds too: once it is used up no further variant is begun,
+  // and the best model so far is kept.
+  const auto out_of_time = [&] { return deadline != Clock::time_point::max() && Clock::now() > deadline; };
+  bool stopped = false;
   for (const HypothesisVariant& h : hypotheses) {
+    if ((stopped = stopped || out_of_time())) break;
     const bool own = !h.smaller_planes && !h.wide_outline;
     ReconstructionParams hp = params;
     hp.debug_dir.clear();
@@ -704,6 +709,7 @@ void explain_more(const BuildingInput& input, const ReconstructionParams& params
     // Selections with the prior that had to drop it equal those without: those are skipped.
     bool prior_dropped = own && own_without_prior;
     for (const SelectionVariant& v : selections) {
+      if ((stopped = out_of_time())) break;
       if (own && !v.without_prior && !v.half_complexity) continue;  // the rung's own model
       if (v.without_prior && prior_dropped) continue;
       ReconstructionParams p = hp;
@@ -737,6 +743,7 @@ void explain_more(const BuildingInput& input, const ReconstructionParams& params
   }
   if (!over_limit.empty())
     add_note(r, "not tried (more than " + std::to_string(kMaxRebuildFaces) + " candidate faces): " + over_limit);
+  if (stopped) add_note(r, "rebuilds stopped at the time limit");
 }
 
 // Monotone-chain convex hull, counter-clockwise, without collinear points.
