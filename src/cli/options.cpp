@@ -271,7 +271,11 @@ const std::vector<OptionSpec>& option_table() {
        [](O& o, V v) { o.batch.reconstruction.debug_dir = v; }},
       // Output.
       {"--output", "-o", "DIR", "output folder (created when missing)",
-       [](const O& o) { return o.batch.output_dir; }, [](O& o, V v) { o.batch.output_dir = v; }},
+       [](const O& o) { return o.batch.output_dir; },
+       [](O& o, V v) {
+         if (std::string(v).empty()) throw ConfigError("--output: the output folder name is empty");
+         o.batch.output_dir = v;
+       }},
       {"--format", nullptr, "obj|ply|ply-ascii", "model file format (ply = binary little-endian)",
        [](const O& o) { return o.format; },
        [](O& o, V v) {
