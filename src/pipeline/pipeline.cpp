@@ -631,15 +631,16 @@ constexpr std::size_t kMaxRebuildFaces = 3000;
 // A variant replaces the model only if it leaves fewer points unexplained and fits the points better
 // (smaller sum of squared distances). The report says which variant was kept, or that none helped.
 // `before_hypothesis` and `before_selection` are the report as it was before the rung's hypothesis
-// and before its selection; debug files are written for the rung's own hypothesis only.
-void explain_more(const BuildingInput& input, const ReconstructionParams& params, ModelLevel level,
+// and before its selection; debug files are written for the rung's own hypothesis only. Returns how
+// well the model it leaves explains the points (measured once: the report's figures reuse it).
+Explained explain_more(const BuildingInput& input, const ReconstructionParams& params, ModelLevel level,
                   bool footprint_walls_only, const Lod2Hypothesis& hypothesis, const BuildingReport& before_hypothesis,
                   const BuildingReport& before_selection, bool own_without_prior, Clock::time_point deadline,
                   BuildingReport& r, BuildingModel& model) {
   const std::size_t n = input.points.size();
-  if (n == 0) return;
+  if (n == 0) return {};
   Explained best = explained(model.mesh, input.points);
-  if (!(static_cast<double>(best.far) > params.retry_unexplained_share * static_cast<double>(n))) return;
+  if (!(static_cast<double>(best.far) > params.retry_unexplained_share * static_cast<double>(n))) return best;
   const auto candidate_faces = [](const Lod2Hypothesis& h) {
     std::size_t faces = 0;
     for (const CandidateFaces& part : h.parts) faces += part.faces.size();
@@ -649,7 +650,7 @@ void explain_more(const BuildingInput& input, const ReconstructionParams& params
   if (faces > kMaxRebuildFaces) {
     add_note(r, "unexplained points " + percent(best.far, n) + ": not rebuilt (" + std::to_string(faces) +
                     " candidate faces, more than " + std::to_string(kMaxRebuildFaces) + ")");
-    return;
+    return best;
   }
   const int small_points = std::max<int>(kMinPointsForSmallRoof, params.planes.min_points / 2);
   struct HypothesisVariant {
@@ -744,6 +745,7 @@ void explain_more(const BuildingInput& input, const ReconstructionParams& params
   if (!over_limit.empty())
     add_note(r, "not tried (more than " + std::to_string(kMaxRebuildFaces) + " candidate faces): " + over_limit);
   if (stopped) add_note(r, "rebuilds stopped at the time limit");
+  return best;
 }
 
 // Monotone-chain convex hull, counter-clockwise, without collinear points.
@@ -822,8 +824,9 @@ std::string roof_type_of(const BuildingModel& model) {
 
 // LoD1.2 and LoD1.3 derived from the LoD2.2 model (or only the LoD1.2 block when the ladder ended
 // there), each valid as written; volumes and RMSE per level; the model OBJ/PLY get is the highest
-// level asked for.
-void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams& params, BuildingResult& result) {
+// level asked for. `lod2_fit`: the LoD2 model's distances to the points, when already measured.
+void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams& params,
+                          const std::optional<Explained>& lod2_fit, BuildingResult& result) {
   BuildingReport& r = result.report;
   const BuildingModel primary = *result.model;
   std::vector<LodModel> made;  // in order 1.2, 1.3, 2.2
@@ -866,17 +869,12 @@ void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams
   if (kept.empty()) kept.push_back({lod2 ? "2.2" : "1.2", primary});
   for (const LodModel& m : kept) {
     const double volume = check_mesh(m.model.mesh).signed_volume;
-    const std::vector<double> distances = point_distances(m.model.mesh, input.points);
-    double sum = 0.0;
-    std::size_t far = 0;
-    for (const double d : distances) {
-      sum += d * d;
-      far += d > kUnexplainedDistance;
-    }
-    const double error = distances.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(distances.size()));
+    const Explained fit = lod2 && m.lod == "2.2" && lod2_fit ? *lod2_fit : explained(m.model.mesh, input.points);
+    const std::size_t n = input.points.size();
+    const double error = n == 0 ? 0.0 : std::sqrt(fit.squares / static_cast<double>(n));
     // The unexplained points of the model the OBJ/PLY files hold: the last level kept.
-    r.unexplained_points = static_cast<double>(far);
-    r.unexplained_share = distances.empty() ? 0.0 : static_cast<double>(far) / static_cast<double>(distances.size());
+    r.unexplained_points = static_cast<double>(fit.far);
+    r.unexplained_share = n == 0 ? 0.0 : static_cast<double>(fit.far) / static_cast<double>(n);
     (m.lod == "1.2" ? r.volume_lod12 : m.lod == "1.3" ? r.volume_lod13 : r.volume_lod22) = volume;
     (m.lod == "1.2" ? r.rmse_lod12 : m.lod == "1.3" ? r.rmse_lod13 : r.rmse_lod22) = error;
     r.lods += (r.lods.empty() ? "" : ",") + m.lod;
@@ -1018,6 +1016,7 @@ BuildingResult reconstruct_building(const BuildingInput& given, const Reconstruc
     const Rung rungs[] = {{ModelLevel::lod22, false}, {ModelLevel::lod22_footprint_walls, true}, {ModelLevel::lod12, false}};
     const ModelLevel requested = params.max_level == ModelLevel::none ? ModelLevel::lod22 : params.max_level;
     bool started = false;
+    std::optional<Explained> lod2_fit;  // the LoD2 model's distances, as explain_more measured them
     for (const Rung& rung : rungs) {
       if (rung.level == requested) started = true;
       if (!started) continue;
@@ -1039,8 +1038,8 @@ BuildingResult reconstruct_building(const BuildingInput& given, const Reconstruc
           bool without_prior = false;
           model = checked_model(input, params, rung.level, rung.footprint_walls_only,
                                 lod2_model(input, hypothesis, params, deadline, r, &without_prior), r);
-          explain_more(input, params, rung.level, rung.footprint_walls_only, hypothesis, before_hypothesis,
-                       before_selection, without_prior, deadline, r, model);
+          lod2_fit = explain_more(input, params, rung.level, rung.footprint_walls_only, hypothesis, before_hypothesis,
+                                  before_selection, without_prior, deadline, r, model);
         }
         r.level = rung.level;
         r.status = rung.level == requested ? BuildingStatus::ok : BuildingStatus::fallback;
@@ -1057,7 +1056,7 @@ BuildingResult reconstruct_building(const BuildingInput& given, const Reconstruc
       }
     }
     if (!result.model) r.status = BuildingStatus::failed;
-    if (result.model) add_levels_of_detail(input, params, result);
+    if (result.model) add_levels_of_detail(input, params, lod2_fit, result);
     if (result.model) r.rmse = r.lods.empty() ? rmse(result.model->mesh, input.points) : highest_level_rmse(r);
     if (r.status == BuildingStatus::ok) r.stage.clear(), r.reason.clear();
   }
