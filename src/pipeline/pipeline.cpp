@@ -353,6 +353,18 @@ std::vector<Polygon2> separate_parts(const std::vector<Polygon2>& parts, const s
   return kept;
 }
 
+// The roof planes of an inferred outline part: those with at least a quarter of their points inside it.
+std::vector<PlanarSegment> roofs_of_part(const std::vector<PlanarSegment>& roofs, const Polygon2& part,
+                                         const std::vector<Point3>& points) {
+  std::vector<PlanarSegment> held;
+  for (const PlanarSegment& s : roofs) {
+    std::size_t in = 0;
+    for (std::uint32_t i : s.points) in += inside_ring(part.outer, {points[i].x, points[i].y});
+    if (4 * in >= s.points.size()) held.push_back(s);
+  }
+  return held;
+}
+
 // Mean point spacing, metres: sqrt(outline area / points).
 double point_spacing(const std::vector<Polygon2>& outline, std::size_t points) {
   const double area = polygons_area(outline);
@@ -476,9 +488,15 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
         write_walls_obj(debug_path(params.debug_dir, input.id, "walls" + suffix + ".obj"), walls, input.ground_z,
                         input.ground_z + 20.0);
 
-      // Face hypothesis (paper section 3.3).
+      // Face hypothesis (paper section 3.3). An inferred part's roofs are the planes it holds a
+      // share of: a plane of points elsewhere (another part, or ground returns around a tree, AHN3
+      // large/06050) would put a roof where none of its points are.
+      const std::vector<PlanarSegment> part_roofs = input.footprint_given ? roofs : roofs_of_part(roofs, part.front(), points);
+      if (part_roofs.empty())
+        throw ReconstructionError("planes: none of the " + std::to_string(roofs.size()) +
+                                  " roof planes lies inside the inferred outline");
       CandidateFaces candidates =
-          generate_candidates(points, roofs, walls, part, input.ground_z, input.ground_measured, params.hypothesis,
+          generate_candidates(points, part_roofs, walls, part, input.ground_z, input.ground_measured, params.hypothesis,
                               params.selection);
       report.candidate_faces += candidates.faces.size();
       check_time(deadline, "hypothesis");
