@@ -700,6 +700,40 @@ TEST(Model, orients_faces_outward_whatever_their_input_orientation) {
   EXPECT_NEAR(check.signed_volume, 300.0, 9.0);
 }
 
+// A flat box cut into 40 cells along x: its roof, floor and long walls are merged from 40 pieces
+// each, which leaves 39 collinear vertices on each of its four long edges, every one in two faces
+// with two neighbours. All are removed, one after another along each edge: a box again.
+TEST(Model, chains_of_collinear_vertices_along_merged_edges_are_all_removed) {
+  constexpr std::uint32_t n = 40;
+  CandidateFaces c;
+  const auto at = [](std::uint32_t i, std::uint32_t y, std::uint32_t z) { return 4 * i + 2 * y + z; };
+  for (std::uint32_t i = 0; i <= n; ++i)
+    for (std::uint32_t y = 0; y < 2; ++y)
+      for (std::uint32_t z = 0; z < 2; ++z) c.vertices.push_back({0.5 * i, 6.0 * y, 3.0 * z});
+  const auto add = [&](FaceKind kind, std::uint32_t plane, std::vector<std::uint32_t> loop) {
+    CandidateFace f;
+    f.kind = kind;
+    f.plane_id = plane;
+    f.vertices = std::move(loop);
+    c.faces.push_back(std::move(f));
+  };
+  for (std::uint32_t i = 0; i < n; ++i) {
+    add(FaceKind::roof, 0, {at(i, 0, 1), at(i + 1, 0, 1), at(i + 1, 1, 1), at(i, 1, 1)});
+    add(FaceKind::floor, 1, {at(i, 0, 0), at(i, 1, 0), at(i + 1, 1, 0), at(i + 1, 0, 0)});
+    add(FaceKind::wall, 2, {at(i, 0, 0), at(i + 1, 0, 0), at(i + 1, 0, 1), at(i, 0, 1)});
+    add(FaceKind::wall, 3, {at(i, 1, 0), at(i, 1, 1), at(i + 1, 1, 1), at(i + 1, 1, 0)});
+  }
+  add(FaceKind::wall, 4, {at(0, 0, 0), at(0, 0, 1), at(0, 1, 1), at(0, 1, 0)});
+  add(FaceKind::wall, 5, {at(n, 0, 0), at(n, 1, 0), at(n, 1, 1), at(n, 0, 1)});
+  const PolygonMesh mesh = assemble_model(c, std::vector<bool>(c.faces.size(), true), AssembleParams{});
+  EXPECT_EQ(mesh.faces.size(), 6u);
+  EXPECT_EQ(mesh.vertices.size(), 8u);
+  for (const auto& f : mesh.faces) EXPECT_EQ(f.size(), 4u);
+  const MeshCheck check = check_mesh(mesh);
+  EXPECT_TRUE(check.valid());
+  EXPECT_NEAR(check.signed_volume, 20.0 * 6.0 * 3.0, 1e-9);
+}
+
 }  // namespace
 }  // namespace city3d
 

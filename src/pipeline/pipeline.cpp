@@ -570,6 +570,37 @@ BuildingModel lod2_model(const BuildingInput& input, const Lod2Hypothesis& hypot
   return model;
 }
 
+// Whether two hypotheses give the same model under the same selection parameters: the same
+// candidate faces (vertices, faces) and the same selection problem, exactly. explain_more's variants
+// often rebuild the rung's own hypothesis (smaller planes that find no new plane, a wide outline
+// that closes no gap): their selections would only repeat ones already made.
+bool same_hypothesis(const Lod2Hypothesis& a, const Lod2Hypothesis& b) {
+  if (a.parts.size() != b.parts.size() || a.part_numbers != b.part_numbers) return false;
+  const auto same_point = [](const Point3& p, const Point3& q) { return p.x == q.x && p.y == q.y && p.z == q.z; };
+  const auto same_face = [](const CandidateFace& f, const CandidateFace& g) {
+    return f.kind == g.kind && f.source == g.source && f.plane_id == g.plane_id && f.cell_or_edge == g.cell_or_edge &&
+           f.vertices == g.vertices && f.area == g.area;
+  };
+  const auto same_edge = [](const SelectionProblem::Edge& e, const SelectionProblem::Edge& d) {
+    return e.faces == d.faces && e.sharp_pairs == d.sharp_pairs;
+  };
+  for (std::size_t k = 0; k < a.parts.size(); ++k) {
+    const CandidateFaces &x = a.parts[k], &y = b.parts[k];
+    if (!std::equal(x.vertices.begin(), x.vertices.end(), y.vertices.begin(), y.vertices.end(), same_point) ||
+        !std::equal(x.faces.begin(), x.faces.end(), y.faces.begin(), y.faces.end(), same_face))
+      return false;
+    const SelectionProblem &p = x.problem, &q = y.problem;
+    if (p.face_count != q.face_count || p.support != q.support || p.centroid_z != q.centroid_z ||
+        p.is_roof != q.is_roof || p.point_count != q.point_count || p.z_min != q.z_min || p.z_max != q.z_max ||
+        !std::equal(p.edges.begin(), p.edges.end(), q.edges.begin(), q.edges.end(), same_edge) ||
+        p.vertical_overlaps != q.vertical_overlaps || p.exactly_one != q.exactly_one ||
+        p.face_prior != q.face_prior || p.forced_on != q.forced_on || p.forced_off != q.forced_off ||
+        p.start != q.start)
+      return false;
+  }
+  return true;
+}
+
 // A rung's model as the writers will write it (rounded to the output grid), passing every val3dity
 // rule: a model that does not is repaired (spikes cut, warped faces split), or this throws and the
 // ladder moves on: an invalid model is never written.
@@ -697,6 +728,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
     return text;
   };
 
+  std::vector<Lod2Hypothesis> tried;  // the variant hypotheses selected over (the rung's own is `hypothesis`)
   const std::size_t before = best.far;
   std::string kept;
   std::string over_limit;  // variant hypotheses not selected: more than kMaxRebuildFaces candidate faces
@@ -722,6 +754,12 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
       }
       if (candidate_faces(*built) > kMaxRebuildFaces) {
         over_limit += (over_limit.empty() ? "" : ", ") + name(h, {}) + ": " + std::to_string(candidate_faces(*built));
+        continue;
+      }
+      // A hypothesis already selected over gives the same models again: none could be kept.
+      if (same_hypothesis(*built, hypothesis) ||
+          std::any_of(tried.begin(), tried.end(), [&](const Lod2Hypothesis& t) { return same_hypothesis(*built, t); })) {
+        log_debug("explain: building " + input.id + ": " + name(h, {}) + ": the same hypothesis as one tried");
         continue;
       }
     }
@@ -753,6 +791,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
         log_debug("explain: building " + input.id + ": " + name(h, v) + ": " + e.what());
       }
     }
+    if (built) tried.push_back(std::move(*built));
   }
   if (!kept.empty()) {
     r = std::move(kept_report);
