@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <ctime>
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <sstream>
 
@@ -20,6 +21,7 @@
 #include "city3d/log.hpp"
 #include "city3d/mesh_check.hpp"
 #include "city3d/model_io.hpp"
+#include "pipeline/left_out.hpp"
 
 namespace city3d {
 namespace fs = std::filesystem;
@@ -385,7 +387,7 @@ struct Lod2Hypothesis {
 // stage fails for the largest part; a further part that fails is left out and said.
 Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionParams& params,
                                bool footprint_walls_only, bool wide_outline, Clock::time_point deadline,
-                               BuildingReport& report) {
+                               BuildingReport& report, const std::vector<bool>* unexplained = nullptr) {
   const bool debug = !params.debug_dir.empty();
   const auto& points = input.points;
 
@@ -445,6 +447,15 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
     if (outline.size() > 1) outline = separate_parts(outline, inferred, roofs, points);
     if (outline.size() > 1) add_note(report, "outline: " + std::to_string(outline.size()) + " parts");
   }
+  if (unexplained) {
+    // explain_more's variant for left-out points (pipeline/left_out.hpp): their roof levels.
+    const std::size_t min_points =
+        static_cast<std::size_t>(std::max<int>(kMinPointsForSmallRoof, params.planes.min_points / 2));
+    const std::vector<PlanarSegment> levels =
+        detail::left_out_levels(points, segments, *unexplained, point_spacing(outline, points.size()), min_points);
+    roofs.insert(roofs.end(), levels.begin(), levels.end());
+    report.planes = roofs.size();
+  }
   RegularisationResult lines;
   if (!footprint_walls_only) {
     const std::vector<Point2> edges = detect_edges(heightmap, params.heightmap);
@@ -454,6 +465,13 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
     if (debug) write_polylines_obj(debug_path(params.debug_dir, input.id, "step_lines.obj"), steps, input.ground_z);
     polylines.insert(polylines.end(), steps.begin(), steps.end());
     lines = regularise(polylines, &outline, params.regularise);
+    if (unexplained) {
+      // Their cells, after the regularisation, which would merge a narrow part's lines into the wall
+      // beside it.
+      const std::vector<Segment2> left_out = detail::left_out_plane_lines(points, roofs, *unexplained, outline);
+      lines.segments.insert(lines.segments.end(), left_out.begin(), left_out.end());
+      lines.segments_after = lines.segments.size();
+    }
     if (debug) {
       write_heightmap_png(heightmap, debug_path(params.debug_dir, input.id, "heightmap.png"));
       write_edges_png(heightmap, edges, debug_path(params.debug_dir, input.id, "edges.png"));
@@ -638,13 +656,17 @@ struct Explained {
   double squares = 0.0;
 };
 
-Explained explained(const PolygonMesh& mesh, const std::vector<Point3>& points) {
+Explained explained(const std::vector<double>& distances) {
   Explained e;
-  for (const double d : point_distances(mesh, points)) {
+  for (const double d : distances) {
     e.far += d > kUnexplainedDistance;
     e.squares += d * d;
   }
   return e;
+}
+
+Explained explained(const PolygonMesh& mesh, const std::vector<Point3>& points) {
+  return explained(point_distances(mesh, points));
 }
 
 std::string percent(std::size_t part, std::size_t whole) {
@@ -669,7 +691,9 @@ constexpr std::size_t kMaxRebuildFaces = 3000;
 //    min_points is otherwise covered by the roof below it;
 //  - without a footprint, an outline closing wider gaps (kWideGapSpacings): a roof whose returns have
 //    gaps (dark or wet roofing, glass) is otherwise cut at the gap, and a changed outline changes
-//    the lines regularised against it; and both.
+//    the lines regularised against it; and both;
+//  - roofs for the points left out (pipeline/left_out.hpp): a horizontal level for each group of
+//    them in no plane, and a cell of its own for each plane they mostly make up.
 // Selections over each hypothesis (the first hypothesis is reused from the rung, so these cost a
 // selection each, not a rebuild):
 //  - without the face prior: the paper's hard constraint keeps the best face of every roof plane, so
@@ -688,8 +712,11 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
                   BuildingReport& r, BuildingModel& model) {
   const std::size_t n = input.points.size();
   if (n == 0) return {};
-  Explained best = explained(model.mesh, input.points);
+  const std::vector<double> distances = point_distances(model.mesh, input.points);
+  Explained best = explained(distances);
   if (!(static_cast<double>(best.far) > params.retry_unexplained_share * static_cast<double>(n))) return best;
+  std::vector<bool> unexplained(n);
+  for (std::size_t i = 0; i < n; ++i) unexplained[i] = distances[i] > kUnexplainedDistance;
   const auto candidate_faces = [](const Lod2Hypothesis& h) {
     std::size_t faces = 0;
     for (const CandidateFaces& part : h.parts) faces += part.faces.size();
@@ -705,13 +732,15 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
   struct HypothesisVariant {
     bool smaller_planes;
     bool wide_outline;
+    bool left_out;
   };
-  std::vector<HypothesisVariant> hypotheses{{false, false}};
-  if (small_points < params.planes.min_points) hypotheses.push_back({true, false});
+  std::vector<HypothesisVariant> hypotheses{{false, false, false}};
+  if (small_points < params.planes.min_points) hypotheses.push_back({true, false, false});
   if (!input.footprint_given) {
-    hypotheses.push_back({false, true});
-    if (small_points < params.planes.min_points) hypotheses.push_back({true, true});
+    hypotheses.push_back({false, true, false});
+    if (small_points < params.planes.min_points) hypotheses.push_back({true, true, false});
   }
+  hypotheses.push_back({false, false, true});
   struct SelectionVariant {
     bool without_prior;
     bool half_complexity;
@@ -721,6 +750,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
     std::string text;
     const auto add = [&text](const std::string& part) { text += (text.empty() ? "" : ", ") + part; };
     if (h.smaller_planes) add("roof planes of at least " + std::to_string(small_points) + " points");
+    if (h.left_out) add("roofs for the points left out");
     if (h.wide_outline)
       add("an outline closing gaps of " + std::to_string(static_cast<int>(kWideGapSpacings)) + " point spacings");
     if (v.without_prior) add("without the face prior");
@@ -739,7 +769,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
   bool stopped = false;
   for (const HypothesisVariant& h : hypotheses) {
     if ((stopped = stopped || out_of_time())) break;
-    const bool own = !h.smaller_planes && !h.wide_outline;
+    const bool own = !h.smaller_planes && !h.wide_outline && !h.left_out;
     ReconstructionParams hp = params;
     hp.debug_dir.clear();
     if (h.smaller_planes) hp.planes.min_points = small_points;
@@ -747,7 +777,8 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
     std::optional<Lod2Hypothesis> built;
     if (!own) {
       try {
-        built = lod2_hypothesis(input, hp, footprint_walls_only, h.wide_outline, deadline, after_hypothesis);
+        built = lod2_hypothesis(input, hp, footprint_walls_only, h.wide_outline, deadline, after_hypothesis,
+                                h.left_out ? &unexplained : nullptr);
       } catch (const Error& e) {
         log_debug("explain: building " + input.id + ": " + name(h, {}) + ": " + e.what());
         continue;

@@ -1,0 +1,121 @@
+// Roof levels and cells for the points a LoD2 model leaves out (see left_out.hpp).
+#include "pipeline/left_out.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <utility>
+
+namespace city3d::detail {
+
+std::vector<PlanarSegment> left_out_levels(const std::vector<Point3>& points, const std::vector<PlanarSegment>& segments,
+                                           const std::vector<bool>& unexplained, double spacing,
+                                           std::size_t min_points) {
+  std::vector<PlanarSegment> levels;
+  std::vector<bool> segmented(points.size());
+  for (const PlanarSegment& s : segments)
+    for (std::uint32_t i : s.points) segmented[i] = true;
+  std::vector<std::uint32_t> loose;  // ascending
+  for (std::uint32_t i = 0; i < points.size(); ++i)
+    if (unexplained[i] && !segmented[i]) loose.push_back(i);
+  const double radius = kLevelLinkSpacings * spacing;
+  if (loose.size() < min_points || !(radius > 0)) return levels;
+
+  // Union-find over the loose points; neighbours from a grid of radius-sized cells.
+  std::vector<std::uint32_t> parent(loose.size());
+  std::iota(parent.begin(), parent.end(), 0u);
+  const auto root = [&parent](std::uint32_t k) {
+    while (parent[k] != k) k = parent[k] = parent[parent[k]];
+    return k;
+  };
+  std::map<std::pair<long long, long long>, std::vector<std::uint32_t>> grid;
+  const auto cell = [radius](const Point3& p) {
+    return std::pair{static_cast<long long>(std::floor(p.x / radius)), static_cast<long long>(std::floor(p.y / radius))};
+  };
+  for (std::uint32_t k = 0; k < loose.size(); ++k) grid[cell(points[loose[k]])].push_back(k);
+  for (std::uint32_t k = 0; k < loose.size(); ++k) {
+    const Point3& p = points[loose[k]];
+    const auto [cx, cy] = cell(p);
+    for (long long dx = -1; dx <= 1; ++dx)
+      for (long long dy = -1; dy <= 1; ++dy) {
+        const auto it = grid.find({cx + dx, cy + dy});
+        if (it == grid.end()) continue;
+        for (std::uint32_t j : it->second) {
+          if (j <= k) continue;
+          const Point3& q = points[loose[j]];
+          if (std::hypot(p.x - q.x, p.y - q.y) <= radius && std::fabs(p.z - q.z) <= kLevelLinkHeight) {
+            const std::uint32_t a = root(k), b = root(j);
+            if (a != b) parent[std::max(a, b)] = std::min(a, b);
+          }
+        }
+      }
+  }
+  // Groups in the order of their smallest point (each root is its group's smallest member).
+  std::map<std::uint32_t, std::vector<std::uint32_t>> groups;
+  for (std::uint32_t k = 0; k < loose.size(); ++k) groups[root(k)].push_back(loose[k]);
+  for (auto& [first, members] : groups) {
+    if (members.size() < min_points) continue;
+    std::vector<double> z;
+    z.reserve(members.size());
+    for (std::uint32_t i : members) z.push_back(points[i].z);
+    std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
+    const double height = z[z.size() / 2];
+    PlanarSegment level;
+    level.plane = {0.0, 0.0, 1.0, -height};
+    level.kind = PlanarSegment::Kind::roof;
+    double squares = 0.0;
+    for (std::uint32_t i : members) squares += (points[i].z - height) * (points[i].z - height);
+    level.rms = std::sqrt(squares / static_cast<double>(members.size()));
+    level.points = std::move(members);
+    levels.push_back(std::move(level));
+  }
+  return levels;
+}
+
+std::vector<Segment2> left_out_plane_lines(const std::vector<Point3>& points, const std::vector<PlanarSegment>& roofs,
+                                           const std::vector<bool>& unexplained, const std::vector<Polygon2>& outline) {
+  std::vector<Point2> directions;  // unit, one per outline edge
+  const auto add_directions = [&directions](const Ring2& ring) {
+    for (std::size_t k = 0; k < ring.size(); ++k) {
+      const Point2 &a = ring[k], &b = ring[(k + 1) % ring.size()];
+      const double length = std::hypot(b.x - a.x, b.y - a.y);
+      if (length > 0) directions.push_back({(b.x - a.x) / length, (b.y - a.y) / length});
+    }
+  };
+  for (const Polygon2& polygon : outline) {
+    add_directions(polygon.outer);
+    for (const Ring2& hole : polygon.holes) add_directions(hole);
+  }
+  std::vector<Segment2> lines;
+  if (directions.empty()) return lines;
+  for (const PlanarSegment& roof : roofs) {
+    std::vector<Point2> left;
+    for (std::uint32_t i : roof.points)
+      if (unexplained[i]) left.push_back({points[i].x, points[i].y});
+    if (left.size() < 3 || 2 * left.size() < roof.points.size()) continue;
+    double best = std::numeric_limits<double>::infinity();
+    std::array<Point2, 4> corners{};
+    for (const Point2& u : directions) {
+      // Extents along u and along its left normal v = (-u.y, u.x).
+      double u0 = std::numeric_limits<double>::infinity(), u1 = -u0, v0 = u0, v1 = -u0;
+      for (const Point2& p : left) {
+        const double pu = p.x * u.x + p.y * u.y, pv = -p.x * u.y + p.y * u.x;
+        u0 = std::min(u0, pu), u1 = std::max(u1, pu), v0 = std::min(v0, pv), v1 = std::max(v1, pv);
+      }
+      const double area = (u1 - u0) * (v1 - v0);
+      if (std::min(u1 - u0, v1 - v0) < kMinLeftOutWidth || !(area < best)) continue;
+      best = area;
+      const auto at = [&u](double pu, double pv) { return Point2{pu * u.x - pv * u.y, pu * u.y + pv * u.x}; };
+      corners = {at(u0, v0), at(u1, v0), at(u1, v1), at(u0, v1)};
+    }
+    if (!std::isfinite(best)) continue;
+    for (std::size_t k = 0; k < 4; ++k) lines.push_back({corners[k], corners[(k + 1) % 4]});
+  }
+  return lines;
+}
+
+}  // namespace city3d::detail

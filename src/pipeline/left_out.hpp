@@ -1,0 +1,47 @@
+// explain_more's variant for points a LoD2 model leaves out (issue 10's "a roof level per height
+// cluster", "smaller planes for small upper parts"). Given which points the rung's model leaves
+// farther than 1 m away, the rung is rebuilt with
+//  - a horizontal roof level for every group of such points that lie in no plane (an upper part
+//    whose few or scattered returns form no plane: a crown of returns above a shed, AHN3 large/09083),
+//    and
+//  - a cell of their own for the roof planes whose points are mostly left out, levels included: the
+//    rectangle around those points joins the arrangement's lines after the regularisation, which
+//    would merge a part narrower than its cluster distance into the wall beside it (a parapet along
+//    an eave, AHN3 large/19772).
+// The selection then decides, with the paper's energy, whether those parts are roof.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "city3d/planes.hpp"
+#include "city3d/regularise.hpp"
+#include "city3d/types.hpp"
+
+namespace city3d::detail {
+
+/// A group of left-out points links points closer than this many point spacings in plan (the step
+/// lines' search radius)...
+constexpr double kLevelLinkSpacings = 3.0;
+/// ...and less than this apart in height, metres (the step lines' min_step: a larger difference is a
+/// step between two levels).
+constexpr double kLevelLinkHeight = 0.5;
+/// Rectangles thinner than this are no area (a row of returns), metres.
+constexpr double kMinLeftOutWidth = 0.1;
+
+/// The horizontal roof levels of the left-out points (`unexplained[i]`) that are in no segment:
+/// points linked in plan (kLevelLinkSpacings x `spacing`) and height (kLevelLinkHeight) form a group;
+/// each group of at least `min_points` is a roof segment at the median height of its points.
+/// Ordered by the groups' smallest point index. Deterministic.
+std::vector<PlanarSegment> left_out_levels(const std::vector<Point3>& points, const std::vector<PlanarSegment>& segments,
+                                           const std::vector<bool>& unexplained, double spacing,
+                                           std::size_t min_points);
+
+/// The lines of a cell of its own for every roof plane of which at least half the points are
+/// left out: the four sides of the rectangle around those points, in the direction of an outline edge
+/// (parallel or orthogonal to the walls) for which it is smallest. Planes with fewer than 3 such
+/// points, or whose rectangle is thinner than kMinLeftOutWidth, get none.
+std::vector<Segment2> left_out_plane_lines(const std::vector<Point3>& points, const std::vector<PlanarSegment>& roofs,
+                                           const std::vector<bool>& unexplained, const std::vector<Polygon2>& outline);
+
+}  // namespace city3d::detail
