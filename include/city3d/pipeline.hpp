@@ -87,9 +87,10 @@ struct ReconstructionParams {
   /// footprint's edges (a 10,000-vertex circle took 25 s). Real footprints have far fewer.
   std::size_t max_footprint_vertices = 1000;
   /// A LoD2 model that leaves more than this share of the building's points unexplained (farther
-  /// than kUnexplainedDistance) is rebuilt with the variants of explain_more(): without the face
-  /// prior, with smaller roof planes, and both; the variant explaining the most points is kept.
-  /// 1 (or more): never rebuilt.
+  /// than kUnexplainedDistance) is rebuilt with the variants of explain_more(): smaller roof planes,
+  /// a wider inferred outline, roofs for the points left out, and selections without the face prior
+  /// and with half the complexity weight; a variant that leaves fewer points unexplained and fits all
+  /// points better is kept. 1 (or more): never rebuilt.
   double retry_unexplained_share = 0.05;
   /// Opt-in wall-clock safety net for one building's LoD2 attempts, seconds; 0 (the default): none.
   /// The full rung gets 60% of it, the footprint-walls rung the rest, and each selection what is

@@ -256,7 +256,8 @@ const std::vector<OptionSpec>& option_table() {
          o.batch.reconstruction.max_footprint_vertices = static_cast<std::size_t>(parse_int("--max-footprint-vertices", v, 3));
        }},
       {"--retry-share", nullptr, "F", "a LoD2 model leaving more than this share of the building's points farther "
-       "than 1 m from it is rebuilt with variants (smaller roof planes, a wider outline, without the face prior, "
+       "than 1 m from it is rebuilt with variants (smaller roof planes, a wider outline, roofs for the points left "
+       "out, without the face prior, "
        "half the complexity weight), and one that explains more points and fits them better is kept (the report "
        "says so); 1: never",
        [](const O& o) { return number_text(o.batch.reconstruction.retry_unexplained_share); },

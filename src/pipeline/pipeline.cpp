@@ -383,7 +383,9 @@ struct Lod2Hypothesis {
 // A LoD2 rung up to its face hypothesis: planes, walls, candidate faces (paper sections 3.1-3.3).
 // `footprint_walls_only` skips the inferred inner walls (the second rung). `wide_outline`: without a
 // footprint, the outline is inferred closing gaps of kWideGapSpacings point spacings instead of 1.5
-// (explain_more's variant for roofs whose returns have gaps). Throws Error naming the stage when a
+// (explain_more's variant for roofs whose returns have gaps). `unexplained` (explain_more's variant
+// for left-out points), when given, marks the points a model of this rung left farther than 1 m: they
+// get roof levels and cells of their own (pipeline/left_out.hpp). Throws Error naming the stage when a
 // stage fails for the largest part; a further part that fails is left out and said.
 Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionParams& params,
                                bool footprint_walls_only, bool wide_outline, Clock::time_point deadline,
