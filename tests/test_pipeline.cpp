@@ -330,10 +330,13 @@ TEST(LeftOut, points_in_no_plane_become_a_roof_level_per_group) {
     plane.points.push_back(static_cast<std::uint32_t>(points.size()));
     add(3.9 + 0.2 * (i % 6), 0.2 * (i / 6), 3.0, i % 2 == 0);  // beside group A
   }
-  // Group A: 15 points at z = 3.0 + 0.01 k (median 3.07) on a 0.2 m grid.
-  for (int k = 0; k < 15; ++k) add(5.0 + 0.2 * (k % 5), 0.2 * (k / 5), 3.0 + 0.01 * k, true);
-  // Group B: 12 points 2 m above group A, over the same area: another level.
-  for (int k = 0; k < 12; ++k) add(5.0 + 0.2 * (k % 4), 0.2 * (k / 4), 5.0 + 0.01 * k, true);
+  // Group A: 15 points at z = 3.0 + 0.01 k (median 3.07) on a 0.2 m grid. Group B: 12 points 2 m
+  // above it, over the same area: another level. Their points interleave (A 30, B 31, A 32, ...,
+  // B 53, then A 54-56), so A comes first by its smallest point but B's largest point is smaller.
+  for (int k = 0; k < 15; ++k) {
+    add(5.0 + 0.2 * (k % 5), 0.2 * (k / 5), 3.0 + 0.01 * k, true);
+    if (k < 12) add(5.0 + 0.2 * (k % 4), 0.2 * (k / 4), 5.0 + 0.01 * k, true);
+  }
   // 6 points far away in plan: too few for a level. 12 explained points: no level either.
   for (int k = 0; k < 6; ++k) add(20.0 + 0.2 * k, 0.0, 3.0, true);
   for (int k = 0; k < 12; ++k) add(10.0 + 0.2 * (k % 4), 0.2 * (k / 4), 3.0, false);
@@ -343,7 +346,9 @@ TEST(LeftOut, points_in_no_plane_become_a_roof_level_per_group) {
   EXPECT_EQ(levels[0].points.size(), 15u);
   EXPECT_EQ(levels[0].points.front(), 30u);
   EXPECT_EQ(levels[1].points.size(), 12u);
-  EXPECT_EQ(levels[1].points.front(), 45u);
+  EXPECT_EQ(levels[1].points.front(), 31u);
+  EXPECT_EQ(levels[0].points.back(), 56u);
+  EXPECT_EQ(levels[1].points.back(), 53u);
   for (const PlanarSegment& level : levels) {
     EXPECT_EQ(level.kind, PlanarSegment::Kind::roof);
     EXPECT_DOUBLE_EQ(level.plane.a, 0.0);
@@ -375,12 +380,13 @@ TEST(LeftOut, a_plane_mostly_left_out_gets_a_rectangle_parallel_to_the_outline) 
       points.push_back({p.x, p.y, 5.0});
       unexplained.push_back(j != 0);
     }
-  // A roof with 2 of its 5 points left out, and a row of left-out points (no width): no rectangle.
-  for (int i = 0; i < 5; ++i) {
-    const Point2 p = turn(5.0 + i, 5.0);
+  // A roof with 4 of its 10 points left out (an area: less than half), and a row of left-out points
+  // (no width): no rectangle.
+  for (int i = 0; i < 10; ++i) {
+    const Point2 p = turn(5.0 + i % 5, 5.0 + i / 5);
     roof.points.push_back(static_cast<std::uint32_t>(points.size()));
     points.push_back({p.x, p.y, 4.0});
-    unexplained.push_back(i < 2);
+    unexplained.push_back(i == 0 || i == 1 || i == 5 || i == 6);
   }
   for (int i = 0; i < 5; ++i) {
     const Point2 p = turn(5.0 + i, 8.0);

@@ -7,7 +7,8 @@
 //  - a cell of their own for the roof planes whose points are mostly left out, levels included: the
 //    rectangle around those points joins the arrangement's lines after the regularisation, which
 //    would merge a part narrower than its cluster distance into the wall beside it (a parapet along
-//    an eave, AHN3 large/19772).
+//    an eave, AHN3 large/19772). Only on the full LoD2 rung: the footprint-walls rung has no inner
+//    lines by design, so there the levels only compete for the footprint's cells.
 // The selection then decides, with the paper's energy, whether those parts are roof.
 #pragma once
 
@@ -20,18 +21,21 @@
 
 namespace city3d::detail {
 
-/// A group of left-out points links points closer than this many point spacings in plan (the step
-/// lines' search radius)...
+/// A group of left-out points links points within this many point spacings of each other in plan
+/// (the step lines' search radius)...
 constexpr double kLevelLinkSpacings = 3.0;
-/// ...and less than this apart in height, metres (the step lines' min_step: a larger difference is a
-/// step between two levels).
+/// ...and within this of each other in height, metres (the step lines' min_step: a larger difference
+/// is a step between two levels). Links chain: a group can span more height than this (a crown of
+/// scattered returns), and is one level all the same; the selection and the rebuilds' keep rule
+/// decide whether it explains the points.
 constexpr double kLevelLinkHeight = 0.5;
 /// Rectangles thinner than this are no area (a row of returns), metres.
 constexpr double kMinLeftOutWidth = 0.1;
 
 /// The horizontal roof levels of the left-out points (`unexplained[i]`) that are in no segment:
 /// points linked in plan (kLevelLinkSpacings x `spacing`) and height (kLevelLinkHeight) form a group;
-/// each group of at least `min_points` is a roof segment at the median height of its points.
+/// each group of at least `min_points` is a roof segment at the median height of its points (the
+/// upper median of an even count).
 /// Ordered by the groups' smallest point index. Deterministic.
 std::vector<PlanarSegment> left_out_levels(const std::vector<Point3>& points, const std::vector<PlanarSegment>& segments,
                                            const std::vector<bool>& unexplained, double spacing,

@@ -385,7 +385,7 @@ struct Lod2Hypothesis {
 // footprint, the outline is inferred closing gaps of kWideGapSpacings point spacings instead of 1.5
 // (explain_more's variant for roofs whose returns have gaps). `unexplained` (explain_more's variant
 // for left-out points), when given, marks the points a model of this rung left farther than 1 m: they
-// get roof levels and cells of their own (pipeline/left_out.hpp). Throws Error naming the stage when a
+// get roof levels, and on the full rung cells of their own (pipeline/left_out.hpp). Throws Error naming the stage when a
 // stage fails for the largest part; a further part that fails is left out and said.
 Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionParams& params,
                                bool footprint_walls_only, bool wide_outline, Clock::time_point deadline,
