@@ -1,11 +1,14 @@
 #!/usr/bin/env python3
-"""Issues 4 and 10 acceptance benchmark: reconstruct every building of ../shared/data/city3d_dev (200
+"""Issues 4, 10 and 23 acceptance benchmark: reconstruct every building of ../shared/data/city3d_dev (200
 clouds, with City3D's own model beside each), city3d_dev_large (1,120 clouds, the same pairing) and
 city3d_repo/building_instances (100 clouds), then compare with the same evaluation code
 (`city3d evaluate`): share of models, validity, LoD2 share, median and mean RMSE and face counts against
 City3D's models, per dataset, time per building, and the points left unexplained: a cloud "fails" when
 more than 5% of its points are farther than 1 m from our model while City3D's model has fewer than 5%
-(issue 10); the failing clouds are listed.
+(issue 10); the failing clouds are listed. The other way (issue 23): the models, ours and City3D's, with
+surface no point supports (`city3d evaluate`'s unsupported_area: more than 1 m above the highest point
+within 1.5 m in plan), more than 1 m2 and more than 10 m2 of it, per dataset; the clouds over 10 m2 are
+listed.
 
 Usage: bench/dev_set.py [--city3d build/city3d] [--jobs 2] [--runs 1] [--out DIR] [--city3d-floors]
        [--sets dev,dev_large,instances] [-- extra city3d options]
@@ -43,7 +46,7 @@ FAR_SHARE = 0.05  # a model leaving more than this share of the points unexplain
 
 
 def evaluate(city3d, model, points, residuals):
-    """RMSE, faces and the share of points farther than FAR from the model."""
+    """RMSE, faces, the share of points farther than FAR from the model, and its unsupported area (m2)."""
     text = subprocess.run([city3d, "evaluate", model, points, "--residuals", residuals], check=True,
                           capture_output=True, text=True).stdout
     fields = dict(line.split(": ", 1) for line in text.splitlines() if ": " in line)
@@ -53,12 +56,16 @@ def evaluate(city3d, model, points, residuals):
             n += 1
             far += float(row["distance"]) > FAR
     os.remove(residuals)
-    return float(fields["rmse"]), int(fields["faces"]), far / n if n else 0.0
+    return (float(fields["rmse"]), int(fields["faces"]), far / n if n else 0.0,
+            float(fields["unsupported_area"].split()[0]))
 
 
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--city3d", default=os.path.join(HERE, "..", "build", "city3d"))
+    ap.add_argument("--evaluator", default=None,
+                    help="the city3d that evaluates the models (default --city3d): another build's models measured "
+                         "with this build's evaluate")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--runs", type=int, default=1)
     ap.add_argument("--out", default=None)
@@ -67,6 +74,7 @@ def main():
     ap.add_argument("extra", nargs="*", help="more city3d options, after --")
     args = ap.parse_args()
     out = args.out or tempfile.mkdtemp(prefix="city3d_dev_")
+    evaluator = args.evaluator or args.city3d
 
     wanted = args.sets.split(",")
     sets = {}
@@ -98,14 +106,16 @@ def main():
             r = report[bid]
             ref = os.path.splitext(cloud)[0] + ".obj"
             residuals = os.path.join(out, name.replace(" ", "_"), bid + ".residuals.csv")
-            ref_rmse, ref_faces, ref_far = (evaluate(args.city3d, ref, cloud, residuals) if os.path.exists(ref)
-                                            else (None, None, None))
+            ref_rmse, ref_faces, ref_far, ref_unsupported = (evaluate(evaluator, ref, cloud, residuals)
+                                                             if os.path.exists(ref) else (None, None, None, None))
             model = os.path.join(out, name.replace(" ", "_"), "models", bid + ".obj")
-            far = evaluate(args.city3d, model, cloud, residuals)[2] if os.path.exists(model) else None
+            far, unsupported = (evaluate(evaluator, model, cloud, residuals)[2:] if os.path.exists(model)
+                                else (None, None))
             rows.append({
                 "set": name, "id": bid, "status": r["status"], "level": r["level"], "valid": r["valid"] == "1",
                 "rmse": float(r["rmse"]) if r["rmse"] else None, "faces": int(r["faces"]),
                 "ref_rmse": ref_rmse, "ref_faces": ref_faces, "far": far, "ref_far": ref_far,
+                "unsupported": unsupported, "ref_unsupported": ref_unsupported,
                 "seconds": statistics.median(seconds[bid]), "reason": r["reason"]})
 
     with open(os.path.join(out, "dev_set.csv"), "w", newline="") as f:
@@ -136,6 +146,16 @@ def main():
         line += f"{statistics.median(secs):.3f} | {max(secs):.2f} |"
         print(line)
 
+    def support_summary(label, rs):
+        """Model to points (issue 23): models with unsupported surface, ours against City3D's."""
+        ours = [r["unsupported"] for r in rs if r["unsupported"] is not None]
+        refs = [r["ref_unsupported"] for r in rs if r["ref_unsupported"] is not None]
+        line = (f"| {label} | {len(ours)} | {sum(u > 1 for u in ours)} | {sum(u > 10 for u in ours)} | "
+                f"{sum(ours):.1f} | ")
+        line += (f"{len(refs)} | {sum(u > 1 for u in refs)} | {sum(u > 10 for u in refs)} | {sum(refs):.1f} |"
+                 if refs else "- | - | - | - |")
+        print(line)
+
     print("| set | buildings | models | valid | full LoD2 | median RMSE (m) | mean RMSE (m) | City3D median RMSE (m) | "
           "City3D mean RMSE (m) | median faces | City3D median faces | > 5% of points > 1 m | of them where City3D "
           "< 5% | median s | max s |")
@@ -147,6 +167,18 @@ def main():
         if len({r["set"] for r in both}) == 2:
             summary(f"{dataset}, dev + dev_large", both)
     summary(f"all {len(rows)}", rows)
+    print()
+    print("| set | our models | > 1 m2 unsupported | > 10 m2 | total m2 | City3D models | > 1 m2 | > 10 m2 | total m2 |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for name in sets:
+        support_summary(name, [r for r in rows if r["set"] == name])
+    support_summary(f"all {len(rows)}", rows)
+    over = [r for r in rows if r["unsupported"] is not None and r["unsupported"] > 10]
+    if over:
+        print("\nour models with more than 10 m2 of unsupported surface: " +
+              ", ".join(f"{r['set']} {r['id']} {r['unsupported']:.1f} m2 (City3D "
+                        f"{r['ref_unsupported'] if r['ref_unsupported'] is not None else float('nan'):.1f})"
+                        for r in sorted(over, key=lambda r: -r["unsupported"])))
     fails = [r for r in rows if r["far"] is not None and r["far"] > FAR_SHARE and r["ref_far"] is not None
              and r["ref_far"] < FAR_SHARE]
     if fails:

@@ -230,6 +230,49 @@ TEST(Executable, evaluate_prints_rmse_and_validity_and_writes_every_points_resid
   fs::remove(csv);
 }
 
+// Issue 23: a hand-made house whose points lie on a flat roof at 5 m, modelled with a blade (its east half
+// a plane rising to 15 m): evaluate measures the surface no point supports, and none for the flat model.
+TEST(Executable, evaluate_measures_a_blade_that_no_point_supports) {
+  const fs::path dir = fs::temp_directory_path() / "city3d_cli_blade";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  {
+    std::ofstream ply(dir / "points.ply");
+    ply << "ply\nformat ascii 1.0\nelement vertex 441\nproperty double x\nproperty double y\nproperty double z\n"
+           "end_header\n";
+    for (int i = 0; i <= 20; ++i)
+      for (int j = 0; j <= 20; ++j) ply << 0.5 * i + 85000 << ' ' << 0.5 * j + 447000 << " 5\n";
+    const auto write_obj = [&](const fs::path& path, const std::string& vertices, const std::string& faces) {
+      std::ofstream obj(path);
+      std::istringstream v(vertices);
+      double x, y, z;
+      while (v >> x >> y >> z) obj << "v " << x + 85000 << ' ' << y + 447000 << ' ' << z << "\n";
+      obj << faces;
+    };
+    write_obj(dir / "blade.obj", "0 0 0 10 0 0 10 10 0 0 10 0 0 0 5 5 0 5 10 0 15 10 10 15 5 10 5 0 10 5",
+              "f 1 4 3 2\nf 5 6 9 10\nf 6 7 8 9\nf 1 2 7 6 5\nf 2 3 8 7\nf 3 4 10 9 8\nf 4 1 5 10\n");
+    write_obj(dir / "flat.obj", "0 0 0 10 0 0 10 10 0 0 10 0 0 0 5 10 0 5 10 10 5 0 10 5",
+              "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n");
+  }
+  const auto field = [](const std::string& output, const std::string& name) {
+    const std::size_t at = output.find("\n" + name + ": ");
+    return at == std::string::npos ? std::nan("") : std::stod(output.substr(at + name.size() + 3));
+  };
+  const Result blade = run("evaluate " + (dir / "blade.obj").string() + " " + (dir / "points.ply").string());
+  ASSERT_EQ(blade.exit_code, 0) << blade.output;
+  EXPECT_TRUE(contains(blade.output, "valid: yes")) << blade.output;
+  // The blade above 6 m, the two side walls above 6 m and the east wall above 6 m (see test_evaluation).
+  EXPECT_NEAR(field(blade.output, "unsupported_area"), 231.1, 7.0) << blade.output;
+  EXPECT_GT(field(blade.output, "height_excess"), 9.5) << blade.output;
+  EXPECT_NEAR(field(blade.output, "highest_vertex_above_points"), 10.0, 1e-9) << blade.output;
+  const Result flat = run("evaluate " + (dir / "flat.obj").string() + " " + (dir / "points.ply").string());
+  ASSERT_EQ(flat.exit_code, 0) << flat.output;
+  EXPECT_EQ(field(flat.output, "unsupported_area"), 0.0) << flat.output;
+  EXPECT_EQ(field(flat.output, "height_excess"), 0.0) << flat.output;
+  EXPECT_EQ(field(flat.output, "unpointed_roof_area"), 0.0) << flat.output;
+  fs::remove_all(dir);
+}
+
 TEST(Executable, residuals_option_belongs_to_evaluate) {
   const Result r = run("info x.las --residuals out.csv");
   EXPECT_EQ(r.exit_code, 2);

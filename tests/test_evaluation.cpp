@@ -10,6 +10,7 @@
 #include "city3d/error.hpp"
 #include "city3d/evaluation.hpp"
 #include "city3d/model_io.hpp"
+#include "city3d/surface_support.hpp"
 
 namespace city3d {
 namespace {
@@ -236,3 +237,150 @@ TEST(Evaluation, collinear_runs_are_not_taken_for_a_self_intersection) {
   EXPECT_FALSE(v.self_intersects) << v.problem;
   EXPECT_TRUE(v.valid()) << v.problem;
 }
+
+// ---------------------------------------------------------------------------------------------
+// Surface support (issue 23): the model measured against its points the other way.
+namespace city3d {
+namespace {
+
+TEST(SurfaceSupport, local_top_is_the_highest_point_within_the_radius_as_brute_force_finds_it) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> xy(-20.0, 20.0), z(0.0, 15.0);
+  std::vector<Point3> points(3000);
+  for (auto& p : points) p = {xy(rng), xy(rng), z(rng)};
+  const LocalTop top(points, 1.5);
+  std::uniform_real_distribution<double> q(-25.0, 25.0);
+  for (int k = 0; k < 2000; ++k) {
+    const double x = q(rng), y = q(rng);
+    double best = -1.0;
+    for (const auto& p : points)
+      if ((p.x - x) * (p.x - x) + (p.y - y) * (p.y - y) <= 1.5 * 1.5) best = std::max(best, p.z);
+    const double got = top.at(x, y);
+    if (best < 0.0)
+      EXPECT_TRUE(std::isnan(got)) << x << " " << y;
+    else
+      EXPECT_EQ(got, best) << x << " " << y;
+  }
+}
+
+TEST(SurfaceSupport, local_top_counts_a_point_exactly_on_the_radius_and_none_beyond) {
+  const LocalTop top({{0.0, 0.0, 3.0}, {10.0, 0.0, 7.0}}, 1.5);
+  EXPECT_EQ(top.at(1.5, 0.0), 3.0);
+  EXPECT_TRUE(std::isnan(top.at(1.5001, 0.0)));
+  EXPECT_EQ(top.at(8.5, 0.0), 7.0);
+  EXPECT_TRUE(std::isnan(LocalTop({}, 1.5).at(0.0, 0.0)));
+}
+
+TEST(SurfaceSupport, samples_of_a_nonconvex_face_cover_its_area_inside_it_and_no_farther_apart_than_the_spacing) {
+  // An L in the tilted plane z = 0.5 x: 6 x 6 minus its 3 x 3 upper right quarter.
+  std::vector<Point3> l;
+  for (const auto& [x, y] : std::vector<std::pair<double, double>>{{0, 0}, {6, 0}, {6, 3}, {3, 3}, {3, 6}, {0, 6}})
+    l.push_back({x, y, 0.5 * x});
+  std::vector<Point3> samples;
+  double area = 0.0;
+  sample_polygon(l, 0.25, [&](const Point3& p, double a) {
+    samples.push_back(p);
+    area += a;
+  });
+  const double expected = 27.0 * std::sqrt(1.25);  // plan area / cos(slope)
+  EXPECT_NEAR(area, expected, 1e-9);
+  for (const auto& p : samples) {
+    EXPECT_NEAR(p.z, 0.5 * p.x, 1e-9);
+    EXPECT_FALSE(p.x > 3.0 && p.y > 3.0) << p.x << " " << p.y;  // not in the notch
+  }
+  // Every sample has a neighbour within the spacing, and there are about one per spacing squared.
+  for (std::size_t i = 0; i < samples.size(); i += 37) {
+    double nearest = 1e9;
+    for (std::size_t j = 0; j < samples.size(); ++j)
+      if (j != i)
+        nearest = std::min(nearest, std::hypot(samples[i].x - samples[j].x, samples[i].y - samples[j].y,
+                                               samples[i].z - samples[j].z));
+    EXPECT_LE(nearest, 0.25);
+  }
+  EXPECT_GT(static_cast<double>(samples.size()), 0.9 * expected / (0.25 * 0.25));
+  EXPECT_LT(static_cast<double>(samples.size()), 1.1 * expected / (0.25 * 0.25));
+}
+
+// A 10 x 10 m house whose points all lie on a flat roof at 5 m (a 0.5 m grid), modelled either as the flat
+// box or with its east half under a blade: a plane rising from 5 m at x = 5 to 15 m at x = 10.
+struct BladeHouse {
+  std::vector<Point3> points;
+  PolygonMesh flat = box(10, 10, 5);
+  PolygonMesh blade;
+  BladeHouse() {
+    for (int i = 0; i <= 20; ++i)
+      for (int j = 0; j <= 20; ++j) points.push_back({0.5 * i, 0.5 * j, 5.0});
+    blade.vertices = {{0, 0, 0}, {10, 0, 0}, {10, 10, 0}, {0, 10, 0}, {0, 0, 5},
+                      {5, 0, 5}, {10, 0, 15}, {10, 10, 15}, {5, 10, 5}, {0, 10, 5}};
+    blade.faces = {{0, 3, 2, 1},     // ground
+                   {4, 5, 8, 9},     // flat roof, x <= 5
+                   {5, 6, 7, 8},     // the blade
+                   {0, 1, 6, 5, 4},  // south wall, up to the blade
+                   {1, 2, 7, 6},     // east wall, 15 m high
+                   {2, 3, 9, 8, 7},  // north wall
+                   {3, 0, 4, 9}};    // west wall
+  }
+};
+
+TEST(SurfaceSupport, a_blade_above_the_roof_is_measured_and_the_flat_roof_is_not) {
+  const BladeHouse house;
+  const LocalTop top(house.points, 1.5);
+  ASSERT_TRUE(check_validity(house.blade).valid()) << check_validity(house.blade).problem;
+  const SurfaceSupport flat = surface_support(house.flat, surface_types_unoriented(house.flat), top);
+  EXPECT_EQ(flat.unsupported_area, 0.0);
+  EXPECT_LE(flat.height_excess, 1e-9);
+  EXPECT_EQ(flat.unpointed_roof_area, 0.0);
+  const SurfaceSupport blade = surface_support(house.blade, surface_types_unoriented(house.blade), top);
+  // Above 6 m (the local top, 5 m, plus 1 m): the blade beyond x = 5.5 (4.5 m x sqrt(5) x 10 m), the
+  // two side walls' triangles above 6 m (2 x 20.25 m2) and the east wall above 6 m (9 m x 10 m).
+  const double expected = 4.5 * std::sqrt(5.0) * 10.0 + 2 * 20.25 + 90.0;
+  EXPECT_NEAR(blade.unsupported_area, expected, 0.03 * expected);
+  EXPECT_GT(blade.height_excess, 9.5);
+  EXPECT_LE(blade.height_excess, 10.0);
+  EXPECT_EQ(blade.face_unsupported_area[0], 0.0);  // the ground is not sampled
+  EXPECT_EQ(blade.face_unsupported_area[1], 0.0);  // the flat roof is supported
+  EXPECT_NEAR(blade.face_unsupported_area[2], 4.5 * std::sqrt(5.0) * 10.0, 1.5);
+  // The points beneath it: those within 1.5 m in plan of its unsupported part (x > 5.5 - 1.5).
+  const std::vector<bool> beneath = points_beneath_unsupported(blade, house.points);
+  for (std::size_t i = 0; i < house.points.size(); ++i)
+    EXPECT_EQ(beneath[i], house.points[i].x > 4.1) << house.points[i].x;
+}
+
+TEST(SurfaceSupport, a_sliver_thinner_than_the_spacing_is_still_sampled_along_its_length) {
+  // 20 m long, 5 cm wide, vertical: a sample every 0.25 m along it.
+  const std::vector<Point3> sliver = {{0, 0, 0}, {20, 0, 0}, {20, 0, 0.05}, {0, 0, 0.05}};
+  std::size_t count = 0;
+  double area = 0.0, lo = 1e9, hi = -1e9;
+  sample_polygon(sliver, 0.25, [&](const Point3& p, double a) {
+    ++count;
+    area += a;
+    lo = std::min(lo, p.x), hi = std::max(hi, p.x);
+  });
+  EXPECT_NEAR(area, 1.0, 1e-12);
+  EXPECT_EQ(count, 80u);
+  EXPECT_LT(lo, 0.25);
+  EXPECT_GT(hi, 19.75);
+}
+
+TEST(SurfaceSupport, roof_with_no_point_near_it_is_unpointed_not_unsupported) {
+  // Points only over the west 3 m of the flat box: the roof beyond 4.5 m has no local top.
+  std::vector<Point3> points;
+  for (int i = 0; i <= 6; ++i)
+    for (int j = 0; j <= 20; ++j) points.push_back({0.5 * i, 0.5 * j, 5.0});
+  const PolygonMesh house = box(10, 10, 5);
+  const SurfaceSupport s = surface_support(house, surface_types_unoriented(house), LocalTop(points, 1.5));
+  EXPECT_EQ(s.unsupported_area, 0.0);
+  EXPECT_NEAR(s.unpointed_roof_area, 10.0 * (10.0 - 4.5), 1.0);
+}
+
+TEST(SurfaceSupport, ground_is_found_whatever_the_orientation_of_the_faces) {
+  PolygonMesh m = box(4, 4, 3);
+  for (auto& f : m.faces) std::reverse(f.begin(), f.end());  // inward, as some tools write them
+  const std::vector<SurfaceType> types = surface_types_unoriented(m);
+  EXPECT_EQ(types[0], SurfaceType::ground);
+  EXPECT_EQ(types[1], SurfaceType::roof);
+  for (std::size_t f = 2; f < 6; ++f) EXPECT_EQ(types[f], SurfaceType::wall);
+}
+
+}  // namespace
+}  // namespace city3d

@@ -162,6 +162,8 @@ TEST_F(Outputs, geopackage_opens_with_ogrinfo_and_has_one_feature_per_footprint)
   EXPECT_NE(info.output.find("b3_rmse_lod22: Real"), std::string::npos) << info.output;
   EXPECT_NE(info.output.find("unexplained_points: Integer64"), std::string::npos) << info.output;
   EXPECT_NE(info.output.find("unexplained_share: Real"), std::string::npos) << info.output;
+  EXPECT_NE(info.output.find("unsupported_area: Real"), std::string::npos) << info.output;
+  EXPECT_NE(info.output.find("height_excess: Real"), std::string::npos) << info.output;
   const Result empty = run_shell("ogrinfo -ro " + gpkg.string() + " buildings -where \"id = 'empty-one'\"");
   EXPECT_NE(empty.output.find("status (String) = skipped"), std::string::npos) << empty.output;
   const Result big = run_shell("ogrinfo -ro " + gpkg.string() + " buildings -where \"bag_pnd = 9007199254740993\"");

@@ -184,6 +184,44 @@ TEST(Selection, exactly_one_group_selects_one_roof_of_its_cell_with_both_backend
   EXPECT_TRUE(satisfies_constraints(p, faces(3, {}), no_layer));
 }
 
+// Issue 23's blade: two roofs over one cell with the same support, the higher one (a steep plane
+// extended over the cell, most of it far above every point) preferred by E_r alone. E_u, the surface no
+// point supports, turns the choice, and its cost is what selection_energy adds.
+TEST(Selection, unsupported_surface_term_keeps_a_blade_out_of_the_selection) {
+  SelectionProblem p;
+  p.face_count = 2;
+  p.support = {5, 5};
+  p.centroid_z = {2.0, 9.0};  // the blade's centroid is far above the roof
+  p.is_roof = {true, true};
+  p.point_count = 50;
+  p.z_min = 0.0;
+  p.z_max = 4.0;
+  p.vertical_overlaps = {{0, 1}};
+  p.exactly_one = {{0, 1}};
+  SelectionParams without = paper_weights();
+  without.lambda_unsupported = 0.0;
+  for (const std::string solver : {"glpk", "cbc"}) {
+    SCOPED_TRACE(solver);
+    without.solver = solver;
+    p.unsupported.clear();
+    const auto blind = solve_selection(p, without);  // no E_u at all: the roof preference picks the blade
+    ASSERT_EQ(blind.status, SelectionStatus::optimal) << blind.message;
+    EXPECT_EQ(blind.selected, faces(2, {1}));
+    p.unsupported = {0.0, 12.0};
+    p.plan_area = 40.0;
+    SelectionParams with = paper_weights();
+    with.solver = solver;
+    const auto seeing = solve_selection(p, with);
+    ASSERT_EQ(seeing.status, SelectionStatus::optimal) << seeing.message;
+    EXPECT_EQ(seeing.selected, faces(2, {0}));
+    // E_u = 12 / 40 of the blade, at lambda_u.
+    EXPECT_NEAR(selection_energy(p, faces(2, {1}), with) - selection_energy(p, faces(2, {1}), without),
+                with.lambda_unsupported * 12.0 / 40.0, 1e-12);
+  }
+  p.plan_area = 0.0;  // E_u without a plan area is a malformed problem
+  EXPECT_THROW(solve_selection(p, paper_weights()), ReconstructionError);
+}
+
 TEST(Selection, exactly_one_group_with_every_face_off_is_infeasible_without_a_solver) {
   SelectionProblem p = cut_box();
   p.exactly_one = {{T, M}};
@@ -744,6 +782,7 @@ TEST(Selection, defaults_are_the_papers_weights) {
   EXPECT_EQ(params.lambda_data, 0.34);
   EXPECT_EQ(params.lambda_complexity, 0.3);
   EXPECT_EQ(params.lambda_roof, 0.04);
+  EXPECT_EQ(params.lambda_unsupported, params.lambda_data);  // a m2 unsupported weighs a m2 of points left out
   EXPECT_EQ(params.solver, "auto");
   EXPECT_EQ(params.time_limit, 0.0);  // no wall-clock limit unless asked for
   EXPECT_EQ(params.node_limit, 1000);

@@ -44,4 +44,11 @@ void write_walls_obj(const std::string& path, const std::vector<VerticalPlane>& 
 /// The candidate faces as OBJ, one object per face named by kind and index.
 void write_candidates_obj(const std::string& path, const CandidateFaces& candidates);
 
+/// The selection over the candidate faces as CSV, one row per face in face order: its kind, roof plane,
+/// cell or edge, area, height range, support, the terms the energy gives it, whether the face prior or
+/// another rule fixed it, and whether it was selected (what to read when a model holds a face that no
+/// point asks for).
+void write_selection_csv(const std::string& path, const CandidateFaces& candidates, const std::vector<bool>& selected,
+                         const SelectionParams& energy);
+
 }  // namespace city3d

@@ -42,7 +42,15 @@
 //     plane qualifies, the plane(s) whose points come nearest), at most max_planes_per_cell of them
 //     (at most max_planes_per_large_cell when there are more than large_cell_count cells):
 //     the ones with most points inside the cell, then most points within the margin, then the lower
-//     plane index. Vertically overlapping roof faces are exactly the faces over the same cell.
+//     plane index (planes whose face over the cell would have more than max_unsupported_area of surface
+//     no point supports come after the others). Vertically overlapping roof faces are exactly the faces
+//     over the same cell.
+//     Support cuts: a plane with at least min_support_points of its points inside a cell whose face
+//     there would rise more than support_cut_rise above its points' top plus support_cut_height, over
+//     no point (surface_support.hpp), is a blade: the plane's contour at that height, clipped to the
+//     cell, joins the curves and the arrangement is built again (once), so that the plane's face can
+//     end where its points end. The contour often stands in for a line the arrangement lacks: the
+//     hip of a steep plane around a corner, the ridge beyond a plane's last points.
 //     The floor lies below every roof face: when the ground is measured, over a cell, a plane that
 //     comes lower than ground_z + floor_clearance at a cell vertex is dropped when another of the
 //     cell's planes stays above that. Without ground points ground_z is the lowest building point,
@@ -76,6 +84,9 @@
 // projection falls inside the face polygon. For a roof face only the points of its own planar
 // segment count (as in PolyFit); for walls and the floor every point counts. Points are not weighted
 // by distance and no coverage (alpha-shape) term is used, as in City3D's formulation.
+// Unsupported area (E_u of selection.hpp): the area of each roof and wall face more than
+// surface_support.tolerance above the highest point within surface_support.radius of it in plan; the
+// face prior of a segment is its best-supported face among those whose data term outweighs that.
 #pragma once
 
 #include <cstdint>
@@ -84,6 +95,7 @@
 
 #include "city3d/planes.hpp"
 #include "city3d/selection.hpp"
+#include "city3d/surface_support.hpp"
 #include "city3d/types.hpp"
 #include "city3d/walls.hpp"
 
@@ -124,6 +136,18 @@ struct HypothesisParams {
                                      ///< run on to the next line, which made more cells, not fewer.
   double line_merge_distance = 0.1;  ///< a roof line with both ends within this xy distance of a longer
                                      ///< one, overlapping it, is merged into it; 0 = never, >= 0
+  /// Where more than max_planes_per_cell roof planes qualify for a cell, those whose face over it would
+  /// have more than max_unsupported_area (m2) more than surface_support.tolerance above the highest point
+  /// within surface_support.radius in plan (surface_support.hpp) come last (see 2), >= 0
+  double max_unsupported_area = 0.25;
+  /// A plane lifted onto a cell that rises there more than support_cut_rise above its highest point plus
+  /// support_cut_height, with more than max_unsupported_area unsupported, is cut at its contour at that
+  /// height (see 2), metres, >= 0
+  double support_cut_height = 0.5;
+  double support_cut_rise = 2.0;
+  /// The measure of surface no point supports: each candidate face's unsupported area (E_u of
+  /// selection.hpp) and the ranking above.
+  SurfaceSupportParams surface_support;
 
   /// Throws ConfigError listing every invalid field.
   void validate() const;

@@ -92,6 +92,11 @@ struct ReconstructionParams {
   /// and with half the complexity weight; a variant that leaves fewer points unexplained and fits all
   /// points better is kept. 1 (or more): never rebuilt.
   double retry_unexplained_share = 0.05;
+  /// A LoD2 model with more than this much surface no point supports (m2 more than 1 m above the
+  /// highest point within 1.5 m in plan, surface_support.hpp) is rebuilt with the same variants, the
+  /// points beneath that surface counted as left out; a variant is kept when it is more faithful both
+  /// ways (see explain_more()). A large value: never rebuilt for it.
+  double retry_unsupported_area = 1.0;
   /// Opt-in wall-clock safety net for one building's LoD2 attempts, seconds; 0 (the default): none.
   /// The full rung gets 60% of it, the footprint-walls rung the rest, and each selection what is
   /// left of its rung's share. When it fires the output depends on the machine's speed and load;
@@ -164,6 +169,11 @@ struct BuildingReport {
   /// model.
   double unexplained_points = std::numeric_limits<double>::quiet_NaN();
   double unexplained_share = std::numeric_limits<double>::quiet_NaN();
+  /// The same question the other way (surface_support.hpp), of the model written: square metres of
+  /// its surface more than 1 m above the highest building point within 1.5 m in plan, and the largest
+  /// height of its surface above that point, metres; NaN without a model.
+  double unsupported_area = std::numeric_limits<double>::quiet_NaN();
+  double height_excess = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// A point farther than this from its building's model is "unexplained" (BuildingReport), metres:

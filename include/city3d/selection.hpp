@@ -1,15 +1,24 @@
 // Face selection (paper section 3.3 and appendix): choose the subset of candidate faces that forms
 // the building by a binary integer program
 //
-//   min  lambda_d * E_d + lambda_c * E_c + lambda_r * E_r
+//   min  lambda_d * E_d + lambda_c * E_c + lambda_r * E_r + lambda_u * E_u
 //   E_d = 1 - (1/|P|) sum_i x_i support(f_i)                      data fitting (PolyFit)
 //   E_c = (1/|E|) sum_e corner(e)                                  model complexity (PolyFit)
 //   E_r = (1/|F|) sum_i x_i (z_max - z_i) / (z_max - z_min)        roof preference (City3D)
+//   E_u = (1/A) sum_i x_i unsupported(f_i)                         surface no point supports (issue 23)
 //   s.t. sum_{j in N(e)} x_j in {0, 2}  for every edge e          watertight, 2-manifold
 //        single-layer roof: exactly one roof face over each cell, and vertically overlapping roof
 //        faces never selected together
 //        face prior: x_l = 1 for the best-supported face l of each planar segment
 //        x_i in {0, 1}
+//
+// E_u is data fitting the other way, from the model to the points: unsupported(f_i) is the area of
+// face i more than 1 m above the highest point within 1.5 m of it in plan (surface_support.hpp) and A
+// the building's plan area. The data term pays lambda_d / |P| per point explained, about lambda_d / A
+// per square metre of roof (|P| = density x A); at lambda_u = lambda_d a square metre of surface no
+// point asks for costs what a square metre of points left out costs. Without it the energy is blind to
+// such surface: a steep plane extended over a cell beyond its points (a blade metres above the roof)
+// has no support and no cost, and wins where it saves a few sharp edges.
 //
 // The problem is solver-independent; backends (GLPK, COIN-OR CBC) sit behind solve_selection().
 #pragma once
@@ -30,6 +39,9 @@ struct SelectionProblem {
   std::vector<double> support;                ///< per face: support(f_i), points epsilon-close (may be weighted)
   std::vector<double> centroid_z;             ///< per face: z of the centroid (for E_r)
   std::vector<bool> is_roof;                  ///< per face: lies on a roof plane
+  /// per face, or empty (no E_u): m2 of the face more than the tolerance above its local top
+  std::vector<double> unsupported;
+  double plan_area = 0.0;                     ///< A, m2: the plan area of the cells (> 0 with unsupported)
   std::size_t point_count = 0;                ///< |P|
   double z_min = 0.0, z_max = 1.0;            ///< lowest / highest building point z
 
@@ -69,6 +81,9 @@ struct SelectionParams {
   /// faces) and on every dataset of the dev set (docs/BENCHMARKS.md, "RMSE against faces").
   double lambda_complexity = 0.3;
   double lambda_roof = 0.04;        ///< lambda_r
+  /// lambda_u: the weight of surface no point supports (E_u). lambda_d's value: a square metre of it
+  /// weighs what a square metre of points left out weighs (see the file comment).
+  double lambda_unsupported = 0.34;
   /// "auto": GLPK, then CBC where GLPK stops on its node limit or breaks; "glpk" or "cbc": that
   /// backend (the other one only where it breaks). See selection.cpp for the measurement.
   std::string solver = "auto";

@@ -2,14 +2,17 @@
 // size is summarised in bounded memory.
 #include "city3d/info.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "city3d/error.hpp"
 #include "city3d/evaluation.hpp"
+#include "city3d/surface_support.hpp"
 #include "city3d/model_io.hpp"
 
 namespace city3d {
@@ -175,6 +178,21 @@ std::string evaluate_model(const std::string& model_path, const std::string& poi
   double sum = 0.0;
   for (const double d : distances) sum += d * d;
   out << "rmse: " << fixed(std::sqrt(sum / static_cast<double>(distances.size())), 4) << "\n";
+  // The other direction: surface no point supports (surface_support.hpp).
+  const SurfaceSupportParams support_params;
+  const SurfaceSupport support =
+      surface_support(model.mesh, surface_types_unoriented(model.mesh), LocalTop(cloud.points, support_params.radius),
+                      support_params);
+  out << "unsupported_area: " << fixed(support.unsupported_area, 2) << " (m2 of surface more than "
+      << fixed(support_params.tolerance, 1) << " m above the highest point within " << fixed(support_params.radius, 1)
+      << " m in plan)\n";
+  out << "height_excess: " << fixed(support.height_excess, 3) << "\n";
+  out << "unpointed_roof_area: " << fixed(support.unpointed_roof_area, 2) << " (m2 of roof with no point within "
+      << fixed(support_params.radius, 1) << " m in plan)\n";
+  double highest_point = -std::numeric_limits<double>::infinity(), highest_vertex = highest_point;
+  for (const Point3& p : cloud.points) highest_point = std::max(highest_point, p.z);
+  for (const Point3& v : model.mesh.vertices) highest_vertex = std::max(highest_vertex, v.z);
+  out << "highest_vertex_above_points: " << fixed(highest_vertex - highest_point, 3) << "\n";
   out << "closed: " << yes(v.closed) << "\n";
   out << "manifold: " << yes(v.manifold) << "\n";
   out << "outward: " << yes(v.outward) << "\n";

@@ -227,6 +227,12 @@ const std::vector<OptionSpec>& option_table() {
       {"--lambda-roof", nullptr, "W", "weight of the roof-preference term",
        [](const O& o) { return number_text(o.batch.reconstruction.selection.lambda_roof); },
        [](O& o, V v) { o.batch.reconstruction.selection.lambda_roof = parse_double("--lambda-roof", v); }},
+      {"--lambda-unsupported", nullptr, "W",
+       "weight of surface no point supports (m2 more than 1 m above the highest point within 1.5 m in plan)",
+       [](const O& o) { return number_text(o.batch.reconstruction.selection.lambda_unsupported); },
+       [](O& o, V v) {
+         o.batch.reconstruction.selection.lambda_unsupported = parse_double("--lambda-unsupported", v);
+       }},
       {"--solver", nullptr, "auto|glpk|cbc", "integer-program solver (auto: GLPK, then CBC where GLPK stops at its node limit)",
        [](const O& o) { return o.batch.reconstruction.selection.solver; },
        [](O& o, V v) {
@@ -262,6 +268,11 @@ const std::vector<OptionSpec>& option_table() {
        "says so); 1: never",
        [](const O& o) { return number_text(o.batch.reconstruction.retry_unexplained_share); },
        [](O& o, V v) { o.batch.reconstruction.retry_unexplained_share = parse_double("--retry-share", v); }},
+      {"--retry-unsupported", nullptr, "M2", "a LoD2 model with more than this much surface no point supports "
+       "(m2 more than 1 m above the highest point within 1.5 m in plan) is rebuilt with the same variants, and one "
+       "more faithful both ways is kept (the report says so)",
+       [](const O& o) { return number_text(o.batch.reconstruction.retry_unsupported_area); },
+       [](O& o, V v) { o.batch.reconstruction.retry_unsupported_area = parse_double("--retry-unsupported", v); }},
       {"--time-limit", nullptr, "S", "opt-in wall-clock safety net per building for LoD2, seconds (then it falls back); "
        "0: none, the default. When it fires, the output depends on the machine and its load",
        [](const O& o) { return number_text(o.batch.reconstruction.time_limit); },

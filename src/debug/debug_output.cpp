@@ -180,4 +180,42 @@ void write_candidates_obj(const std::string& path, const CandidateFaces& candida
   if (std::fclose(file) != 0) throw IoError("hypothesis: cannot write " + path);
 }
 
+void write_selection_csv(const std::string& path, const CandidateFaces& candidates, const std::vector<bool>& selected,
+                         const SelectionParams& energy) {
+  std::FILE* file = std::fopen(path.c_str(), "w");
+  if (!file) throw IoError("selection: cannot write " + path);
+  const SelectionProblem& problem = candidates.problem;
+  std::vector<char> prior(candidates.faces.size(), 0), forced(candidates.faces.size(), 0);
+  for (auto i : problem.face_prior) prior[i] = 1;
+  for (auto i : problem.forced_on) forced[i] = 1;
+  for (auto i : problem.forced_off) forced[i] = -1;
+  static const char* kind_names[] = {"roof", "wall", "floor"};
+  // The energy's coefficient of each face as selection.hpp writes it: data and roof preference.
+  const double points = static_cast<double>(std::max<std::size_t>(problem.point_count, 1));
+  const double faces = static_cast<double>(std::max<std::size_t>(problem.face_count, 1));
+  std::fprintf(file, "face,kind,plane,cell_or_edge,area,z_min,z_max,support,unsupported_area,data_term,roof_term,"
+                     "unsupported_term,fixed,selected\n");
+  for (std::size_t i = 0; i < candidates.faces.size(); ++i) {
+    const CandidateFace& f = candidates.faces[i];
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const Point3& p : candidates.polygons[i]) {
+      lo = std::min(lo, p.z);
+      hi = std::max(hi, p.z);
+    }
+    const double support = i < problem.support.size() ? problem.support[i] : 0.0;
+    const double centroid = i < problem.centroid_z.size() ? problem.centroid_z[i] : 0.0;
+    const double data = -energy.lambda_data * support / points;
+    const double roof =
+        energy.lambda_roof * (problem.z_max - centroid) / ((problem.z_max - problem.z_min) * faces);
+    const double unsupported = i < problem.unsupported.size() ? problem.unsupported[i] : 0.0;
+    const double unsupported_term =
+        problem.plan_area > 0.0 ? energy.lambda_unsupported * unsupported / problem.plan_area : 0.0;
+    const char* fixed = prior[i] ? "prior" : forced[i] > 0 ? "on" : forced[i] < 0 ? "off" : "";
+    std::fprintf(file, "%zu,%s,%d,%u,%.4f,%.4f,%.4f,%.0f,%.4f,%.6g,%.6g,%.6g,%s,%d\n", i,
+                 kind_names[static_cast<int>(f.kind)], f.kind == FaceKind::roof ? f.source : -1, f.cell_or_edge, f.area,
+                 lo, hi, support, unsupported, data, roof, unsupported_term, fixed, i < selected.size() && selected[i] ? 1 : 0);
+  }
+  if (std::fclose(file) != 0) throw IoError("selection: cannot write " + path);
+}
+
 }  // namespace city3d

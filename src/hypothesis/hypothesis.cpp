@@ -34,8 +34,16 @@ void HypothesisParams::validate() const {
   need(min_cell_width >= 0.0, "min_cell_width must be >= 0");
   need(min_line_overlap >= 0.0, "min_line_overlap must be >= 0");
   need(line_merge_distance >= 0.0, "line_merge_distance must be >= 0");
+  need(max_unsupported_area >= 0.0, "max_unsupported_area must be >= 0");
+  need(support_cut_height >= 0.0, "support_cut_height must be >= 0");
+  need(support_cut_rise >= 0.0, "support_cut_rise must be >= 0");
   need(large_cell_count >= 0, "large_cell_count must be >= 0");
   need(max_planes_per_large_cell >= 1, "max_planes_per_large_cell must be >= 1");
+  try {
+    surface_support.validate();
+  } catch (const ConfigError& e) {
+    problems.push_back(e.what());
+  }
   if (problems.empty()) return;
   std::string message = "hypothesis: invalid parameters: ";
   for (std::size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];
@@ -66,21 +74,41 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
 
   // 1. The input curves, 2. their arrangement, cleaned up.
   std::size_t line_count = 0;
-  const std::vector<InputCurve> curves = arrangement_curves(points, roofs, walls, footprint_local, params, line_count);
-  const PlainArrangement arr =
-      drop_small_parts(contract_robustly(build_arrangement(curves, params.min_cell_width), params.min_edge_length), params.min_part_area);
+  std::vector<InputCurve> curves = arrangement_curves(points, roofs, walls, footprint_local, params, line_count);
+  const auto arrange = [&] {
+    return drop_small_parts(contract_robustly(build_arrangement(curves, params.min_cell_width), params.min_edge_length),
+                            params.min_part_area);
+  };
+  PlainArrangement arr = arrange();
   if (arr.cells.empty()) throw ReconstructionError("hypothesis: the footprint has no inside cell");
-  const std::size_t cell_count = arr.cells.size();
 
-  // 3. The roof planes lifted onto each cell, and the floor below them.
-  std::vector<std::vector<int>> cell_planes = cell_roof_planes(points, roofs, arr, params);
+  // 3. The roof planes lifted onto each cell; where a plane's face would run beyond its points' height
+  // range over no point, the cell is cut at the plane's contour (support cuts) and the arrangement
+  // built again; then the floor below them.
+  // The local top of the points on a raster of the sample spacing over the cells: the candidate faces
+  // are many, and each sample then costs a lookup (surface_support.hpp).
+  Box2 region;
+  for (const Point2& v : arr.vertices) region.add(v);
+  const LocalTopRaster local_top(LocalTop(points, params.surface_support.radius), region,
+                                 params.surface_support.sample_spacing);
+  std::vector<std::vector<std::size_t>> points_inside;
+  std::vector<std::vector<int>> cell_planes = cell_roof_planes(points, roofs, arr, local_top, params, &points_inside);
+  const std::vector<InputCurve> cuts = support_cuts(points, roofs, arr, cell_planes, points_inside, local_top, params);
+  if (!cuts.empty()) {
+    curves.insert(curves.end(), cuts.begin(), cuts.end());
+    arr = arrange();
+    if (arr.cells.empty()) throw ReconstructionError("hypothesis: the footprint has no inside cell");
+    cell_planes = cell_roof_planes(points, roofs, arr, local_top, params);
+    log_debug("hypothesis: " + std::to_string(cuts.size()) + " support cuts");
+  }
+  const std::size_t cell_count = arr.cells.size();
   const double floor_z = place_floor(roofs, arr, cell_planes, ground_z, ground_measured, params);
   const Levels lv{&roofs, floor_z};
 
   // 4. The candidate faces, 5. the selection problem over them, 6. a start for the solvers.
   CandidateFaces out;
   const auto edge_faces = lift_cells(arr, cell_planes, lv, params.vertex_merge_tolerance, out);
-  build_selection_problem(points, roofs, arr, floor_z, edge_faces, params, out);
+  build_selection_problem(points, roofs, arr, floor_z, edge_faces, local_top, params, energy, out);
   SelectionProblem& prob = out.problem;
   prob.start = start_assignment(out, arr, lv, cell_count, energy);
 

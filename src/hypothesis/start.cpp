@@ -29,7 +29,7 @@ constexpr double kEnergyTolerance = 1e-12;
 // change helps), until none is left or no change helps. Returns an empty vector in that case.
 //
 // The closed start then descends the selection energy of selection.hpp under `energy`'s weights, kept
-// up to date as faces toggle (support and roof-preference sums, and per edge whether a sharp pair
+// up to date as faces toggle (support, roof-preference and unsupported-area sums, and per edge whether a sharp pair
 // is on): each pass visits the cells in order and gives each the roof face that lowers the energy
 // most among those that keep every edge at 0 or 2 faces; cells holding a face prior keep it, so the
 // start still satisfies the prior when it did. Passes repeat until none improves, at most
@@ -76,13 +76,14 @@ std::vector<bool> start_assignment(const CandidateFaces& out, const PlainArrange
   // The energy's parts: sum of support and of roof preference over the selected faces, and the
   // edges where two selected faces meet at a sharp angle.
   const double z_span = prob.z_max - prob.z_min;
-  double support_sum = 0.0, roof_sum = 0.0;
+  double support_sum = 0.0, roof_sum = 0.0, unsupported_sum = 0.0;
   std::size_t sharp_edges = 0;
   std::vector<bool> sharp(prob.edges.size(), false);
   const auto toggle = [&](std::uint32_t f) {
     selected[f] = !selected[f];
     const double sign = selected[f] ? 1.0 : -1.0;
     support_sum += sign * prob.support[f];
+    if (!prob.unsupported.empty()) unsupported_sum += sign * prob.unsupported[f];
     if (z_span > 0) roof_sum += sign * (prob.z_max - prob.centroid_z[f]) / z_span;
     for (auto e : edges_of_face[f]) {
       bad -= is_bad(count[e]);
@@ -100,7 +101,9 @@ std::vector<bool> start_assignment(const CandidateFaces& out, const PlainArrange
     const double data = prob.point_count ? 1.0 - support_sum / static_cast<double>(prob.point_count) : 0.0;
     const double complexity = prob.edges.empty() ? 0.0 : static_cast<double>(sharp_edges) / prob.edges.size();
     const double roof = nf ? roof_sum / static_cast<double>(nf) : 0.0;
-    return energy.lambda_data * data + energy.lambda_complexity * complexity + energy.lambda_roof * roof;
+    const double unsupported = prob.unsupported.empty() ? 0.0 : unsupported_sum / prob.plan_area;
+    return energy.lambda_data * data + energy.lambda_complexity * complexity + energy.lambda_roof * roof +
+           energy.lambda_unsupported * unsupported;
   };
   const auto level = [&](int cell) {
     return cell < 0 ? floor_level : out.faces[roof_of_cell[static_cast<std::size_t>(cell)]].source;

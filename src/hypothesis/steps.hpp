@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "city3d/hypothesis.hpp"
+#include "city3d/surface_support.hpp"
 #include "hypothesis/geometry.hpp"
 
 namespace city3d::detail {
@@ -86,7 +87,20 @@ PlainArrangement drop_small_parts(const PlainArrangement& in, double min_area);
 // 3. The roof planes lifted onto each cell (cell_planes.cpp), ascending plane indices per cell.
 std::vector<std::vector<int>> cell_roof_planes(const std::vector<Point3>& points,
                                                const std::vector<PlanarSegment>& roofs,
-                                               const PlainArrangement& arr, const HypothesisParams& params);
+                                               const PlainArrangement& arr, const LocalTopRaster& local_top,
+                                               const HypothesisParams& params,
+                                               std::vector<std::vector<std::size_t>>* points_inside = nullptr);
+
+// Support cuts (cell_planes.cpp): where a plane lifted onto a cell rises within the cell more than
+// support_cut_rise above the height support_cut_height above its highest point, and the face beyond that
+// height rises over no point (more than max_unsupported_area of it, surface_support.hpp): the plane's
+// contour at that height, clipped to the cell, a line that ends the face where its points end (a steep
+// plane around a hip corner, a roof plane over a lower part beside it). Only planes with at least
+// min_support_points of their points inside the cell (points_inside, as cell_roof_planes gives it) are cut.
+std::vector<InputCurve> support_cuts(const std::vector<Point3>& points, const std::vector<PlanarSegment>& roofs,
+                                     const PlainArrangement& arr, const std::vector<std::vector<int>>& cell_planes,
+                                     const std::vector<std::vector<std::size_t>>& points_inside,
+                                     const LocalTopRaster& local_top, const HypothesisParams& params);
 
 // The floor below them: drops, per cell, planes that come too low (see hypothesis.hpp, 2) and returns
 // the floor height (ground_z, or lower so that every remaining roof vertex keeps floor_clearance).
@@ -103,12 +117,14 @@ std::vector<std::vector<std::uint32_t>> lift_cells(const PlainArrangement& arr,
                                                    const Levels& lv, double vertex_merge_tolerance,
                                                    CandidateFaces& out);
 
-// 5. The selection problem over out's faces (support.cpp): support of every face, the edges and their
-// sharp pairs, floors forced on, the face prior of every roof segment, vertical overlaps.
+// 5. The selection problem over out's faces (support.cpp): support and unsupported area of every face,
+// the edges and their sharp pairs, floors forced on, the face prior of every roof segment (its
+// best-supported face among those whose support outweighs their unsupported area under `energy`),
+// vertical overlaps.
 void build_selection_problem(const std::vector<Point3>& points, const std::vector<PlanarSegment>& roofs,
                              const PlainArrangement& arr, double floor_z,
-                             const std::vector<std::vector<std::uint32_t>>& edge_faces,
-                             const HypothesisParams& params, CandidateFaces& out);
+                             const std::vector<std::vector<std::uint32_t>>& edge_faces, const LocalTopRaster& local_top,
+                             const HypothesisParams& params, const SelectionParams& energy, CandidateFaces& out);
 
 // 6. A closed start assignment for the solvers (start.cpp), descended under the weights of `energy`,
 // or an empty vector when none was found.

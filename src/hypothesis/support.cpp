@@ -6,6 +6,11 @@
 // Support: the number of points within support_distance of the face's plane whose projection falls
 // inside the face polygon. For a roof face only the points of its own planar segment count (as in
 // PolyFit); for walls and the floor every point counts.
+//
+// Unsupported area (E_u of selection.hpp): the area of the face more than surface_support.tolerance
+// above the highest point within surface_support.radius of it in plan (surface_support.hpp); 0 for the
+// floor. The face prior of a segment is its best-supported face among those whose data term outweighs
+// their unsupported-area term: the prior must not force a blade on.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -19,8 +24,8 @@ namespace city3d::detail {
 
 void build_selection_problem(const std::vector<Point3>& points, const std::vector<PlanarSegment>& roofs,
                              const PlainArrangement& arr, double floor_z,
-                             const std::vector<std::vector<std::uint32_t>>& edge_faces,
-                             const HypothesisParams& params, CandidateFaces& out) {
+                             const std::vector<std::vector<std::uint32_t>>& edge_faces, const LocalTopRaster& local_top,
+                             const HypothesisParams& params, const SelectionParams& energy, CandidateFaces& out) {
   const std::size_t R = roofs.size();
   const std::size_t cell_count = arr.cells.size();
   SelectionProblem& prob = out.problem;
@@ -94,6 +99,14 @@ void build_selection_problem(const std::vector<Point3>& points, const std::vecto
     }
     prob.support[i] = support;
   }
+  prob.plan_area = 0.0;
+  for (const auto& cell : arr.cells) prob.plan_area += cell.area;
+  prob.unsupported.assign(nf, 0.0);
+  const SurfaceSupportParams& sp = params.surface_support;
+  for (std::size_t i = 0; i < nf; ++i) {
+    if (out.faces[i].kind == FaceKind::floor) continue;
+    prob.unsupported[i] = local_top.unsupported_area(out.polygons[i], sp);
+  }
 
   for (const auto& list : edge_faces) {
     SelectionProblem::Edge edge;
@@ -113,7 +126,10 @@ void build_selection_problem(const std::vector<Point3>& points, const std::vecto
     if (f.kind != FaceKind::roof) continue;
     roofs_over_cell[f.cell_or_edge].push_back(i);
     auto& best = prior[static_cast<std::size_t>(f.source)];
-    if (prob.support[i] > 0.0 && f.area >= params.min_face_area &&
+    const bool pays = prob.plan_area > 0.0 && prob.point_count > 0 &&
+                      energy.lambda_data * prob.support[i] / static_cast<double>(prob.point_count) >
+                          energy.lambda_unsupported * prob.unsupported[i] / prob.plan_area;
+    if (prob.support[i] > 0.0 && f.area >= params.min_face_area && pays &&
         (best < 0 || prob.support[i] > prob.support[static_cast<std::size_t>(best)]))
       best = i;
   }

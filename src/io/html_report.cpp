@@ -284,17 +284,20 @@ histogram("RMSE", rmses, "m", 3);
 histogram("Faces", faces, "", 0);
 histogram("Seconds", secs, "s", 2);
 
-// Worst buildings: failed, then fallback, then the highest RMSE.
+// Worst buildings: failed, then fallback, then the least faithful models both ways (the share of the
+// points farther than 1 m from the model, plus the share of the footprint's area that the model covers
+// with surface no point supports), then the highest RMSE.
 const rank = { failed: 0, fallback: 1, ok: 2, skipped: 3 };
+const unfaithful = (b) => (b.us || 0) + (b.ua && b.fa ? b.ua / b.fa : 0);
 const worst = B.map((b, i) => i).filter((i) => B[i].s !== "skipped" || B[i].r)
-  .sort((a, b) => rank[B[a].s] - rank[B[b].s] || (B[b].rmse || 0) - (B[a].rmse || 0) || a - b).slice(0, 25);
+  .sort((a, b) => rank[B[a].s] - rank[B[b].s] || unfaithful(B[b]) - unfaithful(B[a]) ||
+                  (B[b].rmse || 0) - (B[a].rmse || 0) || a - b).slice(0, 25);
 (function drawWorst() {
   if (!worst.length) { el("div", { class: "empty" }, $("worst")).textContent = "no buildings"; return; }
   const table = el("table", { class: "worst" }, $("worst"));
   const head = el("tr", {}, el("thead", {}, table));
-  ["building", "status", "level", "RMSE (m)", "faces", "seconds", "reason"].forEach((h, k) => {
-    el("th", k >= 3 && k <= 5 ? { class: "num" } : {}, head).textContent = h;
-  });
+  ["building", "status", "level", "RMSE (m)", "points > 1 m", "unsupported (m²)", "faces", "seconds", "reason"]
+    .forEach((h, k) => { el("th", k >= 3 && k <= 7 ? { class: "num" } : {}, head).textContent = h; });
   const body = el("tbody", {}, table);
   worst.forEach((i) => {
     const b = B[i], tr = el("tr", {}, body);
@@ -302,6 +305,8 @@ const worst = B.map((b, i) => i).filter((i) => B[i].s !== "skipped" || B[i].r)
     el("span", { class: "pill", style: "background:" + COLORS[b.s] }, el("td", {}, tr)).textContent = b.s;
     el("td", {}, tr).textContent = b.l;
     el("td", { class: "num" }, tr).textContent = fmt(b.rmse, 3);
+    el("td", { class: "num" }, tr).textContent = b.us === null || b.us === undefined ? "–" : fmt(100 * b.us, 1) + "%";
+    el("td", { class: "num" }, tr).textContent = fmt(b.ua, 1);
     el("td", { class: "num" }, tr).textContent = b.f;
     el("td", { class: "num" }, tr).textContent = fmt(b.t, 2);
     el("td", { class: "reason" }, tr).textContent = b.r || (b.n || "");
@@ -386,6 +391,8 @@ function select(i) {
   model = b.m >= 0 ? D.models[b.m] : null;
   $("view-title").textContent = "3D view · " + b.id + (model ? " · LoD" + model.lod : "");
   const rows = [["status", b.s], ["level", b.l], ["levels written", b.lods || "–"], ["RMSE", fmt(b.rmse, 3) + " m"],
+                ["points farther than 1 m", b.us === null || b.us === undefined ? "–" : fmt(100 * b.us, 1) + "%"],
+                ["surface no point supports", fmt(b.ua, 1) + " m² (up to " + fmt(b.he, 1) + " m above the points)"],
                 ["faces", b.f], ["points", b.p], ["roof height (70th percentile)", fmt(b.h, 2) + " m"],
                 ["roof type", b.rt || "–"], ["seconds", fmt(b.t, 2)], ["reason", b.r || "–"], ["note", b.n || "–"]];
   const d = $("details");
@@ -409,9 +416,10 @@ console.log("city3d report ready");
 
 void write_report_html(const std::string& path, const OverviewSource& records, const std::string& crs) {
   // A first pass over the records: the footprints' extent (the map is drawn relative to the run's
-  // corner, in centimetres), what orders the models (status, RMSE) and each highest level's size.
+  // corner, in centimetres), what orders the models (status, faithfulness both ways, RMSE) and each highest level's size.
   struct Key {
     bool fallback = false;
+    double unfaithful = 0.0;  // as the page's worst buildings: both ways, then RMSE
     double rmse = 0.0;
     std::size_t vertices = 0;
     bool model = false;
@@ -422,7 +430,10 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
     const OverviewRecord r = records.at(k, true);
     for (const Polygon2& p : r.footprint)
       for (const Point2& v : p.outer) extent.add(v);
-    keys[k] = {r.report.status == BuildingStatus::fallback, r.report.rmse,
+    const BuildingReport& b = r.report;
+    const double unfaithful = (std::isfinite(b.unexplained_share) ? b.unexplained_share : 0.0) +
+                              (std::isfinite(b.unsupported_area) && b.footprint_area > 0 ? b.unsupported_area / b.footprint_area : 0.0);
+    keys[k] = {r.report.status == BuildingStatus::fallback, unfaithful, r.report.rmse,
                r.lods.empty() ? 0 : r.lods.back().model.mesh.vertices.size(), !r.lods.empty()};
   }
   const bool have_footprints = !extent.empty();
@@ -435,6 +446,7 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
   for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     if (keys[a].fallback != keys[b].fallback) return keys[a].fallback;
+    if (keys[a].unfaithful != keys[b].unfaithful) return keys[a].unfaithful > keys[b].unfaithful;
     return keys[a].rmse > keys[b].rmse;
   });
   std::vector<long> model_of(records.size(), -1);
@@ -507,6 +519,14 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
     json_string(data, b.roof_type);
     data += ",\"rmse\":";
     json_number(data, b.rmse >= 0 ? b.rmse : NAN, 4);
+    data += ",\"us\":";
+    json_number(data, b.unexplained_share, 4);
+    data += ",\"ua\":";
+    json_number(data, b.unsupported_area, 2);
+    data += ",\"he\":";
+    json_number(data, b.height_excess, 2);
+    data += ",\"fa\":";
+    json_number(data, b.footprint_area, 2);
     data += ",\"f\":" + std::to_string(b.faces) + ",\"p\":" + std::to_string(b.points) + ",\"t\":";
     json_number(data, b.seconds, 3);
     data += ",\"h\":";

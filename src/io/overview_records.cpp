@@ -90,6 +90,8 @@ BuildingReport parse_report(const std::string& text, std::size_t position) {
   r.rmse_lod22 = number_or_nan(o, "rmse_lod22");
   r.unexplained_points = number_or_nan(o, "unexplained_points");
   r.unexplained_share = number_or_nan(o, "unexplained_share");
+  r.unsupported_area = number_or_nan(o, "unsupported_area");
+  r.height_excess = number_or_nan(o, "height_excess");
   r.validity_found = text_of(o, "validity_found");
   r.repairs = text_of(o, "repairs");
   return r;

@@ -21,6 +21,7 @@
 #include "city3d/log.hpp"
 #include "city3d/mesh_check.hpp"
 #include "city3d/model_io.hpp"
+#include "city3d/surface_support.hpp"
 #include "pipeline/left_out.hpp"
 
 namespace city3d {
@@ -85,6 +86,8 @@ void ReconstructionParams::validate() const {
     problems += (problems.empty() ? "" : "; ") + std::string("max_footprint_vertices must be >= 3");
   if (!(retry_unexplained_share >= 0) || !std::isfinite(retry_unexplained_share))
     problems += (problems.empty() ? "" : "; ") + std::string("retry_unexplained_share must be a share >= 0 (1: never retry)");
+  if (!(retry_unsupported_area >= 0) || std::isnan(retry_unsupported_area))
+    problems += (problems.empty() ? "" : "; ") + std::string("retry_unsupported_area must be >= 0 (m2)");
   if (!(time_limit >= 0) || !std::isfinite(time_limit))
     problems += (problems.empty() ? "" : "; ") + std::string("time_limit must be >= 0 seconds (0: none)");
   if (!problems.empty()) throw ConfigError(problems);
@@ -147,9 +150,16 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("hypothesis.min_line_overlap", p.hypothesis.min_line_overlap);
   put("hypothesis.large_cell_count", p.hypothesis.large_cell_count);
   put("hypothesis.max_planes_per_large_cell", p.hypothesis.max_planes_per_large_cell);
+  put("hypothesis.max_unsupported_area", p.hypothesis.max_unsupported_area);
+  put("hypothesis.support_cut_height", p.hypothesis.support_cut_height);
+  put("hypothesis.support_cut_rise", p.hypothesis.support_cut_rise);
+  put("hypothesis.surface_support.sample_spacing", p.hypothesis.surface_support.sample_spacing);
+  put("hypothesis.surface_support.radius", p.hypothesis.surface_support.radius);
+  put("hypothesis.surface_support.tolerance", p.hypothesis.surface_support.tolerance);
   put("selection.lambda_data", p.selection.lambda_data);
   put("selection.lambda_complexity", p.selection.lambda_complexity);
   put("selection.lambda_roof", p.selection.lambda_roof);
+  put("selection.lambda_unsupported", p.selection.lambda_unsupported);
   put("selection.solver", p.selection.solver);
   put("selection.time_limit", p.selection.time_limit);
   put("selection.node_limit", p.selection.node_limit);
@@ -171,6 +181,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("max_level", to_string(p.max_level));
   put("max_footprint_vertices", p.max_footprint_vertices);
   put("retry_unexplained_share", p.retry_unexplained_share);
+  put("retry_unsupported_area", p.retry_unsupported_area);
   put("time_limit", p.time_limit);
   return s.str();
 }
@@ -572,6 +583,11 @@ BuildingModel lod2_model(const BuildingInput& input, const Lod2Hypothesis& hypot
                                                   : "selection: no solution within the limits") +
                                   " (" + std::to_string(selection.variables) + " variables): " + selection.message);
 
+      if (!params.debug_dir.empty()) {
+        const std::string suffix = hypothesis.parts.size() > 1 ? "_part" + std::to_string(hypothesis.part_numbers[k]) : "";
+        write_selection_csv(debug_path(params.debug_dir, input.id, "selection" + suffix + ".csv"), candidates,
+                            selection.selected, selection_params);
+      }
       std::vector<SurfaceType> surfaces;
       const PolygonMesh mesh = assemble_model(candidates, selection.selected, params.assemble, &surfaces);
       const auto offset = static_cast<std::uint32_t>(model.mesh.vertices.size());
@@ -611,7 +627,8 @@ bool same_hypothesis(const Lod2Hypothesis& a, const Lod2Hypothesis& b) {
       return false;
     const SelectionProblem &p = x.problem, &q = y.problem;
     if (p.face_count != q.face_count || p.support != q.support || p.centroid_z != q.centroid_z ||
-        p.is_roof != q.is_roof || p.point_count != q.point_count || p.z_min != q.z_min || p.z_max != q.z_max ||
+        p.is_roof != q.is_roof || p.unsupported != q.unsupported || p.plan_area != q.plan_area ||
+        p.point_count != q.point_count || p.z_min != q.z_min || p.z_max != q.z_max ||
         !std::equal(p.edges.begin(), p.edges.end(), q.edges.begin(), q.edges.end(), same_edge) ||
         p.vertical_overlaps != q.vertical_overlaps || p.exactly_one != q.exactly_one ||
         p.face_prior != q.face_prior || p.forced_on != q.forced_on || p.forced_off != q.forced_off ||
@@ -651,24 +668,40 @@ BuildingModel checked_model(const BuildingInput& input, const ReconstructionPara
   return model;
 }
 
-// How well a model explains the building's points: how many lie farther than kUnexplainedDistance,
-// and the sum of the squared distances.
+// How faithful a model is to the building's points, both ways: from the points to the model, how many
+// lie farther than kUnexplainedDistance and the sum of the squared distances; from the model to the
+// points, its surface no point supports (surface_support.hpp).
 struct Explained {
   std::size_t far = 0;
   double squares = 0.0;
+  SurfaceSupport support;
+  /// Both directions in one figure, in points: the points left out, plus the unsupported area at
+  /// the building's point density (`points_per_m2`): a square metre of surface no point asks for
+  /// weighs as much as a square metre of points the model leaves out (the selection's E_u and E_d).
+  double unfaithful(double points_per_m2) const {
+    return static_cast<double>(far) + support.unsupported_area * points_per_m2;
+  }
 };
 
-Explained explained(const std::vector<double>& distances) {
+// From the points to the model only.
+Explained explained_points(const PolygonMesh& mesh, const std::vector<Point3>& points,
+                           std::vector<double>* distances_out = nullptr) {
   Explained e;
+  const std::vector<double> distances = point_distances(mesh, points);
   for (const double d : distances) {
     e.far += d > kUnexplainedDistance;
     e.squares += d * d;
   }
+  if (distances_out) *distances_out = distances;
   return e;
 }
 
-Explained explained(const PolygonMesh& mesh, const std::vector<Point3>& points) {
-  return explained(point_distances(mesh, points));
+// Both ways.
+Explained explained(const BuildingModel& model, const std::vector<Point3>& points, const LocalTop& local_top,
+                    const SurfaceSupportParams& support_params, std::vector<double>* distances_out = nullptr) {
+  Explained e = explained_points(model.mesh, points, distances_out);
+  e.support = surface_support(model.mesh, surface_types(model), local_top, support_params);
+  return e;
 }
 
 std::string percent(std::size_t part, std::size_t whole) {
@@ -686,9 +719,13 @@ std::string percent(std::size_t part, std::size_t whole) {
 // into 38 s (docs/BENCHMARKS.md).
 constexpr std::size_t kMaxRebuildFaces = 3000;
 
-// Issue 10's "every point explained, or reported": when a LoD2 model leaves more than
-// retry_unexplained_share of the points unexplained, the rung is rebuilt with variants that address
-// what leaves points out, each a deterministic function of the input. Hypotheses:
+// Issue 10's "every point explained, or reported" and issue 23's "no surface the points don't
+// support": when a LoD2 model leaves more than retry_unexplained_share of the points unexplained, or
+// carries more than retry_unsupported_area of surface no point supports, the rung is rebuilt with
+// variants that address what leaves points out, each a deterministic function of the input. The
+// points beneath unsupported surface count as left out (points_beneath_unsupported: a low annex whose
+// few points form no plane, under a roof plane extended over it, is near that roof's walls but
+// misrepresented all the same). Hypotheses:
 //  - roof planes of half min_points: an upper part or a small tier whose few points form no plane of
 //    min_points is otherwise covered by the roof below it;
 //  - without a footprint, an outline closing wider gaps (kWideGapSpacings): a roof whose returns have
@@ -703,7 +740,8 @@ constexpr std::size_t kMaxRebuildFaces = 3000;
 //    explains (a flat roof modelled at ground level over a third of the building);
 //  - half the complexity weight: a roof part of few points costs more edges than its points weigh;
 //  - both.
-// A variant replaces the model only if it leaves fewer points unexplained and fits the points better
+// A variant replaces the model only if it is more faithful both ways (Explained::unfaithful: fewer
+// points left out plus less unsupported surface at the point density) and fits the points better
 // (smaller sum of squared distances). The report says which variant was kept, or that none helped.
 // `before_hypothesis` and `before_selection` are the report as it was before the rung's hypothesis
 // and before its selection; debug files are written for the rung's own hypothesis only. Returns how
@@ -714,11 +752,28 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
                   BuildingReport& r, BuildingModel& model) {
   const std::size_t n = input.points.size();
   if (n == 0) return {};
-  const std::vector<double> distances = point_distances(model.mesh, input.points);
-  Explained best = explained(distances);
-  if (!(static_cast<double>(best.far) > params.retry_unexplained_share * static_cast<double>(n))) return best;
-  std::vector<bool> unexplained(n);
-  for (std::size_t i = 0; i < n; ++i) unexplained[i] = distances[i] > kUnexplainedDistance;
+  const SurfaceSupportParams& support_params = params.hypothesis.surface_support;
+  const LocalTop local_top(input.points, support_params.radius);
+  std::vector<double> distances;
+  Explained best = explained(model, input.points, local_top, support_params, &distances);
+  const bool too_many_left_out = static_cast<double>(best.far) > params.retry_unexplained_share * static_cast<double>(n);
+  const bool unsupported = best.support.unsupported_area > params.retry_unsupported_area;
+  if (!too_many_left_out && !unsupported) return best;
+  std::vector<bool> unexplained = points_beneath_unsupported(best.support, input.points, support_params);
+  for (std::size_t i = 0; i < n; ++i) unexplained[i] = unexplained[i] || distances[i] > kUnexplainedDistance;
+  const double area = polygons_area(input.footprint.polygons);
+  const double density = area > 0.0 ? static_cast<double>(n) / area : 0.0;
+  const auto what = [&](const Explained& e) {
+    std::string text;
+    if (too_many_left_out) text = "unexplained points " + percent(e.far, n);
+    if (unsupported) {
+      std::ostringstream s;
+      s.precision(1);
+      s << std::fixed << e.support.unsupported_area << " m2";
+      text += (text.empty() ? "" : ", ") + std::string("unsupported surface ") + s.str();
+    }
+    return text;
+  };
   const auto candidate_faces = [](const Lod2Hypothesis& h) {
     std::size_t faces = 0;
     for (const CandidateFaces& part : h.parts) faces += part.faces.size();
@@ -726,8 +781,8 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
   };
   const std::size_t faces = candidate_faces(hypothesis);
   if (faces > kMaxRebuildFaces) {
-    add_note(r, "unexplained points " + percent(best.far, n) + ": not rebuilt (" + std::to_string(faces) +
-                    " candidate faces, more than " + std::to_string(kMaxRebuildFaces) + ")");
+    add_note(r, what(best) + ": not rebuilt (" + std::to_string(faces) + " candidate faces, more than " +
+                    std::to_string(kMaxRebuildFaces) + ")");
     return best;
   }
   const int small_points = std::max<int>(kMinPointsForSmallRoof, params.planes.min_points / 2);
@@ -761,7 +816,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
   };
 
   std::vector<Lod2Hypothesis> tried;  // the variant hypotheses selected over (the rung's own is `hypothesis`)
-  const std::size_t before = best.far;
+  const Explained before = best;
   std::string kept;
   std::string over_limit;  // variant hypotheses not selected: more than kMaxRebuildFaces candidate faces
   BuildingReport kept_report;
@@ -812,9 +867,9 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
                                         lod2_model(input, own ? hypothesis : *built, p, deadline, trial, &dropped),
                                         trial);
         if (!v.without_prior && !v.half_complexity) prior_dropped = dropped;
-        const Explained e = explained(m.mesh, input.points);
-        if (e.far < best.far && e.squares < best.squares) {
-          best = e;
+        Explained e = explained(m, input.points, local_top, support_params);
+        if (e.unfaithful(density) < best.unfaithful(density) && e.squares < best.squares) {
+          best = std::move(e);
           model = std::move(m);
           kept = name(h, v);
           kept_report = std::move(trial);
@@ -828,9 +883,18 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
   }
   if (!kept.empty()) {
     r = std::move(kept_report);
-    add_note(r, "rebuilt (" + kept + "): unexplained points " + percent(before, n) + " -> " + percent(best.far, n));
+    std::string change;
+    if (too_many_left_out) change = "unexplained points " + percent(before.far, n) + " -> " + percent(best.far, n);
+    if (unsupported) {
+      std::ostringstream s;
+      s.precision(1);
+      s << std::fixed << "unsupported surface " << before.support.unsupported_area << " -> "
+        << best.support.unsupported_area << " m2";
+      change += (change.empty() ? "" : ", ") + s.str();
+    }
+    add_note(r, "rebuilt (" + kept + "): " + change);
   } else {
-    add_note(r, "unexplained points " + percent(before, n) + ": no rebuild explained more");
+    add_note(r, what(before) + ": no rebuild explained more");
   }
   if (!over_limit.empty())
     add_note(r, "not tried (more than " + std::to_string(kMaxRebuildFaces) + " candidate faces): " + over_limit);
@@ -959,7 +1023,7 @@ void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams
   if (kept.empty()) kept.push_back({lod2 ? "2.2" : "1.2", primary});
   for (const LodModel& m : kept) {
     const double volume = check_mesh(m.model.mesh).signed_volume;
-    const Explained fit = lod2 && m.lod == "2.2" && lod2_fit ? *lod2_fit : explained(m.model.mesh, input.points);
+    const Explained fit = lod2 && m.lod == "2.2" && lod2_fit ? *lod2_fit : explained_points(m.model.mesh, input.points);
     const std::size_t n = input.points.size();
     const double error = n == 0 ? 0.0 : std::sqrt(fit.squares / static_cast<double>(n));
     // The unexplained points of the model the OBJ/PLY files hold: the last level kept.
@@ -973,6 +1037,17 @@ void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams
   }
   result.model = kept.back().model;
   r.faces = result.model->mesh.faces.size();
+  // The model written, from the model to the points (explain_more measured a LoD2.2 model already).
+  if (!input.points.empty()) {
+    const SurfaceSupportParams& support_params = params.hypothesis.surface_support;
+    const SurfaceSupport support =
+        lod2 && kept.back().lod == "2.2" && lod2_fit
+            ? lod2_fit->support
+            : surface_support(result.model->mesh, surface_types(*result.model),
+                              LocalTop(input.points, support_params.radius), support_params);
+    r.unsupported_area = support.unsupported_area;
+    r.height_excess = support.height_excess;
+  }
   result.lods = std::move(kept);
 }
 

@@ -85,6 +85,8 @@ const Extra kExtras[] = {
     {"rmse_lod22", 4, &BuildingReport::rmse_lod22, nullptr},
     {"unexplained_points", 0, &BuildingReport::unexplained_points, nullptr},
     {"unexplained_share", 4, &BuildingReport::unexplained_share, nullptr},
+    {"unsupported_area", 2, &BuildingReport::unsupported_area, nullptr},
+    {"height_excess", 3, &BuildingReport::height_excess, nullptr},
     {"validity_found", -1, nullptr, &BuildingReport::validity_found},
     {"repairs", -1, nullptr, &BuildingReport::repairs},
 };
@@ -198,6 +200,8 @@ Attributes building_attributes(const BuildingReport& r, bool timings) {
                                  ? AttributeValue{static_cast<std::int64_t>(r.unexplained_points)}
                                  : AttributeValue{}},
       {"unexplained_share", rounded(r.unexplained_share, 4)},
+      {"unsupported_area", rounded(r.unsupported_area, 2)},
+      {"height_excess", rounded(r.height_excess, 3)},
       {"b3_val3dity_lod12", val3dity("1.2")},
       {"b3_val3dity_lod13", val3dity("1.3")},
       {"b3_val3dity_lod22", val3dity("2.2")},

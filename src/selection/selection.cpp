@@ -8,7 +8,8 @@
 //              c_e in [0,1]   per edge whose corner indicator is not constant (continuous: at any
 //                             integral x its cheapest value is already 0 or 1, so a binary would only
 //                             add branching)
-//   minimise   sum_i x_i (-lambda_d support_i / |P| + lambda_r (z_max - z_i) / ((z_max - z_min) |F|))
+//   minimise   sum_i x_i (-lambda_d support_i / |P| + lambda_r (z_max - z_i) / ((z_max - z_min) |F|)
+//                         + lambda_u unsupported_i / A)
 //              + lambda_c / |E| sum_e c_e          (the constant lambda_d and the terms of faces
 //                                                   fixed on stay out; selection_energy() adds them)
 //   subject to sum_{j in N(e)} x_j - 2 y_e = 0     edge used by 0 or 2 faces
@@ -117,6 +118,10 @@ void check_problem(const SelectionProblem& problem) {
   if (!problem.is_roof.empty() && problem.is_roof.size() != n)
     add("is_roof has " + std::to_string(problem.is_roof.size()) + " entries, need 0 or " + std::to_string(n));
   if (problem.point_count == 0) add("point_count is 0");
+  if (!problem.unsupported.empty() && problem.unsupported.size() != n)
+    add("unsupported has " + std::to_string(problem.unsupported.size()) + " entries, need 0 or " + std::to_string(n));
+  if (!problem.unsupported.empty() && !(problem.plan_area > 0.0))
+    add("plan_area " + std::to_string(problem.plan_area) + " is not > 0");
   if (!(problem.z_max > problem.z_min))
     add("z_max " + std::to_string(problem.z_max) + " is not above z_min " + std::to_string(problem.z_min));
   for (std::size_t e = 0; e < problem.edges.size(); ++e) {
@@ -168,7 +173,9 @@ double face_cost(const SelectionProblem& problem, const SelectionParams& params,
   const double data = -params.lambda_data * problem.support[i] / static_cast<double>(problem.point_count);
   const double roof = params.lambda_roof * (problem.z_max - problem.centroid_z[i]) /
                       ((problem.z_max - problem.z_min) * static_cast<double>(problem.face_count));
-  return data + roof;
+  const double unsupported =
+      problem.unsupported.empty() ? 0.0 : params.lambda_unsupported * problem.unsupported[i] / problem.plan_area;
+  return data + roof + unsupported;
 }
 
 double corner_cost(const SelectionProblem& problem, const SelectionParams& params) {
@@ -620,6 +627,7 @@ void SelectionParams::validate() const {
   weight(lambda_data, "lambda_data");
   weight(lambda_complexity, "lambda_complexity");
   weight(lambda_roof, "lambda_roof");
+  weight(lambda_unsupported, "lambda_unsupported");
   if (solver != "auto" && solver != "glpk" && solver != "cbc")
     errors.push_back("solver = '" + solver + "' (need auto, glpk or cbc)");
   if (!std::isfinite(time_limit) || time_limit < 0.0)
@@ -640,11 +648,12 @@ double selection_energy(const SelectionProblem& problem, const std::vector<bool>
   if (selected.size() != problem.face_count)
     throw ReconstructionError("selection: assignment has " + std::to_string(selected.size()) +
                               " entries for " + std::to_string(problem.face_count) + " faces");
-  double support = 0.0, roof = 0.0;
+  double support = 0.0, roof = 0.0, unsupported = 0.0;
   for (std::size_t i = 0; i < problem.face_count; ++i) {
     if (!selected[i]) continue;
     support += problem.support[i];
     roof += (problem.z_max - problem.centroid_z[i]) / (problem.z_max - problem.z_min);
+    if (!problem.unsupported.empty()) unsupported += problem.unsupported[i];
   }
   std::size_t sharp = 0;
   for (const auto& edge : problem.edges)
@@ -654,7 +663,9 @@ double selection_energy(const SelectionProblem& problem, const std::vector<bool>
   const double e_complexity =
       problem.edges.empty() ? 0.0 : static_cast<double>(sharp) / static_cast<double>(problem.edges.size());
   const double e_roof = problem.face_count == 0 ? 0.0 : roof / static_cast<double>(problem.face_count);
-  return params.lambda_data * e_data + params.lambda_complexity * e_complexity + params.lambda_roof * e_roof;
+  const double e_unsupported = problem.unsupported.empty() ? 0.0 : unsupported / problem.plan_area;
+  return params.lambda_data * e_data + params.lambda_complexity * e_complexity + params.lambda_roof * e_roof +
+         params.lambda_unsupported * e_unsupported;
 }
 
 bool satisfies_constraints(const SelectionProblem& problem, const std::vector<bool>& selected,

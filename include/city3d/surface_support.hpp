@@ -1,0 +1,129 @@
+// Surface support: how much of a model's surface its points ask for (issue 23). The RMSE measures one
+// direction only, from each point to the model: a face that no point is near costs nothing there, so a
+// model can carry a steep blade metres above its roof and still fit its points. This measures the other
+// direction, from the model to the points:
+//
+//   - every face but the ground is sampled, area-weighted, no two neighbouring samples farther apart
+//     than sample_spacing (each triangle of the face is cut into n x n similar triangles, one sample at
+//     each one's centroid, carrying its area);
+//   - a sample's local top is the highest point within radius of it in plan;
+//   - the unsupported area is the area of the samples more than tolerance above their local top, and
+//     the height excess the largest height of a sample above its local top (0 when none is above);
+//   - the unpointed roof area is the area of the roof samples with no point within radius in plan.
+//
+// unexplained_points (points farther than 1 m from the model) asks the same question the other way:
+// a model faithful both ways has neither.
+//
+// The hypothesis (src/hypothesis/cell_planes.cpp) uses the same measure on each candidate roof face, so
+// that a plane is not lifted onto a cell where its face would rise over no point.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "city3d/types.hpp"
+
+namespace city3d {
+
+/// The measure's parameters. Distances in metres.
+struct SurfaceSupportParams {
+  double sample_spacing = 0.25;  ///< largest distance between neighbouring samples of a face, > 0
+  double radius = 1.5;           ///< plan distance of the points that make a sample's local top, > 0
+  double tolerance = 1.0;        ///< height above the local top from which a sample is unsupported, >= 0
+  /// Throws ConfigError listing every invalid field.
+  void validate() const;
+};
+
+/// The highest of a set of points within a radius in plan of a position. Built once per building (a
+/// grid of bins of radius / 2, each bin's points by descending height), then queried in about a
+/// microsecond: a bin is skipped when its highest point cannot beat the best so far, taken whole when
+/// it lies inside the disc, and searched from the top otherwise.
+class LocalTop {
+ public:
+  LocalTop(const std::vector<Point3>& points, double radius);
+  /// The highest z of the points within radius of (x, y) in plan (boundary included); NaN when there is
+  /// none.
+  double at(double x, double y) const;
+  double radius() const { return radius_; }
+
+ private:
+  struct Bin {
+    std::uint32_t begin = 0, end = 0;  // range of `points_` (by descending z)
+  };
+  double radius_;
+  Point2 origin_{0.0, 0.0};
+  double size_ = 1.0;
+  long nx_ = 0, ny_ = 0;
+  std::vector<Bin> bins_;
+  std::vector<Point3> points_;  // grouped by bin, each bin by descending z (then x, y)
+};
+
+/// The local top on a raster, for the many candidate faces of the hypothesis (the selection's E_u and the
+/// support cuts): each cell of `cell` metres over `region` holds the local top at its centre, so a sample
+/// costs a lookup instead of a search, at the price of reading the local top up to cell / sqrt(2) away
+/// in plan. Blocks of 8 x 8 cells keep their lowest top, so that a face that cannot rise more than the
+/// tolerance above any top under it is passed over without sampling. Measures of a model (report,
+/// evaluate) use LocalTop itself.
+class LocalTopRaster {
+ public:
+  LocalTopRaster(const LocalTop& local_top, const Box2& region, double cell);
+  /// The local top at the centre of the cell holding (x, y); NaN outside the region or where no point is
+  /// near.
+  double at(double x, double y) const;
+  /// A lower bound of the local tops over `box` (+inf where none is known: no sample there can be
+  /// unsupported).
+  double lowest_in(const Box2& box) const;
+  /// The area of the polygon `face` more than params.tolerance above its local top, sampled as
+  /// sample_polygon does at params.sample_spacing.
+  double unsupported_area(const std::vector<Point3>& face, const struct SurfaceSupportParams& params) const;
+
+ private:
+  static constexpr long kBlock = 8;
+  Point2 origin_{0.0, 0.0};
+  double cell_ = 1.0;
+  long nx_ = 0, ny_ = 0, bx_ = 0, by_ = 0;
+  std::vector<float> top_;         // per cell, NaN: none
+  std::vector<float> block_low_;   // per block of kBlock x kBlock cells, +inf: none
+};
+
+/// Samples the polygon `face` (simple, planar, any orientation; non-convex allowed) as described in the
+/// file comment: calls visit(sample, area) for each sample, in a deterministic order. A polygon without
+/// area gives no sample.
+void sample_polygon(const std::vector<Point3>& face, double spacing,
+                    const std::function<void(const Point3&, double)>& visit);
+
+/// What surface_support() measured. Areas in m2, heights in metres.
+struct SurfaceSupport {
+  double unsupported_area = 0.0;     ///< samples more than tolerance above their local top
+  double height_excess = 0.0;        ///< the largest height of a sample above its local top, >= 0
+  double unpointed_roof_area = 0.0;  ///< roof samples with no point within radius in plan
+  double sampled_area = 0.0;         ///< every face sampled (the ground excluded)
+  /// Per face of the mesh: its unsupported area (0 for the ground).
+  std::vector<double> face_unsupported_area;
+  /// The unsupported samples, in sampling order.
+  std::vector<Point3> unsupported_samples;
+};
+
+/// Measures `mesh` against the points of `local_top` (same frame). `types` gives each face's semantic
+/// type (surface_types() of model_io.hpp classifies the faces of a model without semantics by their
+/// normal); a face without an entry counts as a wall. Faces with out-of-range indices are skipped.
+/// Never throws on bad geometry.
+SurfaceSupport surface_support(const PolygonMesh& mesh, const std::vector<SurfaceType>& types,
+                               const LocalTop& local_top, const SurfaceSupportParams& params = {});
+
+/// Semantic types of a mesh's faces that do not depend on their orientation (other tools' models, City3D's
+/// among them, are not consistently oriented): a face within ~6 degrees of vertical is a wall, a face
+/// that lies at the mesh's lowest height (every vertex within 1 cm of it) is the ground, any other a roof.
+std::vector<SurfaceType> surface_types_unoriented(const PolygonMesh& mesh);
+
+/// The points beneath surface no point supports: point i is marked when an unsupported sample of
+/// `support` lies within params.radius of it in plan and more than params.tolerance above it (the
+/// points such a sample's local top was taken from, and those lower). These are the points a model
+/// with a blade misrepresents, whatever their distance to it (a low annex beside a wall is near the
+/// wall).
+std::vector<bool> points_beneath_unsupported(const SurfaceSupport& support, const std::vector<Point3>& points,
+                                             const SurfaceSupportParams& params = {});
+
+}  // namespace city3d

@@ -1,0 +1,306 @@
+// Surface support (include/city3d/surface_support.hpp): the local top of the points in plan, face
+// sampling, and the unsupported area of a model.
+#include "city3d/surface_support.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <string>
+
+#include "city3d/error.hpp"
+
+namespace city3d {
+
+void SurfaceSupportParams::validate() const {
+  std::string problems;
+  const auto add = [&](const std::string& p) { problems += (problems.empty() ? "" : "; ") + p; };
+  if (!(sample_spacing > 0.0) || !std::isfinite(sample_spacing)) add("sample_spacing must be > 0 (metres)");
+  if (!(radius > 0.0) || !std::isfinite(radius)) add("radius must be > 0 (metres)");
+  if (!(tolerance >= 0.0) || !std::isfinite(tolerance)) add("tolerance must be >= 0 (metres)");
+  if (!problems.empty()) throw ConfigError("surface support: " + problems);
+}
+
+LocalTop::LocalTop(const std::vector<Point3>& points, double radius) : radius_(radius) {
+  Box2 box;
+  for (const Point3& p : points)
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) box.add({p.x, p.y});
+  if (box.empty() || !(radius > 0.0)) return;
+  origin_ = box.min;
+  // Bins of half the radius: a query visits at most 7 x 7 of them, and most inner ones whole.
+  size_ = radius / 2.0;
+  const double w = box.max.x - box.min.x, h = box.max.y - box.min.y;
+  while ((w / size_ + 1.0) * (h / size_ + 1.0) > 4e6) size_ *= 2.0;
+  nx_ = static_cast<long>(w / size_) + 1;
+  ny_ = static_cast<long>(h / size_) + 1;
+  std::vector<std::uint32_t> count(static_cast<std::size_t>(nx_ * ny_) + 1, 0);
+  const auto bin_of = [&](const Point3& p) {
+    const long i = std::clamp(static_cast<long>((p.x - origin_.x) / size_), 0L, nx_ - 1);
+    const long j = std::clamp(static_cast<long>((p.y - origin_.y) / size_), 0L, ny_ - 1);
+    return static_cast<std::size_t>(j * nx_ + i);
+  };
+  for (const Point3& p : points)
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) ++count[bin_of(p) + 1];
+  std::partial_sum(count.begin(), count.end(), count.begin());
+  points_.resize(count.back());
+  bins_.resize(static_cast<std::size_t>(nx_ * ny_));
+  std::vector<std::uint32_t> next(count.begin(), count.end() - 1);
+  for (const Point3& p : points)
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) points_[next[bin_of(p)]++] = p;
+  for (std::size_t b = 0; b < bins_.size(); ++b) {
+    bins_[b] = {count[b], count[b + 1]};
+    std::sort(points_.begin() + count[b], points_.begin() + count[b + 1], [](const Point3& a, const Point3& c) {
+      return a.z > c.z || (a.z == c.z && (a.x < c.x || (a.x == c.x && a.y < c.y)));
+    });
+  }
+}
+
+double LocalTop::at(double x, double y) const {
+  double best = -std::numeric_limits<double>::infinity();
+  if (bins_.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const double r2 = radius_ * radius_;
+  const long i0 = std::max(0L, static_cast<long>(std::floor((x - radius_ - origin_.x) / size_)));
+  const long i1 = std::min(nx_ - 1, static_cast<long>(std::floor((x + radius_ - origin_.x) / size_)));
+  const long j0 = std::max(0L, static_cast<long>(std::floor((y - radius_ - origin_.y) / size_)));
+  const long j1 = std::min(ny_ - 1, static_cast<long>(std::floor((y + radius_ - origin_.y) / size_)));
+  // Two passes: the bins wholly inside the disc first (their highest point counts as it is), then the
+  // others, searched from their top only while it can beat the best so far: on a roof the first pass
+  // usually leaves little for the second.
+  for (int pass = 0; pass < 2; ++pass)
+    for (long j = j0; j <= j1; ++j) {
+      const double y0 = origin_.y + static_cast<double>(j) * size_, y1 = y0 + size_;
+      const double dy_far = std::max(std::abs(y - y0), std::abs(y - y1));
+      for (long i = i0; i <= i1; ++i) {
+        const Bin& bin = bins_[static_cast<std::size_t>(j * nx_ + i)];
+        if (bin.begin == bin.end || points_[bin.begin].z <= best) continue;
+        const double x0 = origin_.x + static_cast<double>(i) * size_, x1 = x0 + size_;
+        const double dx_far = std::max(std::abs(x - x0), std::abs(x - x1));
+        const bool whole = dx_far * dx_far + dy_far * dy_far <= r2;  // the whole bin lies in the disc
+        if (pass == 0) {
+          if (whole) best = points_[bin.begin].z;
+          continue;
+        }
+        if (whole) continue;  // taken in the first pass
+        for (std::uint32_t k = bin.begin; k < bin.end; ++k) {
+          const Point3& p = points_[k];
+          if (p.z <= best) break;
+          if ((p.x - x) * (p.x - x) + (p.y - y) * (p.y - y) <= r2) {
+            best = p.z;
+            break;
+          }
+        }
+      }
+    }
+  return std::isfinite(best) ? best : std::numeric_limits<double>::quiet_NaN();
+}
+
+LocalTopRaster::LocalTopRaster(const LocalTop& local_top, const Box2& region, double cell) {
+  if (region.empty() || !(cell > 0.0)) return;
+  cell_ = cell;
+  origin_ = region.min;
+  const double w = region.max.x - region.min.x, h = region.max.y - region.min.y;
+  // A bound on the work: a region of more than ~4M cells is read at a coarser cell.
+  while ((w / cell_ + 1.0) * (h / cell_ + 1.0) > 4e6) cell_ *= 2.0;
+  nx_ = static_cast<long>(w / cell_) + 1;
+  ny_ = static_cast<long>(h / cell_) + 1;
+  bx_ = (nx_ + kBlock - 1) / kBlock;
+  by_ = (ny_ + kBlock - 1) / kBlock;
+  top_.assign(static_cast<std::size_t>(nx_ * ny_), std::numeric_limits<float>::quiet_NaN());
+  block_low_.assign(static_cast<std::size_t>(bx_ * by_), std::numeric_limits<float>::infinity());
+  for (long j = 0; j < ny_; ++j)
+    for (long i = 0; i < nx_; ++i) {
+      const double z = local_top.at(origin_.x + (static_cast<double>(i) + 0.5) * cell_,
+                                    origin_.y + (static_cast<double>(j) + 0.5) * cell_);
+      if (std::isnan(z)) continue;
+      top_[static_cast<std::size_t>(j * nx_ + i)] = static_cast<float>(z);
+      float& low = block_low_[static_cast<std::size_t>((j / kBlock) * bx_ + i / kBlock)];
+      low = std::min(low, static_cast<float>(z));
+    }
+}
+
+double LocalTopRaster::at(double x, double y) const {
+  const long i = static_cast<long>(std::floor((x - origin_.x) / cell_));
+  const long j = static_cast<long>(std::floor((y - origin_.y) / cell_));
+  if (i < 0 || j < 0 || i >= nx_ || j >= ny_) return std::numeric_limits<double>::quiet_NaN();
+  return top_[static_cast<std::size_t>(j * nx_ + i)];
+}
+
+double LocalTopRaster::lowest_in(const Box2& box) const {
+  double low = std::numeric_limits<double>::infinity();
+  if (top_.empty() || box.empty()) return low;
+  const long i0 = std::max(0L, static_cast<long>(std::floor((box.min.x - origin_.x) / cell_)) / kBlock);
+  const long i1 = std::min(bx_ - 1, static_cast<long>(std::floor((box.max.x - origin_.x) / cell_)) / kBlock);
+  const long j0 = std::max(0L, static_cast<long>(std::floor((box.min.y - origin_.y) / cell_)) / kBlock);
+  const long j1 = std::min(by_ - 1, static_cast<long>(std::floor((box.max.y - origin_.y) / cell_)) / kBlock);
+  for (long j = j0; j <= j1; ++j)
+    for (long i = i0; i <= i1; ++i) low = std::min(low, static_cast<double>(block_low_[static_cast<std::size_t>(j * bx_ + i)]));
+  return low;
+}
+
+double LocalTopRaster::unsupported_area(const std::vector<Point3>& face, const SurfaceSupportParams& params) const {
+  Box2 box;
+  double highest = -std::numeric_limits<double>::infinity();
+  for (const Point3& p : face) {
+    box.add({p.x, p.y});
+    highest = std::max(highest, p.z);
+  }
+  // No sample of the face can rise more than the tolerance above a top that is at least this low.
+  if (!(highest - lowest_in(box) > params.tolerance)) return 0.0;
+  double area = 0.0;
+  sample_polygon(face, params.sample_spacing, [&](const Point3& p, double a) {
+    const double top = at(p.x, p.y);
+    if (!std::isnan(top) && p.z - top > params.tolerance) area += a;
+  });
+  return area;
+}
+
+void sample_polygon(const std::vector<Point3>& face, double spacing,
+                    const std::function<void(const Point3&, double)>& visit) {
+  const std::size_t n = face.size();
+  if (n < 3 || !(spacing > 0.0)) return;
+  // Newell's normal: twice the vector area, robust for non-convex polygons.
+  double nx = 0.0, ny = 0.0, nz = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Point3 &a = face[i], &b = face[(i + 1) % n];
+    nx += (a.y - b.y) * (a.z + b.z);
+    ny += (a.z - b.z) * (a.x + b.x);
+    nz += (a.x - b.x) * (a.y + b.y);
+  }
+  const double twice = std::sqrt(nx * nx + ny * ny + nz * nz);
+  if (!(twice > 0.0) || !std::isfinite(twice)) return;
+  const double area = 0.5 * twice;
+  nx /= twice, ny /= twice, nz /= twice;
+  // The frame: u along the longest edge (a thin face then runs along the rows), v = n x u.
+  std::size_t longest = 0;
+  double longest2 = -1.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Point3 &a = face[i], &b = face[(i + 1) % n];
+    const double d2 = (b.x - a.x) * (b.x - a.x) + (b.y - a.y) * (b.y - a.y) + (b.z - a.z) * (b.z - a.z);
+    if (d2 > longest2) longest2 = d2, longest = i;
+  }
+  const Point3& o = face[longest];
+  const Point3& e = face[(longest + 1) % n];
+  const double el = std::sqrt(longest2);
+  if (!(el > 0.0)) return;
+  const double ux = (e.x - o.x) / el, uy = (e.y - o.y) / el, uz = (e.z - o.z) / el;
+  const double vx = ny * uz - nz * uy, vy = nz * ux - nx * uz, vz = nx * uy - ny * ux;
+  std::vector<double> pu(n), pv(n);
+  double u0 = std::numeric_limits<double>::infinity(), u1 = -u0, v0 = u0, v1 = -u0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double dx = face[i].x - o.x, dy = face[i].y - o.y, dz = face[i].z - o.z;
+    pu[i] = dx * ux + dy * uy + dz * uz;
+    pv[i] = dx * vx + dy * vy + dz * vz;
+    u0 = std::min(u0, pu[i]), u1 = std::max(u1, pu[i]);
+    v0 = std::min(v0, pv[i]), v1 = std::max(v1, pv[i]);
+  }
+  // A square grid of the spacing in the face's plane, cell centres inside the polygon (even-odd, row by
+  // row). A face too thin for a row of the grid is scanned with rows closer together (up to 64 times),
+  // its samples still the spacing apart along u.
+  std::vector<std::pair<double, double>> samples;  // (u, v)
+  std::vector<double> crossings;
+  for (double row = spacing; samples.empty() && row >= spacing / 64.0; row /= 2.0) {
+    const long rows = std::max(1L, static_cast<long>(std::ceil((v1 - v0) / row)));
+    const double first_v = v0 + 0.5 * ((v1 - v0) - static_cast<double>(rows - 1) * row);
+    for (long j = 0; j < rows; ++j) {
+      const double v = first_v + static_cast<double>(j) * row;
+      crossings.clear();
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t k = (i + 1) % n;
+        if ((pv[i] <= v) == (pv[k] <= v)) continue;
+        crossings.push_back(pu[i] + (v - pv[i]) / (pv[k] - pv[i]) * (pu[k] - pu[i]));
+      }
+      std::sort(crossings.begin(), crossings.end());
+      for (std::size_t c = 0; c + 1 < crossings.size(); c += 2) {
+        // Columns of the grid anchored at u0; a run shorter than the spacing still gets its middle.
+        const double a = crossings[c], b = crossings[c + 1];
+        long i0 = static_cast<long>(std::ceil((a - u0) / spacing - 0.5));
+        const long i1 = static_cast<long>(std::floor((b - u0) / spacing - 0.5));
+        if (i0 > i1) {
+          samples.emplace_back(0.5 * (a + b), v);
+          continue;
+        }
+        for (; i0 <= i1; ++i0) samples.emplace_back(u0 + (static_cast<double>(i0) + 0.5) * spacing, v);
+      }
+    }
+  }
+  if (samples.empty()) return;
+  const double piece = area / static_cast<double>(samples.size());
+  for (const auto& [u, v] : samples)
+    visit({o.x + u * ux + v * vx, o.y + u * uy + v * vy, o.z + u * uz + v * vz}, piece);
+}
+
+SurfaceSupport surface_support(const PolygonMesh& mesh, const std::vector<SurfaceType>& types,
+                               const LocalTop& local_top, const SurfaceSupportParams& params) {
+  params.validate();
+  SurfaceSupport out;
+  out.face_unsupported_area.assign(mesh.faces.size(), 0.0);
+  std::vector<Point3> polygon;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const SurfaceType type = f < types.size() ? types[f] : SurfaceType::wall;
+    if (type == SurfaceType::ground) continue;
+    const auto& face = mesh.faces[f];
+    if (std::any_of(face.begin(), face.end(), [&](std::uint32_t v) { return v >= mesh.vertices.size(); })) continue;
+    polygon.clear();
+    for (const std::uint32_t v : face) polygon.push_back(mesh.vertices[v]);
+    double unsupported = 0.0;
+    sample_polygon(polygon, params.sample_spacing, [&](const Point3& p, double area) {
+      out.sampled_area += area;
+      const double top = local_top.at(p.x, p.y);
+      if (std::isnan(top)) {
+        if (type == SurfaceType::roof) out.unpointed_roof_area += area;
+        return;
+      }
+      const double above = p.z - top;
+      out.height_excess = std::max(out.height_excess, above);
+      if (above > params.tolerance) {
+        unsupported += area;
+        out.unsupported_samples.push_back(p);
+      }
+    });
+    out.face_unsupported_area[f] = unsupported;
+    out.unsupported_area += unsupported;
+  }
+  return out;
+}
+
+std::vector<SurfaceType> surface_types_unoriented(const PolygonMesh& mesh) {
+  double lowest = std::numeric_limits<double>::infinity();
+  for (const Point3& v : mesh.vertices) lowest = std::min(lowest, v.z);
+  std::vector<SurfaceType> types;
+  types.reserve(mesh.faces.size());
+  for (const auto& face : mesh.faces) {
+    double nx = 0.0, ny = 0.0, nz = 0.0;  // Newell's normal
+    bool ground = true;
+    for (std::size_t i = 0; i < face.size(); ++i) {
+      if (face[i] >= mesh.vertices.size() || face[(i + 1) % face.size()] >= mesh.vertices.size()) {
+        ground = false;
+        break;
+      }
+      const Point3& a = mesh.vertices[face[i]];
+      const Point3& b = mesh.vertices[face[(i + 1) % face.size()]];
+      nx += (a.y - b.y) * (a.z + b.z);
+      ny += (a.z - b.z) * (a.x + b.x);
+      nz += (a.x - b.x) * (a.y + b.y);
+      ground = ground && a.z - lowest <= 0.01;
+    }
+    const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
+    const bool vertical = !(length > 0.0) || std::abs(nz) / length <= 0.1;
+    types.push_back(vertical ? SurfaceType::wall : ground ? SurfaceType::ground : SurfaceType::roof);
+  }
+  return types;
+}
+
+std::vector<bool> points_beneath_unsupported(const SurfaceSupport& support, const std::vector<Point3>& points,
+                                             const SurfaceSupportParams& params) {
+  std::vector<bool> beneath(points.size(), false);
+  if (support.unsupported_samples.empty() || points.empty()) return beneath;
+  // The highest unsupported sample near each point is all that matters: a LocalTop of the samples.
+  const LocalTop highest_sample(support.unsupported_samples, params.radius);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const double z = highest_sample.at(points[i].x, points[i].y);
+    beneath[i] = !std::isnan(z) && z - points[i].z > params.tolerance;
+  }
+  return beneath;
+}
+
+}  // namespace city3d
