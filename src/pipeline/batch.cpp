@@ -43,6 +43,11 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// Adds a note to a report row (after the pipeline's own, "; "-separated).
+void add_note(BuildingReport& report, const std::string& note) {
+  report.note += (report.note.empty() ? "" : "; ") + note;
+}
+
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
@@ -74,6 +79,51 @@ std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
   }
   if (files.empty()) throw ConfigError("input: no point-cloud file given");
   return files;
+}
+
+/// A single-building cloud's id and, when it is not the file name, how it was made.
+struct CloudId {
+  BuildingId id;
+  std::string note;
+};
+
+// Each cloud's id: its file name without extension; when several files share that name, each of
+// them gets its path below their common folder, without extension (with it when that is still
+// shared: x.las and x.laz side by side). Ids are unique in every output, whatever the files' names.
+std::vector<CloudId> cloud_ids(const std::vector<std::string>& files) {
+  std::vector<CloudId> ids(files.size());
+  std::map<std::string, std::vector<std::size_t>> by_name;
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    ids[i].id = fs::path(files[i]).stem().string();
+    by_name[ids[i].id].push_back(i);
+  }
+  for (const auto& [name, group] : by_name) {
+    if (group.size() < 2) continue;
+    std::vector<fs::path> paths;
+    for (std::size_t i : group) paths.push_back(fs::absolute(files[i]).lexically_normal());
+    fs::path common = paths.front().parent_path();
+    for (const fs::path& p : paths)
+      while (!common.empty() && p.parent_path().lexically_relative(common).string().rfind("..", 0) == 0)
+        common = common.parent_path();
+    std::map<std::string, std::size_t> uses;
+    for (const fs::path& p : paths) ++uses[p.lexically_relative(common).replace_extension().generic_string()];
+    for (std::size_t k = 0; k < group.size(); ++k) {
+      fs::path below = paths[k].lexically_relative(common);
+      if (uses[fs::path(below).replace_extension().generic_string()] == 1) below.replace_extension();
+      ids[group[k]].id = below.generic_string();
+      ids[group[k]].note = "id: the path below " + common.string() + ", since " + std::to_string(group.size()) +
+                           " files are named " + name;
+    }
+  }
+  // Names that still meet (a path that is another file's name, say): numbered in input order.
+  std::map<std::string, std::size_t> seen;
+  for (CloudId& c : ids)
+    if (const std::size_t n = ++seen[c.id]; n > 1) {
+      c.note = (c.note.empty() ? "" : c.note + "; ") + "id: " + c.id + " numbered " + std::to_string(n) +
+               ", since another input has that id";
+      c.id += "~" + std::to_string(n);
+    }
+  return ids;
 }
 
 std::vector<Point3> read_all_points(const std::string& path) {
@@ -205,6 +255,7 @@ struct Plan {
   std::vector<std::vector<std::uint64_t>> blocks;   ///< building indices per block, row-major
   std::vector<double> weights;                      ///< per block: footprint area, or cloud file size
   std::vector<SkippedFootprint> skipped;            ///< indices buildings, buildings + 1, ...
+  std::vector<CloudId> cloud_ids;                   ///< single-building clouds: per file
   std::string crs;
 };
 
@@ -282,7 +333,10 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   if (sharded && !(options.shards >= 1 && options.shard >= 1 && options.shard <= options.shards))
     throw ConfigError("batch: shard " + std::to_string(options.shard) + "/" + std::to_string(options.shards) +
                       " does not exist (K/N with 1 <= K <= N)");
-  const std::vector<std::string> files = detail::distinct_inputs(expand_inputs(options.point_clouds));
+  // Tiles given twice are read once; single-building clouds are buildings, each file its own.
+  const std::vector<std::string> files = detail::distinct_inputs(
+      expand_inputs(options.point_clouds),
+      options.footprints.empty() ? detail::Repeats::clouds : detail::Repeats::tiles);
   // Every header is checked before anything is written, and gives the CRS and extents.
   std::vector<PointCloudInfo> infos;
   for (const std::string& f : files) infos.push_back(read_point_cloud_info(f));
@@ -314,6 +368,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   } else {
     // Single-building clouds: each cloud is its own block.
     plan.buildings = files.size();
+    plan.cloud_ids = cloud_ids(files);
     for (std::uint64_t i = 0; i < files.size(); ++i) {
       std::error_code ec;
       const auto size = fs::file_size(files[i], ec);
@@ -404,10 +459,13 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   std::atomic<std::size_t> done{journal.restored()};
   const std::size_t total = header.expected;
   // outline_of(k) gives its footprint's polygons in world coordinates (nullptr for clouds).
+  // amend(k, result) adds what the run knows about the building beyond its input (coverage, how
+  // its id was made).
   auto reconstruct_all = [&](const std::vector<std::uint64_t>& indices,
                              const std::function<BuildingId(std::size_t)>& id_of,
                              const std::function<BuildingInput(std::size_t)>& make_input,
-                             const std::function<const std::vector<Polygon2>*(std::size_t)>& outline_of) {
+                             const std::function<const std::vector<Polygon2>*(std::size_t)>& outline_of,
+                             const std::function<void(std::size_t, BuildingResult&)>& amend) {
     std::atomic<std::size_t> next{0};
     std::exception_ptr failure;
     std::mutex failure_mutex;
@@ -427,6 +485,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
           }
           const BuildingInput input = make_input(k);
           BuildingResult result = reconstruct_building(input, options.reconstruction);
+          amend(k, result);
           journal.append(make_record(indices[k], std::move(result), options, plan.layout, input.footprint.attributes,
                                      outline_of(k)));
         } catch (...) {
@@ -456,11 +515,14 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
     if (all_done) continue;
     if (!source) {
       const std::string& file = files[indices.front()];
-      const BuildingId id = fs::path(file).stem().string();
+      const CloudId& cloud = plan.cloud_ids[indices.front()];
       reconstruct_all(
-          indices, [&](std::size_t) { return id; },
-          [&](std::size_t) { return building_from_cloud(id, read_all_points(file), options.ground_z); },
-          [](std::size_t) { return nullptr; });
+          indices, [&](std::size_t) { return cloud.id; },
+          [&](std::size_t) { return building_from_cloud(cloud.id, read_all_points(file), options.ground_z); },
+          [](std::size_t) { return nullptr; },
+          [&](std::size_t, BuildingResult& result) {
+            if (!cloud.note.empty()) add_note(result.report, cloud.note);
+          });
       continue;
     }
     // The group's footprints and every other footprint that can reach into their ground buffers
@@ -515,7 +577,8 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
       }
     reconstruct_all(
         indices, [&](std::size_t k) { return inputs[k].id; }, [&](std::size_t k) { return std::move(inputs[k]); },
-        [&](std::size_t k) { return outlines.empty() ? nullptr : &outlines[k]; });
+        [&](std::size_t k) { return outlines.empty() ? nullptr : &outlines[k]; },
+        [&](std::size_t, BuildingResult&) {});
   }
   journal.close();
 

@@ -1,0 +1,214 @@
+// Issue 24: nothing silently wrong. The ordinary mistakes of a new user, each caught, stated, or
+// given its own output: twin tiles, footprints the tiles only partly cover, clouds of the same name
+// or the same bytes, a non-unique id field, runs that build nothing, reruns into a folder, and the
+// small things of the command line. Each test checks outputs (ids, counts, status, coverage, exit
+// code), not the wording of messages; real data where it exists (../shared/data), else made here.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "city3d/point_cloud_io.hpp"
+#include "io/input_check.hpp"
+#include "las_writer.hpp"
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+struct Result {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+Result run_shell(const std::string& command_line) {
+  Result r;
+  FILE* pipe = popen((command_line + " 2>&1").c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf;
+  std::size_t n;
+  while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+Result run(const std::string& arguments) { return run_shell(std::string(CITY3D_EXE) + " " + arguments); }
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+const std::string kShared = CITY3D_SHARED_DATA;
+const std::string kDelft = kShared + "/ahn3_delft";
+const std::string kTile1 = kDelft + "/ahn3_cropped_1.las";
+const std::string kTile2 = kDelft + "/ahn3_cropped_2.las";
+const std::string kGpkg = kDelft + "/footprints/bgt_pand_laz_area.gpkg";
+const std::string kSample = CITY3D_SAMPLE_DATA;
+
+/// report.json of an output folder.
+json report(const fs::path& out) { return json::parse(read_file(out / "report.json")); }
+
+/// id -> that building's row of report.json.
+std::map<std::string, json> rows_by_id(const fs::path& out) {
+  std::map<std::string, json> rows;
+  const json whole = report(out);
+  for (const json& row : whole.at("buildings")) rows[row.at("id").get<std::string>()] = row;
+  return rows;
+}
+
+class Mistakes : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("city3d_mistakes_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+  static void require_shared_data() {
+    if (!fs::exists(kTile1)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  }
+  fs::path dir_;
+};
+
+}  // namespace
+
+// --- 1. twins: a folder with LAS and LAZ of the same tiles doubled every point ---
+
+TEST_F(Mistakes, folder_with_las_and_laz_twins_reads_each_tile_once) {
+  require_shared_data();
+  const std::string tail = " -f " + kGpkg + " --id-field gml_id -j 2 --no-progress -o ";
+  ASSERT_EQ(run("reconstruct " + kTile1 + " " + kTile2 + tail + (dir_ / "las").string()).exit_code, 0);
+  const Result folder = run("reconstruct " + kDelft + tail + (dir_ / "folder").string());
+  ASSERT_EQ(folder.exit_code, 0) << folder.output;
+  // The same points per building (76,818 -> 153,636 before), so the same models.
+  const auto las = rows_by_id(dir_ / "las"), twins = rows_by_id(dir_ / "folder");
+  ASSERT_EQ(twins.size(), 160u);
+  std::size_t points = 0;
+  for (const auto& [id, row] : las) {
+    ASSERT_TRUE(twins.count(id)) << id;
+    EXPECT_EQ(twins.at(id).at("points"), row.at("points")) << id;
+    points += row.at("points").get<std::size_t>();
+  }
+  EXPECT_GT(points, 70000u);
+  EXPECT_EQ(read_file(dir_ / "folder" / "buildings.city.json"), read_file(dir_ / "las" / "buildings.city.json"));
+}
+
+// The LAZ set's manifest gives each pair's point-block SHA-256: files of one SHA hold the same
+// points (a LAS file and its LAZ, and the same records as LAS 1.2, 1.3 and 1.4), and only those.
+TEST(Twins, files_of_the_laz_set_are_one_tile_exactly_when_their_point_blocks_are_the_same) {
+  const fs::path set = kShared + "/laz";
+  if (!fs::exists(set / "manifest.json")) GTEST_SKIP() << "../shared/data is not beside the repository";
+  const json manifest = json::parse(read_file(set / "manifest.json"));
+  std::map<std::string, std::string> sha_of;  // file name -> point-block SHA-256
+  for (const json& pair : manifest.at("pairs")) {
+    // Two files without points have the same (empty) block; in other point formats they are other tiles.
+    const std::string name = pair.at("name").get<std::string>(),
+                      sha = pair.at("point_block_sha256").get<std::string>() + " " + pair.at("point_format").dump();
+    sha_of[name + ".las"] = sha_of[name + ".laz"] = sha;
+  }
+  ASSERT_EQ(sha_of.size(), 52u);
+  std::vector<std::string> files, expected;
+  std::set<std::string> seen;
+  for (const auto& [name, sha] : sha_of) {  // sorted by name: NAME.las before NAME.laz
+    files.push_back((set / "cases" / name).string());
+    if (seen.insert(sha).second) expected.push_back(files.back());
+  }
+  EXPECT_EQ(expected.size(), 23u);  // 26 pairs, three of them the records of another pair
+  EXPECT_EQ(city3d::detail::distinct_inputs(files), expected);
+}
+
+TEST_F(Mistakes, tiles_of_one_header_but_other_end_records_are_both_read) {
+  std::vector<city3d::test::LasPoint> points;
+  for (int i = 0; i < 500; ++i) points.push_back({85000.0 + (i % 20) * 0.5, 447550.0 + (i / 20) * 0.5, 5.0 + i % 3, 6});
+  city3d::test::write_las((dir_ / "a.las").string(), points);
+  // The same header facts (count, bounds, scale, offset), one record at the end swapped.
+  std::swap(points[498], points[499]);
+  city3d::test::write_las((dir_ / "b.las").string(), points);
+  // And a twin in all but the first record's class.
+  points[0].classification = 2;
+  std::swap(points[498], points[499]);
+  city3d::test::write_las((dir_ / "c.las").string(), points);
+  const std::vector<std::string> files = {(dir_ / "a.las").string(), (dir_ / "b.las").string(),
+                                          (dir_ / "c.las").string()};
+  EXPECT_EQ(city3d::detail::distinct_inputs(files), files);
+  // And the same file's bytes under another name is still one tile.
+  fs::copy_file(dir_ / "a.las", dir_ / "d.las");
+  EXPECT_EQ(city3d::detail::distinct_inputs({files[0], (dir_ / "d.las").string()}), std::vector<std::string>{files[0]});
+}
+
+// --- 3. clouds of the same file name overwrote each other's model and shared an id ---
+
+TEST_F(Mistakes, clouds_of_the_same_name_get_ids_from_their_paths_and_files_of_their_own) {
+  const fs::path dales = kShared + "/city3d_dev/Dales3d/00011.ply", vaihingen = kShared + "/city3d_dev/Vaihingen/00011.ply";
+  if (!fs::exists(dales)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  const Result r = run("reconstruct " + dales.string() + " " + vaihingen.string() + " --no-progress -o " +
+                       (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto rows = rows_by_id(dir_ / "out");
+  ASSERT_EQ(rows.size(), 2u);
+  ASSERT_TRUE(rows.count("Dales3d/00011")) << r.output;
+  ASSERT_TRUE(rows.count("Vaihingen/00011")) << r.output;
+  // Each note says how its id was made; each building has its own model file and CityJSON object.
+  for (const auto& [id, row] : rows) EXPECT_TRUE(contains(row.at("note").get<std::string>(), "id: the path below")) << id;
+  EXPECT_NE(rows.at("Dales3d/00011").at("points"), rows.at("Vaihingen/00011").at("points"));
+  std::size_t models = 0;
+  for (const auto& entry : fs::directory_iterator(dir_ / "out" / "models")) models += entry.is_regular_file();
+  EXPECT_EQ(models, 2u);
+  const json city = json::parse(read_file(dir_ / "out" / "buildings.city.json"));
+  EXPECT_TRUE(city.at("CityObjects").contains("Dales3d/00011"));
+  EXPECT_TRUE(city.at("CityObjects").contains("Vaihingen/00011"));
+  // A file of the same name beside them again, in one of the folders' copies: x.ply and x.PLY do
+  // not meet, but a path that is still shared keeps its extension.
+  fs::create_directories(dir_ / "twin");
+  fs::copy_file(vaihingen, dir_ / "twin" / "00011.ply");
+  fs::copy_file(vaihingen, dir_ / "twin" / "00011.PLY");
+  const Result same_folder = run("reconstruct " + (dir_ / "twin").string() + " --no-progress -o " + (dir_ / "out2").string());
+  ASSERT_EQ(same_folder.exit_code, 0) << same_folder.output;
+  const auto rows2 = rows_by_id(dir_ / "out2");
+  EXPECT_EQ(rows2.size(), 2u);
+  EXPECT_TRUE(rows2.count("00011.ply") && rows2.count("00011.PLY")) << same_folder.output;
+}
+
+// --- 4. two clouds of identical bytes: the second was "read once" and vanished without a row ---
+
+TEST_F(Mistakes, clouds_of_identical_bytes_are_two_buildings_with_a_row_each) {
+  const fs::path cloud = kShared + "/city3d_dev/AHN3/00262.ply";
+  if (!fs::exists(cloud)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  fs::create_directories(dir_ / "clouds");
+  fs::copy_file(cloud, dir_ / "clouds" / "a.ply");
+  fs::copy_file(cloud, dir_ / "clouds" / "b.ply");
+  const Result r = run("reconstruct " + (dir_ / "clouds").string() + " --no-progress -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto rows = rows_by_id(dir_ / "out");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows.at("a").at("points"), rows.at("b").at("points"));
+  EXPECT_EQ(rows.at("a").at("status"), rows.at("b").at("status"));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "models" / "a.obj"));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "models" / "b.obj"));
+  // The same file named twice is still one building.
+  const Result twice = run("reconstruct " + (dir_ / "clouds" / "a.ply").string() + " " + (dir_ / "clouds").string() +
+                           " --no-progress -o " + (dir_ / "out2").string());
+  ASSERT_EQ(twice.exit_code, 0) << twice.output;
+  EXPECT_EQ(rows_by_id(dir_ / "out2").size(), 2u);
+}
