@@ -212,3 +212,87 @@ TEST_F(Mistakes, clouds_of_identical_bytes_are_two_buildings_with_a_row_each) {
   ASSERT_EQ(twice.exit_code, 0) << twice.output;
   EXPECT_EQ(rows_by_id(dir_ / "out2").size(), 2u);
 }
+
+// --- 2. footprints the tiles given only partly cover came out ok and wrong ---
+
+namespace {
+
+// The seven footprints across the Delft seam (x = 85000) with the share of their area in tile 1
+// (x < 85000): b11282794 99.9%, b31bdfb64 91.9%, b11282799 72.6%, b31bdfb67 46.0%, b31be22a8 30.8%,
+// b1105d28c (fid 95) 13.8%, b31bdfb6a 4.1%; and b31bdd428, wholly in tile 2.
+const std::vector<std::string> kSeam = {
+    "b11282794-00ba-11e6-b420-2bdcc4ab5d7f", "b31bdfb64-00ba-11e6-b420-2bdcc4ab5d7f",
+    "b11282799-00ba-11e6-b420-2bdcc4ab5d7f", "b31bdfb67-00ba-11e6-b420-2bdcc4ab5d7f",
+    "b31be22a8-00ba-11e6-b420-2bdcc4ab5d7f", "b1105d28c-00ba-11e6-b420-2bdcc4ab5d7f",
+    "b31bdfb6a-00ba-11e6-b420-2bdcc4ab5d7f"};
+const std::string kInTile2 = "b31bdd428-00ba-11e6-b420-2bdcc4ab5d7f";
+
+std::string seam_where() {
+  std::string where = "--where \"gml_id IN ('" + kInTile2 + "'";
+  for (const std::string& id : kSeam) where += ", '" + id + "'";
+  return where + ")\"";
+}
+
+}  // namespace
+
+TEST_F(Mistakes, footprints_the_tiles_cover_only_in_part_are_partial_in_every_output_and_fail_a_strict_run) {
+  require_shared_data();
+  const std::string tail = " -f " + kGpkg + " --id-field gml_id " + seam_where() + " --gpkg -j 2 --no-progress -o ";
+  // Both tiles: every seam footprint is covered in full, and ok.
+  const Result both = run("reconstruct " + kTile1 + " " + kTile2 + tail + (dir_ / "both").string());
+  ASSERT_EQ(both.exit_code, 0) << both.output;
+  auto rows = rows_by_id(dir_ / "both");
+  ASSERT_EQ(rows.size(), 8u);
+  for (const std::string& id : kSeam) {
+    EXPECT_EQ(rows.at(id).at("status"), "ok") << id;
+    EXPECT_EQ(rows.at(id).at("coverage"), 1.0) << id;
+  }
+  // Tile 1 alone: the six it cuts by more than 1% of their area are partial, the seventh ok; the
+  // footprint wholly in tile 2 has coverage 0 (and no points, so skipped).
+  const Result one = run("reconstruct " + kTile1 + tail + (dir_ / "one").string());
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  rows = rows_by_id(dir_ / "one");
+  ASSERT_EQ(rows.size(), 8u);
+  EXPECT_EQ(rows.at(kSeam[0]).at("status"), "ok");
+  EXPECT_GE(rows.at(kSeam[0]).at("coverage").get<double>(), 0.95);
+  double previous = 1.0;
+  for (std::size_t k = 1; k < kSeam.size(); ++k) {
+    const json& row = rows.at(kSeam[k]);
+    EXPECT_EQ(row.at("status"), "partial") << kSeam[k];
+    const double coverage = row.at("coverage").get<double>();
+    EXPECT_LT(coverage, 0.95) << kSeam[k];
+    EXPECT_LT(coverage, previous) << kSeam[k];  // in the order of their share in tile 1
+    previous = coverage;
+    EXPECT_NE(row.at("level"), "none") << kSeam[k];  // still reconstructed, from what points there are
+  }
+  EXPECT_LT(rows.at(kSeam[6]).at("coverage").get<double>(), 0.1);
+  EXPECT_EQ(rows.at(kInTile2).at("status"), "skipped");
+  EXPECT_EQ(rows.at(kInTile2).at("coverage"), 0.0);
+  EXPECT_EQ(report(dir_ / "one").at("summary").at("partial"), 6);
+  // The same in CityJSON's attributes and in the GeoPackage.
+  const json city = json::parse(read_file(dir_ / "one" / "buildings.city.json"));
+  const json& fid95 = city.at("CityObjects").at("b1105d28c-00ba-11e6-b420-2bdcc4ab5d7f").at("attributes");
+  EXPECT_EQ(fid95.at("status"), "partial");
+  EXPECT_LT(fid95.at("coverage").get<double>(), 0.2);
+  const Result gpkg = run_shell("ogrinfo -q -sql \"SELECT gml_id, status, coverage FROM buildings WHERE status = "
+                                "'partial'\" " + (dir_ / "one" / "buildings.gpkg").string());
+  ASSERT_EQ(gpkg.exit_code, 0) << gpkg.output;
+  std::size_t partial_features = 0;
+  for (std::size_t at = gpkg.output.find("status (String) = partial"); at != std::string::npos;
+       at = gpkg.output.find("status (String) = partial", at + 1))
+    ++partial_features;
+  EXPECT_EQ(partial_features, 6u) << gpkg.output;
+  EXPECT_TRUE(contains(gpkg.output, "coverage (Real) = 0.14")) << gpkg.output;
+  // --strict makes it a failure: 4 on the whole block with tile 1 (6 partial of 160), 5 here, where
+  // they are most of the buildings (the run's main problem).
+  EXPECT_EQ(run("reconstruct " + kTile1 + " -f " + kGpkg + " --id-field gml_id -j 2 --no-progress --no-html --strict -o " +
+                (dir_ / "strict").string())
+                .exit_code,
+            4);
+  EXPECT_EQ(run("reconstruct " + kTile1 + tail + (dir_ / "strict_most").string() + " --strict").exit_code, 5);
+  // --min-coverage 0 turns the check off.
+  const Result off = run("reconstruct " + kTile1 + tail + (dir_ / "off").string() + " --min-coverage 0");
+  ASSERT_EQ(off.exit_code, 0) << off.output;
+  EXPECT_EQ(report(dir_ / "off").at("summary").at("partial"), 0);
+  EXPECT_EQ(rows_by_id(dir_ / "off").at(kSeam[5]).at("coverage"), rows.at(kSeam[5]).at("coverage"));
+}
