@@ -293,6 +293,15 @@ const std::map<std::string, std::function<fs::path(const fs::path&)>>& generator
          write_text(dir / "clouds" / "b.ply", ply_ascii(points));
          return dir / "clouds";
        }},
+      {"sample_tile_without_building_class",
+       [](const fs::path& dir) {
+         // data/delft_sample_1.las with its building points (class 6) made unclassified (1).
+         std::vector<LasPoint> points = sample_points(std::string(CITY3D_SAMPLE_DATA) + "/delft_sample_1.las");
+         for (LasPoint& p : points)
+           if (p.classification == 6) p.classification = 1;
+         write_las((dir / "no_building_class.las").string(), points);
+         return dir / "no_building_class.las";
+       }},
       {"plain_file",
        [](const fs::path& dir) {
          write_text(dir / "plain_file", "not a folder\n");

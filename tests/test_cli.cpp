@@ -79,6 +79,7 @@ TEST(CommandLine, defaults_are_pinned) {
   EXPECT_TRUE(o.batch.cityjson);
   EXPECT_FALSE(o.batch.cityjson_seq);
   EXPECT_FALSE(o.strict);
+  EXPECT_DOUBLE_EQ(o.batch.min_coverage, 0.95);  // issue 24: partial below 95% of a footprint's area in the tiles
   EXPECT_EQ(o.verbosity, 1);
 }
 

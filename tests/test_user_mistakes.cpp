@@ -296,3 +296,256 @@ TEST_F(Mistakes, footprints_the_tiles_cover_only_in_part_are_partial_in_every_ou
   EXPECT_EQ(report(dir_ / "off").at("summary").at("partial"), 0);
   EXPECT_EQ(rows_by_id(dir_ / "off").at(kSeam[5]).at("coverage"), rows.at(kSeam[5]).at("coverage"));
 }
+
+// --- 5. a non-unique --id-field: 159 warnings, then 1 ok and 159 skipped, exit 0 ---
+
+TEST_F(Mistakes, an_id_field_most_footprints_share_is_one_error_naming_the_fields_that_are_ids) {
+  require_shared_data();
+  const Result r = run("reconstruct " + kTile1 + " " + kTile2 + " -f " + kGpkg + " --id-field rel_hoogte --no-progress -o " +
+                       (dir_ / "out").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "out")) << "a run refused on its inputs leaves no folder";
+  EXPECT_FALSE(contains(r.output, "warning")) << "one error, not a warning per footprint:\n" << r.output;
+  EXPECT_TRUE(contains(r.output, "rel_hoogte")) << r.output;
+  for (const char* id_field : {"gml_id", "lokaalid", "bag_pnd"}) EXPECT_TRUE(contains(r.output, id_field)) << r.output;
+}
+
+TEST_F(Mistakes, a_few_duplicated_ids_are_skipped_each_and_the_others_reconstructed) {
+  // The sample's footprints with a field "pid": gml_id, but the same value for two of the 15.
+  const fs::path footprints = dir_ / "pid.gpkg";
+  const Result made = run_shell("ogr2ogr -f GPKG " + footprints.string() + " " + kSample +
+                                "/delft_sample_footprints.gpkg -dialect sqlite -sql \"SELECT *, CASE WHEN gml_id IN "
+                                "('b31e1d795-00ba-11e6-b420-2bdcc4ab5d7f', 'b11282794-00ba-11e6-b420-2bdcc4ab5d7f') "
+                                "THEN 'twice' ELSE gml_id END AS pid FROM buildingpart\" -nln buildingpart");
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  const Result r = run("reconstruct " + kSample + "/delft_sample_1.las " + kSample + "/delft_sample_2.las -f " +
+                       footprints.string() + " --id-field pid --no-progress -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json whole = report(dir_ / "out");
+  EXPECT_EQ(whole.at("summary").at("buildings"), 15);
+  EXPECT_EQ(whole.at("summary").at("skipped"), 1);
+  EXPECT_EQ(whole.at("summary").at("ok").get<int>() + whole.at("summary").at("fallback").get<int>(), 14);
+  // The first feature of an id keeps it; the second's row says whose it is (skipped rows come last).
+  std::vector<std::string> twice;
+  for (const json& row : whole.at("buildings"))
+    if (row.at("id") == "twice") twice.push_back(row.at("status").get<std::string>() + " " + row.at("reason").get<std::string>());
+  ASSERT_EQ(twice.size(), 2u);
+  EXPECT_TRUE(twice[0] == "ok " || twice[0].rfind("fallback ", 0) == 0) << twice[0];
+  EXPECT_EQ(twice[1].rfind("skipped duplicated id (first at fid", 0), 0u) << twice[1];
+}
+
+// --- 6. runs that build nothing exited 0 ---
+
+TEST_F(Mistakes, a_filter_that_leaves_no_footprint_is_an_error_before_anything_is_written) {
+  const std::string base = "reconstruct " + kSample + "/delft_sample_1.las -f " + kSample +
+                           "/delft_sample_footprints.gpkg --id-field gml_id --no-progress ";
+  Result r = run(base + "--where \"gml_id = 'nope'\" -o " + (dir_ / "where").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "where"));
+  EXPECT_TRUE(contains(r.output, "gml_id = 'nope'")) << r.output;
+  r = run(base + "--bbox 0,0,10,10 -o " + (dir_ / "bbox").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "bbox"));
+  // A filter that keeps one is a run.
+  r = run(base + "--where \"gml_id = 'b31be49eb-00ba-11e6-b420-2bdcc4ab5d7f'\" -o " + (dir_ / "one").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(report(dir_ / "one").at("summary").at("buildings"), 1);
+}
+
+TEST_F(Mistakes, tiles_without_the_building_class_build_nothing_exit_1_and_name_the_classes_present) {
+  // The sample tiles with every building point made class 1: a run skips every footprint.
+  for (const char* tile : {"delft_sample_1.las", "delft_sample_2.las"}) {
+    const city3d::PointCloud cloud = city3d::read_point_cloud(kSample + "/" + tile, city3d::kFieldClassification);
+    std::vector<city3d::test::LasPoint> points;
+    for (std::size_t i = 0; i < cloud.size(); ++i)
+      points.push_back({cloud.points[i].x, cloud.points[i].y, cloud.points[i].z,
+                        static_cast<std::uint8_t>(cloud.classification[i] == 6 ? 1 : cloud.classification[i])});
+    city3d::test::write_las((dir_ / tile).string(), points);
+  }
+  const std::string tiles = (dir_ / "delft_sample_1.las").string() + " " + (dir_ / "delft_sample_2.las").string();
+  const std::string tail = " -f " + kSample + "/delft_sample_footprints.gpkg --id-field gml_id --no-progress -o ";
+  const Result r = run("reconstruct " + tiles + tail + (dir_ / "none").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  const json whole = report(dir_ / "none");  // the report is written, every row with its reason
+  EXPECT_EQ(whole.at("summary").at("buildings"), 15);
+  EXPECT_EQ(whole.at("summary").at("skipped"), 15);
+  // The last lines name the option and the classes the tiles do hold (1 and 2, not 6).
+  EXPECT_TRUE(contains(r.output, "--building-classes")) << r.output;
+  EXPECT_TRUE(contains(r.output, "1 (unclassified")) << r.output;
+  EXPECT_TRUE(contains(r.output, "2 (ground")) << r.output;
+  EXPECT_FALSE(contains(r.output, "6 (building")) << r.output;
+  EXPECT_EQ(run("reconstruct " + tiles + tail + (dir_ / "strict").string() + " --strict").exit_code, 1);
+  // With the class the points have, the same tiles give buildings (and ground 2 stays ground).
+  const Result fixed = run("reconstruct " + tiles + tail + (dir_ / "fixed").string() + " --building-classes 1");
+  EXPECT_EQ(fixed.exit_code, 0) << fixed.output;
+  EXPECT_EQ(report(dir_ / "fixed").at("summary").at("skipped"), 0);
+}
+
+TEST_F(Mistakes, a_run_whose_buildings_mostly_share_one_problem_says_so_and_fails_strict_with_5) {
+  require_shared_data();
+  // Tile 2 alone under the block's 160 footprints: 132 lie outside it.
+  const std::string args = "reconstruct " + kTile2 + " -f " + kGpkg + " --id-field gml_id -j 2 --no-progress --no-html -o ";
+  const Result r = run(args + (dir_ / "lax").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  const json whole = report(dir_ / "lax");
+  EXPECT_GT(whole.at("summary").at("skipped").get<int>(), 80);
+  EXPECT_TRUE(contains(r.output, "outside every tile given")) << r.output;
+  EXPECT_EQ(run(args + (dir_ / "strict").string() + " --strict").exit_code, 5);
+  // Both tiles: no main problem, 0 under --strict.
+  EXPECT_EQ(run("reconstruct " + kTile1 + " " + kTile2 + " -f " + kGpkg +
+                " --id-field gml_id -j 2 --no-progress --no-html --strict -o " + (dir_ / "both").string())
+                .exit_code,
+            0);
+}
+
+// --- 7. reruns into a folder: quiet about the journal, about the time, about what they removed ---
+
+TEST_F(Mistakes, a_rerun_counts_what_it_took_from_the_journal_and_names_the_outputs_it_removed) {
+  const std::string args = "reconstruct " + kSample + "/delft_sample_1.las " + kSample + "/delft_sample_2.las -f " +
+                           kSample + "/delft_sample_footprints.gpkg --id-field gml_id --no-progress -o " +
+                           (dir_ / "out").string();
+  Result r = run(args + " --gpkg");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(report(dir_ / "out").at("summary").at("resumed"), 0);
+  ASSERT_TRUE(fs::exists(dir_ / "out" / "buildings.gpkg"));
+  // The same run again: every building from the journal, and the summary says so.
+  r = run(args + " --gpkg");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(report(dir_ / "out").at("summary").at("resumed"), 15);
+  EXPECT_TRUE(contains(r.output, "15 of them taken from the journal")) << r.output;
+  // Without --gpkg: buildings.gpkg of the earlier run goes, with a warning naming it.
+  r = run(args);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "buildings.gpkg"));
+  EXPECT_TRUE(contains(r.output, "warning: output: removed buildings.gpkg")) << r.output;
+  // Other parameters: the journal is set aside and the earlier models replaced, with warnings.
+  r = run(args + " --lambda-data 0.5");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(report(dir_ / "out").at("summary").at("resumed"), 0);
+  EXPECT_TRUE(contains(r.output, "is from another run")) << r.output;
+  EXPECT_TRUE(contains(r.output, "model files an earlier run")) << r.output;
+}
+
+// --- 8. the smaller things a newcomer trips on ---
+
+TEST(CommandLineMistakes, a_misspelt_option_gets_the_nearest_one_and_lod_2_is_refused) {
+  Result r = run("reconstruct x.las --id-feild gml_id");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(contains(r.output, "did you mean '--id-field'")) << r.output;
+  r = run("reconstruct x.las --frobnicate");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_FALSE(contains(r.output, "did you mean")) << r.output;
+  for (const char* lod : {"2", "1", "2.1", "2.2,3"}) {
+    r = run(std::string("reconstruct x.las --lod ") + lod);
+    EXPECT_EQ(r.exit_code, 2) << lod;
+  }
+  EXPECT_EQ(run("reconstruct x.las --lod 2.2 --print-config").exit_code, 0);
+}
+
+TEST(CommandLineMistakes, help_is_a_command_too) {
+  const Result help = run("help"), flag = run("--help");
+  EXPECT_EQ(help.exit_code, 0) << help.output;
+  EXPECT_EQ(help.output, flag.output);
+  EXPECT_TRUE(contains(help.output, "exit codes:"));
+}
+
+TEST(CommandLineMistakes, info_takes_a_folder_and_lists_a_footprint_sources_fields) {
+  if (!fs::exists(kTile1)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  Result r = run("info " + kDelft);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::size_t files = 0;
+  for (std::size_t at = r.output.find("file: "); at != std::string::npos; at = r.output.find("file: ", at + 1)) ++files;
+  EXPECT_EQ(files, 4u) << r.output;  // two tiles, each as LAS and LAZ
+  EXPECT_TRUE(contains(r.output, "points: 640510\n")) << r.output;
+  r = run("info " + kGpkg);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "  gml_id: String, 160 distinct *\n")) << r.output;
+  EXPECT_TRUE(contains(r.output, "  rel_hoogte: Integer, 1 distinct\n")) << r.output;
+}
+
+TEST_F(Mistakes, the_progress_line_shows_tiles_being_read_and_waits_for_a_sample_before_an_eta) {
+  const Result r = run("reconstruct " + kSample + "/delft_sample_1.las " + kSample + "/delft_sample_2.las -f " + kSample +
+                       "/delft_sample_footprints.gpkg --id-field gml_id --progress -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::vector<std::string> lines;
+  std::stringstream ss(r.output);
+  for (std::string line; std::getline(ss, line, '\r');) lines.push_back(line);
+  ASSERT_GT(lines.size(), 16u) << r.output;
+  EXPECT_TRUE(contains(lines[1], "reading 2 tiles")) << lines[1];
+  for (std::size_t k = 2; k < 2 + 4; ++k) EXPECT_FALSE(contains(lines[k], "s left")) << lines[k];
+  EXPECT_TRUE(contains(lines[10], "s left")) << lines[10];
+  // The last line points to the page a person reads.
+  EXPECT_TRUE(contains(r.output, "report " + (dir_ / "out" / "report.html").string())) << r.output;
+}
+
+TEST_F(Mistakes, verbose_parameters_are_printed_without_float_noise) {
+  const Result r = run("reconstruct " + kSample + "/delft_sample_1.las -f " + kSample +
+                       "/delft_sample_footprints.gpkg --id-field gml_id --where \"gml_id = "
+                       "'b31be49eb-00ba-11e6-b420-2bdcc4ab5d7f'\" -v --no-progress -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "planes.max_distance = 0.2\n")) << r.output;
+  EXPECT_FALSE(contains(r.output, "0000000000")) << r.output;
+}
+
+TEST_F(Mistakes, a_terminated_run_says_what_is_kept_and_the_rerun_resumes) {
+  require_shared_data();
+  const fs::path out = dir_ / "out";
+  // Terminated once three buildings are in the journal (its header and two records).
+  const std::string command = "(" + std::string(CITY3D_EXE) + " reconstruct " + kTile1 + " " + kTile2 + " -f " + kGpkg +
+                              " --id-field gml_id --no-progress -j 1 -o " + out.string() + " & pid=$!; " +
+                              "while [ \"$(cat " + out.string() + "/resume.journal 2>/dev/null | wc -l)\" -lt 3 ]; do "
+                              "sleep 0.02; done; kill -TERM $pid; wait $pid; echo \"exit=$?\")";
+  const Result r = run_shell(command);
+  EXPECT_TRUE(contains(r.output, "exit=143")) << r.output;
+  EXPECT_TRUE(contains(r.output, "interrupted")) << r.output;
+  const Result again = run("reconstruct " + kTile1 + " " + kTile2 + " -f " + kGpkg + " --id-field gml_id -j 2 --no-progress -o " +
+                           out.string());
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  const json whole = report(out);
+  EXPECT_GE(whole.at("summary").at("resumed").get<int>(), 2);
+  EXPECT_EQ(whole.at("summary").at("buildings"), 160);
+}
+
+TEST_F(Mistakes, evaluating_a_model_against_a_whole_tile_warns_that_the_points_reach_beyond_it) {
+  const fs::path model = kShared + "/city3d_dev/AHN3/00262.obj", own = kShared + "/city3d_dev/AHN3/00262.ply";
+  if (!fs::exists(model)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  Result r = run("evaluate " + model.string() + " " + own.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(contains(r.output, "warning")) << r.output;
+  EXPECT_TRUE(contains(r.output, "points beyond the model: 0 ")) << r.output;
+  // A model of the sample block against the whole tile it came from.
+  ASSERT_EQ(run("reconstruct " + kSample + "/delft_sample_1.las -f " + kSample + "/delft_sample_footprints.gpkg " +
+                "--id-field gml_id --where \"gml_id = 'b31be49eb-00ba-11e6-b420-2bdcc4ab5d7f'\" --no-progress -o " +
+                (dir_ / "out").string())
+                .exit_code,
+            0);
+  r = run("evaluate " + (dir_ / "out" / "models" / "b31be49eb-00ba-11e6-b420-2bdcc4ab5d7f.obj").string() + " " + kSample +
+          "/delft_sample_1.las");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "warning: evaluate:")) << r.output;
+}
+
+TEST_F(Mistakes, a_shard_that_builds_nothing_succeeds_and_its_merge_says_so) {
+  // Tile 2 alone, the block in 4 shards of 100 m blocks: shard 3 builds nothing. Each shard must
+  // finish with 0 (4 under --strict for partial buildings: a Slurm merge
+  // waits for every shard to succeed); the merge of all of them judges the run.
+  require_shared_data();
+  const std::string args = "reconstruct " + kTile2 + " -f " + kGpkg +
+                           " --id-field gml_id --block-size 100 --no-progress --no-html --strict -o ";
+  std::string folders;
+  for (int k = 1; k <= 4; ++k) {
+    const fs::path folder = dir_ / ("shard" + std::to_string(k));
+    folders += " " + folder.string();
+    const Result r = run(args + folder.string() + " --shard " + std::to_string(k) + "/4");
+    EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 4) << "shard " << k << ": " << r.output;
+  }
+  // Shard 3 has no building of its own (its blocks' footprints went to the others' tiles' runs).
+  const json third = report(dir_ / "shard3");
+  EXPECT_EQ(third.at("summary").at("ok").get<int>() + third.at("summary").at("fallback").get<int>() +
+                third.at("summary").at("partial").get<int>(),
+            0)
+      << "shard 3 was meant to build nothing";
+  const Result merged = run("merge" + folders + " --strict -o " + (dir_ / "merged").string());
+  EXPECT_EQ(merged.exit_code, 5) << merged.output;  // 132 of 160 outside the tile
+  EXPECT_EQ(report(dir_ / "merged").at("summary").at("buildings"), 160);
+}

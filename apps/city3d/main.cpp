@@ -42,8 +42,12 @@ void catch_interrupts(const std::string& what_is_kept) {
   struct sigaction action {};
   action.sa_handler = on_interrupt;
   sigemptyset(&action.sa_mask);
-  ::sigaction(SIGINT, &action, nullptr);
-  ::sigaction(SIGTERM, &action, nullptr);
+  for (const int signal : {SIGINT, SIGTERM}) {
+    // A signal the caller ignores (a background job's SIGINT, nohup) stays ignored.
+    struct sigaction before {};
+    if (::sigaction(signal, nullptr, &before) == 0 && before.sa_handler == SIG_IGN) continue;
+    ::sigaction(signal, &action, nullptr);
+  }
 }
 
 int run_info(const city3d::RunOptions& options) {
@@ -90,9 +94,12 @@ int finish(const city3d::RunOptions& options, const city3d::BatchSummary& s, con
       std::fprintf(stderr, "city3d: no building was reconstructed (each one's reason is in %s)\n", s.report_path.c_str());
   }
   // Nothing built is a failed run, --strict or not; --strict also fails a run whose buildings mostly
-  // share one problem (a misconfiguration), and one where some failed or are partial.
-  if (s.nothing_built()) return city3d::kExitNothing;
-  if (options.strict && !s.main_problem.empty()) return city3d::kExitMainProblem;
+  // share one problem (a misconfiguration), and one where some failed or are partial. A shard is a
+  // part of a run: what it built or not is judged by the merge (a shard of footprints without points
+  // must not stop a Slurm merge that waits for every shard to succeed).
+  const bool shard = options.command == "reconstruct" && options.batch.shards > 0;
+  if (s.nothing_built() && !shard) return city3d::kExitNothing;
+  if (options.strict && !s.main_problem.empty() && !shard) return city3d::kExitMainProblem;
   if (options.strict && (s.failed > 0 || s.partial > 0)) return city3d::kExitStrict;
   return city3d::kExitOk;
 }

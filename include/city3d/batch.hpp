@@ -69,9 +69,10 @@ struct BatchSummary {
   std::size_t resumed = 0;  ///< buildings taken from the journal of an earlier run into the folder
   double seconds = 0.0;     ///< this run's wall time (a resumed run's own; a merge: its shards' sum)
   std::string report_path;  ///< report.html when the run wrote it, else report.csv
-  /// When more than half of the rows share one problem (status and reason, its numbers left out:
-  /// "skipped: no building points inside the footprint"): that problem, the rows that have it and,
-  /// of those, the footprints outside every tile given (coverage 0). Empty otherwise.
+  /// When more than half of the rows share one problem (a status skipped, failed or partial and its
+  /// reason, numbers left out: "skipped: no building points inside the footprint"): that problem,
+  /// the rows that have it and, of those, the footprints outside every tile given (coverage 0).
+  /// Empty otherwise.
   std::string main_problem;
   std::size_t main_problem_rows = 0;
   std::size_t main_problem_outside = 0;

@@ -345,7 +345,8 @@ const std::vector<OptionSpec>& option_table() {
        "`city3d merge` combines the N folders",
        [](const O& o) { return o.batch.shards > 0 ? std::to_string(o.batch.shard) + "/" + std::to_string(o.batch.shards) : std::string(); },
        [](O& o, V v) { parse_shard(v, o.batch.shard, o.batch.shards); }},
-      {"--strict", nullptr, nullptr, "exit with code 4 when any building failed or none was reconstructed",
+      {"--strict", nullptr, nullptr,
+       "exit with code 4 when any building failed or is partial, 5 when more than half share one problem",
        [](const O& o) { return yes_no(o.strict); },
        [](O& o, V) { o.strict = true; }},
       {"--residuals", nullptr, "PATH", "evaluate: also write every point's distance to the model as CSV (x,y,z,distance)",
@@ -632,12 +633,15 @@ std::string help_text() {
     }
     out << "\n";
   }
-  out << "\nexit codes:\n"
-      << "  0  the run finished\n"
-      << "  1  the run could not go on: unreadable or invalid input, unwritable output\n"
-      << "  2  bad command line or --config file: unknown command or option, bad value\n"
-      << "  3  internal error (a bug; please report it)\n"
-      << "  4  reconstruct --strict: the run finished but some buildings failed or are partial, or none was reconstructed\n";
+  out << "\nexit codes: (docs/MESSAGES.md explains them and every warning)\n"
+      << "  0    the run finished and built something (some buildings may have failed: see the report)\n"
+      << "  1    the run could not go on: unreadable or invalid input, an id field that is not an id, a filter\n"
+      << "       that leaves no footprint, unwritable output; or it finished but built nothing (see the report)\n"
+      << "  2    bad command line or --config file: unknown command or option, bad value\n"
+      << "  3    internal error (a bug; please report it)\n"
+      << "  4    --strict: the run finished but some buildings failed or are partial\n"
+      << "  5    --strict: more than half of the buildings share one problem (the last lines name it)\n"
+      << "  130  interrupted (Ctrl-C; 143 SIGTERM): the same command resumes\n";
   return out.str();
 }
 

@@ -264,7 +264,8 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const
   for (const RecordSource& source : records) {
     BuildingRecord r = source.journal->read(*source.ref);
     report.add(r.report_csv, r.report_json);
-    if (r.status != BuildingStatus::ok) {
+    // A fallback has its model (a lower rung): not a problem of the run.
+    if (r.status != BuildingStatus::ok && r.status != BuildingStatus::fallback) {
       const json row = json::parse(r.report_json, nullptr, false);
       if (!row.is_discarded()) {
         auto& [rows, outside] = problems[problem_key(r.status, row.value("reason", std::string()))];
