@@ -279,6 +279,29 @@ const std::map<std::string, std::function<fs::path(const fs::path&)>>& generator
          sample_run(dir / "out");
          return dir / "out";
        }},
+      {"two_clouds_of_identical_bytes",
+       [](const fs::path& dir) {
+         // A gable roof of 10 x 8 m (eaves 5 m, ridge 8 m along x), points every 0.25 m, twice.
+         std::vector<std::array<double, 3>> points;
+         for (int i = 0; i <= 40; ++i)
+           for (int k = 0; k <= 32; ++k) {
+             const double y = k * 0.25;
+             points.push_back({i * 0.25, y, 8.0 - 3.0 * std::abs(y - 4.0) / 4.0});
+           }
+         fs::create_directories(dir / "clouds");
+         write_text(dir / "clouds" / "a.ply", ply_ascii(points));
+         write_text(dir / "clouds" / "b.ply", ply_ascii(points));
+         return dir / "clouds";
+       }},
+      {"sample_tile_without_building_class",
+       [](const fs::path& dir) {
+         // data/delft_sample_1.las with its building points (class 6) made unclassified (1).
+         std::vector<LasPoint> points = sample_points(std::string(CITY3D_SAMPLE_DATA) + "/delft_sample_1.las");
+         for (LasPoint& p : points)
+           if (p.classification == 6) p.classification = 1;
+         write_las((dir / "no_building_class.las").string(), points);
+         return dir / "no_building_class.las";
+       }},
       {"plain_file",
        [](const fs::path& dir) {
          write_text(dir / "plain_file", "not a folder\n");

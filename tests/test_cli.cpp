@@ -79,6 +79,7 @@ TEST(CommandLine, defaults_are_pinned) {
   EXPECT_TRUE(o.batch.cityjson);
   EXPECT_FALSE(o.batch.cityjson_seq);
   EXPECT_FALSE(o.strict);
+  EXPECT_DOUBLE_EQ(o.batch.min_coverage, 0.95);  // issue 24: partial below 95% of a footprint's area in the tiles
   EXPECT_EQ(o.verbosity, 1);
 }
 
@@ -735,16 +736,18 @@ TEST_F(Reconstruct, footprints_in_another_crs_are_reprojected_or_refused_with_bo
   EXPECT_TRUE(contains(r.output, "utm_2.las is in EPSG:32631 but")) << r.output;
 }
 
-// Issue 14 item 6: --strict counts a run where nothing was reconstructed as a failure.
-TEST_F(Reconstruct, strict_run_where_nothing_was_reconstructed_exits_with_4) {
+// Issue 14 item 6: --strict counted a run where nothing was reconstructed as a failure; since issue 24
+// item 6 such a run exits 1, --strict or not (its report is written).
+TEST_F(Reconstruct, run_where_nothing_was_reconstructed_exits_with_1_strict_or_not) {
   const std::string d = CITY3D_SAMPLE_DATA;
   const std::string args = "reconstruct " + d + "/delft_sample_1.las -f " + d +
                            "/delft_sample_footprints.gpkg --building-classes 99 --no-progress -o ";
   Result r = run(args + (dir_ / "a").string());
-  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_TRUE(contains(r.output, "no building was reconstructed")) << r.output;
+  EXPECT_TRUE(fs::exists(dir_ / "a" / "report.csv"));
   r = run(args + (dir_ / "b").string() + " --strict");
-  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_EQ(r.exit_code, 1) << r.output;
 }
 
 // Issue 14 item 9: `info` on a missing or empty LAS said "footprints: cannot open" or "not a vector
@@ -768,7 +771,7 @@ TEST_F(Reconstruct, single_building_cloud_without_points_is_skipped_for_want_of_
   std::ofstream(dir_ / "nothing.ply") << "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
                                          "property float z\nend_header\n";
   const Result r = run("reconstruct " + (dir_ / "nothing.ply").string() + " --no-progress -o " + (dir_ / "out").string());
-  ASSERT_EQ(r.exit_code, 0) << r.output;
+  ASSERT_EQ(r.exit_code, 1) << r.output;  // nothing built (issue 24 item 6)
   const auto rows = lines_of(read_file(dir_ / "out" / "report.csv"));
   ASSERT_EQ(rows.size(), 2u);
   EXPECT_TRUE(contains(rows[1], "nothing,skipped,none,input,the point cloud has no points")) << rows[1];

@@ -72,6 +72,102 @@ double ring_area(const Ring2& r) {
   return 0.5 * a;
 }
 
+// ---------------------------------------------------------------- coverage (issue 24 item 2)
+
+Box3 box3(double x0, double y0, double x1, double y1) {
+  Box3 b;
+  b.add({x0, y0, 0});
+  b.add({x1, y1, 10});
+  return b;
+}
+
+// A building input for coverage: the footprint cropped from a cloud of `points` (any class).
+BuildingInput covered(const std::vector<Polygon2>& polygons, const std::vector<Point3>& points) {
+  std::vector<std::uint8_t> classes(points.size(), 1);  // unclassified: presence only, no building point
+  return crop({footprint("f", polygons)}, cloud(points, classes)).front();
+}
+
+std::vector<Box2> local(const std::vector<Box3>& tiles, const std::vector<std::uint64_t>& counts, const Point3& origin) {
+  std::vector<Box2> out;
+  for (std::size_t t = 0; t < tiles.size(); ++t) {
+    const Box2 e = tile_extent(tiles[t], counts[t]);
+    Box2 l;
+    l.add({e.min.x - origin.x, e.min.y - origin.y});
+    l.add({e.max.x - origin.x, e.max.y - origin.y});
+    out.push_back(l);
+  }
+  return out;
+}
+
+TEST(Coverage, a_tile_extent_is_its_header_box_grown_by_half_its_point_spacing) {
+  // 100 x 100 m with 40,000 points: 0.5 m apart.
+  EXPECT_DOUBLE_EQ(point_spacing(box3(0, 0, 100, 100), 40000), 0.5);
+  const Box2 e = tile_extent(box3(0, 0, 100, 100), 40000);
+  EXPECT_DOUBLE_EQ(e.min.x, -0.25);
+  EXPECT_DOUBLE_EQ(e.max.y, 100.25);
+  EXPECT_TRUE(tile_extent(box3(0, 0, 100, 100), 0).empty());
+  EXPECT_TRUE(tile_extent(Box3{}, 10).empty());
+  // Cells of three spacings, at least 1 m, a multiple of the presence lattice.
+  EXPECT_DOUBLE_EQ(coverage_cell_size(0.26, 0.25), 1.0);
+  EXPECT_DOUBLE_EQ(coverage_cell_size(0.5, 0.25), 1.5);
+  EXPECT_DOUBLE_EQ(coverage_cell_size(0.5, 1.0), 2.0);
+}
+
+TEST(Coverage, the_area_share_is_the_part_of_the_footprint_inside_the_tiles_extents) {
+  // A 10 x 10 m footprint across x = kX + 5, with points everywhere in it at 0.25 m.
+  std::vector<Point3> points;
+  for (double x = kX + 0.1; x < kX + 10; x += 0.25)
+    for (double y = kY + 0.1; y < kY + 10; y += 0.25) points.push_back({x, y, 5});
+  const BuildingInput in = covered({{rectangle(kX, kY, kX + 10, kY + 10), {}}}, points);
+  // The left tile alone (grown by a negligible spacing): 7 of 10 m.
+  const Box3 left = box3(kX - 50, kY - 50, kX + 7, kY + 50);
+  FootprintCoverage c = footprint_coverage(in, local({left}, {1000000000}, in.origin), 0.25);
+  EXPECT_NEAR(c.area, 0.7, 1e-3);
+  EXPECT_DOUBLE_EQ(c.cells, 1.0);  // the points are there: only the tiles given decide
+  // Both tiles, 2 mm apart (as Delft's at x = 85000): all of it.
+  const Box3 right = box3(kX + 7.002, kY - 50, kX + 60, kY + 50);
+  c = footprint_coverage(in, local({left, right}, {10000, 10000}, in.origin), 0.25);
+  EXPECT_DOUBLE_EQ(c.area, 1.0);
+  // No tile at all, and a tile elsewhere.
+  EXPECT_DOUBLE_EQ(footprint_coverage(in, {}, 0.25).area, 0.0);
+  EXPECT_DOUBLE_EQ(footprint_coverage(in, local({box3(kX + 100, kY, kX + 200, kY + 100)}, {100}, in.origin), 0.25).area,
+                   0.0);
+  // Overlapping tiles are not counted twice.
+  c = footprint_coverage(in, local({left, box3(kX - 10, kY - 10, kX + 3, kY + 20)}, {1000000000, 1000000000}, in.origin),
+                         0.25);
+  EXPECT_NEAR(c.area, 0.7, 1e-3);
+}
+
+TEST(Coverage, a_hole_and_a_second_polygon_count_by_their_area) {
+  // 20 x 10 with a 4 x 4 hole on the left half, and a 5 x 5 square apart on the right: the tile
+  // covers x < kX + 10, the holed polygon's left half (100 - 16 m2) and nothing of the square.
+  const Polygon2 holed{rectangle(kX, kY, kX + 20, kY + 10), {reversed(rectangle(kX + 3, kY + 3, kX + 7, kY + 7))}};
+  const Polygon2 square{rectangle(kX + 30, kY, kX + 35, kY + 5), {}};
+  const BuildingInput in = covered({holed, square}, {});
+  const FootprintCoverage c =
+      footprint_coverage(in, local({box3(kX - 100, kY - 100, kX + 10, kY + 100)}, {4000000000}, in.origin), 0.25);
+  EXPECT_NEAR(c.area, (100.0 - 16.0) / (200.0 - 16.0 + 25.0), 1e-3);
+  EXPECT_DOUBLE_EQ(c.cells, 0.0);  // no point at all
+}
+
+TEST(Coverage, the_cell_share_counts_cells_with_points_of_any_class) {
+  // Points over the left 6 m of a 10 x 10 m footprint only: 1 m cells, 60 of 100 with points.
+  std::vector<Point3> points;
+  for (double x = kX + 0.1; x < kX + 6; x += 0.3)
+    for (double y = kY + 0.1; y < kY + 10; y += 0.3) points.push_back({x, y, 5});
+  const BuildingInput in = covered({{rectangle(kX, kY, kX + 10, kY + 10), {}}}, points);
+  EXPECT_TRUE(in.points.empty());  // class 1: no building point, but data
+  const FootprintCoverage c =
+      footprint_coverage(in, local({box3(kX - 100, kY - 100, kX + 100, kY + 100)}, {4000000000}, in.origin), 0.25);
+  EXPECT_DOUBLE_EQ(c.area, 1.0);
+  EXPECT_DOUBLE_EQ(c.cells, 0.6);
+  // Sparser tiles, larger cells (3 spacings of 1 m: 3 m cells aligned to multiples of 3 m).
+  const FootprintCoverage coarse =
+      footprint_coverage(in, local({box3(kX - 100, kY - 100, kX + 100, kY + 100)}, {40000}, in.origin), 1.0);
+  EXPECT_GT(coarse.cells, 0.5);
+  EXPECT_LT(coarse.cells, 1.0);
+}
+
 // ---------------------------------------------------------------- cropping: which points go where
 
 TEST(Crop, assigns_points_inside_a_square_in_a_local_frame) {

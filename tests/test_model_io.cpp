@@ -176,9 +176,17 @@ TEST_F(ModelWriter, overwrites_atomically_without_leftovers) {
 
 TEST(ModelFileName, replaces_unsafe_characters_and_never_returns_a_hidden_name) {
   EXPECT_EQ(model_file_name("NL.IMBAG.Pand.0503100000018603", MeshFormat::obj), "NL.IMBAG.Pand.0503100000018603.obj");
-  EXPECT_EQ(model_file_name("a/b c:d", MeshFormat::ply_binary), "a_b_c_d.ply");
-  EXPECT_EQ(model_file_name("", MeshFormat::obj), "_.obj");
-  EXPECT_EQ(model_file_name("..", MeshFormat::obj), "_...obj");
+  EXPECT_EQ(model_file_name("a/b c:d", MeshFormat::ply_binary), "a_b_c_d-9ce7b96e.ply");
+  EXPECT_EQ(model_file_name("", MeshFormat::obj), "_-811c9dc5.obj");
+  EXPECT_EQ(model_file_name("..", MeshFormat::obj), "_..-a3d4a70d.obj");
+}
+
+// Issue 24 item 3: ids that differ only in characters a file name cannot hold shared one model file.
+TEST(ModelFileName, distinct_ids_never_share_a_file_name) {
+  EXPECT_NE(model_file_name("a b", MeshFormat::obj), model_file_name("a_b", MeshFormat::obj));
+  EXPECT_EQ(model_file_name("a_b", MeshFormat::obj), "a_b.obj");
+  EXPECT_NE(model_file_name("Dales3d/00011", MeshFormat::obj), model_file_name("Dales3d_00011", MeshFormat::obj));
+  EXPECT_NE(model_file_name("Dales3d/00011", MeshFormat::obj), model_file_name("Dales3d:00011", MeshFormat::obj));
 }
 
 TEST(MeshFormatName, parses_known_names_and_rejects_others) {

@@ -1,11 +1,17 @@
 // The city3d executable: parses the command line and runs the chosen command; nothing else.
+#include <signal.h>
 #include <unistd.h>
+
+#include <algorithm>
+#include <cstring>
 
 #include <cstdio>
 #include <exception>
 #include <filesystem>
 #include <new>
+#include <string>
 #include <system_error>
+#include <vector>
 #include <iostream>
 
 #include "city3d/error.hpp"
@@ -17,16 +23,84 @@
 
 namespace {
 
+// Ctrl-C (SIGINT) and SIGTERM during a run: the progress line is ended and the user told that the
+// finished buildings are kept (the journal is flushed as each one finishes), then the process exits
+// with 128 + the signal. The message is made before the run, as a handler may only write().
+char g_interrupt_message[1024] = "\ncity3d: interrupted\n";
+std::size_t g_interrupt_length = 0;
+
+extern "C" void on_interrupt(int signal) {
+  const ssize_t ignored = ::write(2, g_interrupt_message, g_interrupt_length);
+  (void)ignored;
+  ::_exit(128 + signal);
+}
+
+void catch_interrupts(const std::string& what_is_kept) {
+  const std::string message = "\ncity3d: interrupted; " + what_is_kept + "\n";
+  g_interrupt_length = std::min(message.size(), sizeof g_interrupt_message - 1);
+  std::memcpy(g_interrupt_message, message.data(), g_interrupt_length);
+  struct sigaction action {};
+  action.sa_handler = on_interrupt;
+  sigemptyset(&action.sa_mask);
+  for (const int signal : {SIGINT, SIGTERM}) {
+    // A signal the caller ignores (a background job's SIGINT, nohup) stays ignored.
+    struct sigaction before {};
+    if (::sigaction(signal, nullptr, &before) == 0 && before.sa_handler == SIG_IGN) continue;
+    ::sigaction(signal, &action, nullptr);
+  }
+}
+
 int run_info(const city3d::RunOptions& options) {
-  for (std::size_t i = 0; i < options.inputs.size(); ++i) {
-    const std::string& path = options.inputs[i];
+  // A folder stands for its point-cloud files, as for reconstruct; one without any may be a footprint
+  // source (a folder of Shapefiles).
+  std::vector<std::string> paths;
+  for (const std::string& path : options.inputs) {
+    std::error_code ec;
+    const std::vector<std::string> clouds =
+        std::filesystem::is_directory(path, ec) ? city3d::point_cloud_files_in(path) : std::vector<std::string>{};
+    if (clouds.empty()) paths.push_back(path);
+    paths.insert(paths.end(), clouds.begin(), clouds.end());
+  }
+  for (std::size_t i = 0; i < paths.size(); ++i) {
+    const std::string& path = paths[i];
     if (i > 0) std::cout << "\n";
-    if (city3d::looks_like_point_cloud(path))
+    if (city3d::looks_like_point_cloud(path)) {
       std::cout << city3d::describe_point_cloud(city3d::summarise_point_cloud(path));
-    else
-      std::cout << city3d::describe_footprints(city3d::read_footprints(path, options.batch.footprint));
+    } else {
+      const city3d::FootprintSet set = city3d::read_footprints(path, options.batch.footprint);
+      std::size_t features = 0;
+      const std::vector<city3d::FieldSummary> fields =
+          city3d::summarise_fields(path, options.batch.footprint, static_cast<std::size_t>(-1), features);
+      std::cout << city3d::describe_footprints(set, fields, features);
+    }
     std::cout.flush();
   }
+  return city3d::kExitOk;
+}
+
+// The end of a run or a merge: its summary line, the problem most buildings share with its likely
+// fix, and the exit code (README, "Exit codes").
+int finish(const city3d::RunOptions& options, const city3d::BatchSummary& s, const std::string& what) {
+  if (options.verbosity > 0) {
+    std::string resumed;
+    if (s.resumed > 0)
+      resumed = " (" + std::to_string(s.resumed) + " of them taken from the journal of an earlier run into " +
+                options.batch.output_dir + "; --no-resume recomputes them)";
+    std::fprintf(stderr, "city3d: %s%zu buildings: %zu ok, %zu fallback, %zu skipped, %zu failed, %zu partial in %.1f s%s; report %s\n",
+                 what.c_str(), s.buildings, s.ok, s.fallback, s.skipped, s.failed, s.partial, s.seconds, resumed.c_str(),
+                 s.report_path.c_str());
+    if (!s.advice.empty()) std::fprintf(stderr, "city3d: %s\n", s.advice.c_str());
+    if (s.nothing_built())
+      std::fprintf(stderr, "city3d: no building was reconstructed (each one's reason is in %s)\n", s.report_path.c_str());
+  }
+  // Nothing built is a failed run, --strict or not; --strict also fails a run whose buildings mostly
+  // share one problem (a misconfiguration), and one where some failed or are partial. A shard is a
+  // part of a run: what it built or not is judged by the merge (a shard of footprints without points
+  // must not stop a Slurm merge that waits for every shard to succeed).
+  const bool shard = options.command == "reconstruct" && options.batch.shards > 0;
+  if (s.nothing_built() && !shard) return city3d::kExitNothing;
+  if (options.strict && !s.main_problem.empty() && !shard) return city3d::kExitMainProblem;
+  if (options.strict && (s.failed > 0 || s.partial > 0)) return city3d::kExitStrict;
   return city3d::kExitOk;
 }
 
@@ -34,26 +108,15 @@ int run_reconstruct(const city3d::RunOptions& options) {
   city3d::BatchOptions batch = options.batch;
   batch.point_clouds = options.inputs;
   batch.progress = options.progress == 1 || (options.progress == -1 && options.verbosity > 0 && isatty(2));
-  const city3d::BatchSummary s = city3d::run_batch(batch);
-  if (options.verbosity > 0)
-    std::fprintf(stderr,
-                 "city3d: %zu buildings: %zu ok, %zu fallback, %zu skipped, %zu failed in %.1f s; report %s\n",
-                 s.buildings, s.ok, s.fallback, s.skipped, s.failed, s.seconds, s.report_path.c_str());
-  // Nothing reconstructed at all (every footprint skipped, say for want of points) is worth a word
-  // even when every building has its reason in the report, and a failure under --strict.
-  const bool nothing = s.ok + s.fallback == 0;
-  if (nothing && options.verbosity > 0)
-    std::fprintf(stderr, "city3d: no building was reconstructed (each one's reason is in %s)\n", s.report_path.c_str());
-  return options.strict && (s.failed > 0 || nothing) ? city3d::kExitStrict : city3d::kExitOk;
+  catch_interrupts("the buildings finished so far are kept in " + batch.output_dir +
+                   "/resume.journal: the same command resumes where this one stopped");
+  return finish(options, city3d::run_batch(batch), "");
 }
 
 int run_merge(const city3d::RunOptions& options) {
+  catch_interrupts("no file of the merge is left half-written: the same command merges again");
   const city3d::BatchSummary s = city3d::merge_shards({options.inputs, options.batch.output_dir});
-  if (options.verbosity > 0)
-    std::fprintf(stderr, "city3d: merged %zu shard folders: %zu buildings: %zu ok, %zu fallback, %zu skipped, "
-                 "%zu failed; report %s\n",
-                 options.inputs.size(), s.buildings, s.ok, s.fallback, s.skipped, s.failed, s.report_path.c_str());
-  return options.strict && s.failed > 0 ? city3d::kExitStrict : city3d::kExitOk;
+  return finish(options, s, "merged " + std::to_string(options.inputs.size()) + " shard folders: ");
 }
 
 }  // namespace

@@ -22,6 +22,12 @@ struct BatchOptions {
   CropParams crop;
   ReconstructionParams reconstruction;
   std::optional<double> ground_z;         ///< single-building mode: floor height (world z)
+  /// A building whose footprint has less of its area than this inside the tiles' extents
+  /// (FootprintCoverage::area) is not ok but `partial`: the tiles given leave part of it out (a tile
+  /// forgotten at a seam). Less of its cells with points (FootprintCoverage::cells) gives a note.
+  /// 0: never. 0.95 flags the six of Delft's seam footprints that tile 1 alone cuts by more than
+  /// 1% of their area (their shares: 0.919, 0.726, 0.460, 0.308, 0.138, 0.041; the seventh 0.999).
+  double min_coverage = 0.95;
 
   std::string output_dir = "city3d_out";
   MeshFormat format = MeshFormat::obj;
@@ -59,8 +65,22 @@ struct BatchOptions {
 /// Counts of one batch run.
 struct BatchSummary {
   std::size_t buildings = 0, ok = 0, fallback = 0, skipped = 0, failed = 0;
-  double seconds = 0.0;
-  std::string report_path;
+  std::size_t partial = 0;  ///< reconstructed from points that cover too little of the footprint
+  std::size_t resumed = 0;  ///< buildings taken from the journal of an earlier run into the folder
+  double seconds = 0.0;     ///< this run's wall time (a resumed run's own; a merge: its shards' sum)
+  std::string report_path;  ///< report.html when the run wrote it, else report.csv
+  /// When more than half of the rows share one problem (a status skipped, failed or partial and its
+  /// reason, numbers left out: "skipped: no building points inside the footprint"): that problem,
+  /// the rows that have it and, of those, the footprints outside every tile given (coverage 0).
+  /// Empty otherwise.
+  std::string main_problem;
+  std::size_t main_problem_rows = 0;
+  std::size_t main_problem_outside = 0;
+  /// One line naming the main problem and its likely fix (the tiles have no building class, these
+  /// classes are present; the footprints lie outside the tiles; ...); empty without a main problem.
+  std::string advice;
+  /// Nothing was reconstructed: every row is skipped or failed.
+  bool nothing_built() const { return ok + fallback + partial == 0; }
 };
 
 /// Runs the whole job (or one shard of it). Throws IoError / ConfigError only when the run itself

@@ -4,14 +4,35 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "city3d/point_cloud_io.hpp"
 #include "city3d/types.hpp"
 
 namespace city3d {
+
+/// Where the tiles have points, of any class, over one footprint's bounding box: a lattice of square
+/// cells of `cell` metres aligned to multiples of it in world coordinates, cell (i, j) covering
+/// [i cell, (i + 1) cell) x [j cell, (j + 1) cell). What coverage counts cells with points in
+/// (FootprintCoverage): it tells where the data has no points at all from where the building class
+/// has none (trees over a roof, points classified otherwise).
+struct PointPresence {
+  double cell = 0.25;             ///< metres: 0.25, doubled until the box has at most kMaxPresenceCells
+  std::int64_t i0 = 0, j0 = 0;    ///< the first cell's lattice indices
+  std::int64_t nx = 0, ny = 0;    ///< cells across and up; 0 for a footprint without a usable ring
+  std::vector<bool> marked;       ///< nx * ny, row by row from (i0, j0)
+  /// True when a point fell in lattice cell (i, j); false outside the box.
+  bool at(std::int64_t i, std::int64_t j) const {
+    return i >= i0 && j >= j0 && i < i0 + nx && j < j0 + ny && marked[static_cast<std::size_t>((j - j0) * nx + (i - i0))];
+  }
+};
+
+/// The most cells a footprint's PointPresence has (512 KB of bits).
+constexpr std::int64_t kMaxPresenceCells = std::int64_t{1} << 22;
 
 /// Everything the per-building stages need about one building, in a local frame.
 ///
@@ -33,6 +54,9 @@ struct BuildingInput {
   /// false when it is only the lowest building point, an upper bound of the ground (a roof-only
   /// cloud has its lowest point at the eaves), or unknown.
   bool ground_measured = false;
+  /// Where the tiles have points (any class) over the footprint's box, for its coverage; empty for
+  /// single-building clouds.
+  PointPresence presence;
 };
 
 /// How points are classified while cropping.
@@ -108,6 +132,39 @@ class Cropper {
   CropStats stats_;
   bool finished_ = false;
 };
+
+/// How much of a footprint the points can speak for. A footprint the tiles given only partly cover
+/// (a tile forgotten at a seam) is built from the points of the part they cover, and its model is
+/// wrong in a way nothing else shows (README, "Coverage").
+struct FootprintCoverage {
+  /// Share (0-1) of the footprint's area inside the tiles' extents (tile_extent()).
+  double area = std::numeric_limits<double>::quiet_NaN();
+  /// Share (0-1) of its cells (coverage_cell_size(), aligned to multiples of the size in world
+  /// coordinates; those whose centres lie inside it) where the tiles have at least one point of
+  /// any class; for a footprint that holds no cell centre, 1 when a point fell in its box, else 0.
+  double cells = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// A tile's mean point spacing, metres: the square root of its xy box's area per point (0 without
+/// points or bounds).
+double point_spacing(const Box3& bounds, std::uint64_t points);
+
+/// A tile's extent for coverage, from its header bounds: the xy box grown by half its mean point
+/// spacing, so that two tiles that meet with a gap of less than a point spacing between their
+/// outermost points (Delft's tiles: 2 mm at x = 85000) leave no gap between their extents. Empty
+/// for a tile without points or bounds.
+Box2 tile_extent(const Box3& bounds, std::uint64_t points);
+
+/// The cell size coverage counts points in, metres, for tiles of mean point spacing `spacing` and
+/// a presence lattice of `presence_cell`: three times the spacing (about nine points per cell, so
+/// that an empty cell means missing data rather than chance), at least 1 m, rounded up to a
+/// multiple of `presence_cell`.
+double coverage_cell_size(double spacing, double presence_cell);
+
+/// The coverage of a building's footprint (`input.footprint.polygons`, local) by the tile
+/// `extents` (local) and by the points of `input.presence`, counted in cells for tiles of mean
+/// point spacing `spacing` (the sparsest tile that meets it).
+FootprintCoverage footprint_coverage(const BuildingInput& input, const std::vector<Box2>& extents, double spacing);
 
 /// The p-th percentile (0-100) of `values` with linear interpolation between closest ranks (as
 /// numpy's default). Precondition: `values` is not empty. The vector is reordered.

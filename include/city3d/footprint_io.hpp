@@ -50,6 +50,9 @@ struct FootprintSet {
   std::vector<Footprint> footprints;
   std::vector<SkippedFootprint> skipped;
   std::size_t feature_count = 0;   ///< features read from the layer (after the filters)
+  /// Features of the layer without --where and --bbox: counted only when the filters leave none (to
+  /// say how many they turned away); else 0.
+  std::size_t unfiltered_count = 0;
   std::size_t repaired = 0;        ///< invalid polygons repaired with MakeValid
   std::size_t with_holes = 0;      ///< footprints with at least one hole
 };
@@ -57,6 +60,23 @@ struct FootprintSet {
 /// Reads footprints from an OGR source or an OBJ polygon file (by extension .obj). Throws IoError
 /// when the source does not exist, cannot be opened, has no such layer or field, or has no polygon.
 FootprintSet read_footprints(const std::string& path, const FootprintReadOptions& options = {});
+
+/// One attribute field of a footprint layer, from the values of its features: what `info` shows so
+/// that an id field can be found without ogrinfo, and what a non-unique --id-field is told with.
+struct FieldSummary {
+  std::string name;
+  std::string type;          ///< OGR's type name: "String", "Integer", "Integer64", "Real", "Date", ...
+  std::size_t values = 0;    ///< features with a value (not null) among those read
+  std::size_t distinct = 0;  ///< distinct values among them
+  /// Every feature read has a value, and no two the same: the field can be the id field.
+  bool unique(std::size_t features) const { return features > 0 && values == features && distinct == values; }
+};
+
+/// The fields of a footprint source's layer (options.layer; the attribute filter applied, not the
+/// bbox) with their values' counts over its first `max_features` features; `features` receives how
+/// many were read. An OBJ file has no fields. Throws IoError as read_footprints() does.
+std::vector<FieldSummary> summarise_fields(const std::string& path, const FootprintReadOptions& options,
+                                           std::size_t max_features, std::size_t& features);
 
 /// Names of the layers of an OGR source (one entry "obj" for an OBJ file). Throws IoError.
 std::vector<std::string> list_footprint_layers(const std::string& path);

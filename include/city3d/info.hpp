@@ -29,8 +29,10 @@ bool looks_like_point_cloud(const std::string& path);
 std::string describe_point_cloud(const PointCloudSummary& summary);
 
 /// The text `city3d info` prints for a footprint source (driver, layer, count, id field, SRS, holes,
-/// repaired and skipped features with their reasons).
-std::string describe_footprints(const FootprintSet& footprints);
+/// repaired and skipped features with their reasons) and its fields (`fields`, of `features`
+/// features: summarise_fields()), those usable as --id-field marked.
+std::string describe_footprints(const FootprintSet& footprints, const std::vector<FieldSummary>& fields = {},
+                                std::size_t features = 0);
 
 /// The text `city3d evaluate` prints: a model (OBJ or one of ours) against a point cloud: faces,
 /// RMSE of the points to the model surface, and validity (closed, 2-manifold, outward, planar faces,

@@ -29,7 +29,10 @@ MeshFormat parse_mesh_format(const std::string& name);
 /// The file extension for a format, with the dot (".obj", ".ply").
 std::string mesh_extension(MeshFormat format);
 
-/// A file name for a building id: characters outside [A-Za-z0-9._-] become '_'; never empty.
+/// A file name for a building id: the id itself when it is made of [A-Za-z0-9._-] and does not
+/// start with '.'; otherwise the id with every other character made '_' (and '_' put before a
+/// leading '.' or an empty id), then '-' and 8 hex digits of the id's 32-bit FNV-1a hash, so that
+/// distinct ids never share a file name ("a b" and "a_b").
 std::string model_file_name(const BuildingId& id, MeshFormat format);
 
 /// Writes one building to `path`. Throws IoError naming the path when it cannot be written.

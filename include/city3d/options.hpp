@@ -9,13 +9,16 @@
 
 namespace city3d {
 
-/// Process exit codes of the `city3d` executable.
+/// Process exit codes of the `city3d` executable (docs/MESSAGES.md lists them with every warning).
 enum ExitCode : int {
-  kExitOk = 0,        ///< the run finished (for `reconstruct`: even if some buildings fell back or failed)
-  kExitInput = 1,     ///< the run could not go on: unreadable or invalid input, unwritable output
+  kExitOk = 0,        ///< the run finished and built something (for `reconstruct`: even if some buildings fell back or failed)
+  kExitInput = 1,     ///< the run could not go on: unreadable or invalid input, unwritable output, or no footprint selected
+  kExitNothing = 1,   ///< the run finished but built nothing: every building skipped or failed (the report says why)
   kExitUsage = 2,     ///< bad command line: unknown command or option, bad value
   kExitInternal = 3,  ///< an unexpected internal error (a bug): please report it
-  kExitStrict = 4,    ///< `reconstruct --strict`: the run finished but some buildings failed or none was reconstructed
+  kExitStrict = 4,    ///< `--strict`: the run finished but some buildings failed or are partial
+  kExitMainProblem = 5,  ///< `--strict`: more than half of the buildings share one problem (a misconfigured run)
+  kExitInterrupted = 130,  ///< interrupted (Ctrl-C; 128 + the signal: 143 for SIGTERM); a rerun resumes
 };
 
 /// Everything one invocation of `city3d` can set, with its defaults.
@@ -26,7 +29,7 @@ struct RunOptions {
   std::vector<std::string> inputs;   ///< positional arguments: files for `info`, point clouds for `reconstruct`, shard folders for `merge`
   BatchOptions batch;                ///< footprints, stage parameters, outputs, threads
   std::string format = "obj";        ///< obj, ply, ply-ascii (parsed into batch.format)
-  bool strict = false;               ///< exit non-zero when any building failed
+  bool strict = false;               ///< exit non-zero when any building failed or is partial, or most share a problem
   int progress = -1;                 ///< -1 automatic (on when stderr is a terminal), 0 off, 1 on
   int verbosity = 1;                 ///< 0 quiet, 1 warnings, 2 info, 3 debug
   std::string residuals;             ///< evaluate: CSV of each point's distance to the model, or empty

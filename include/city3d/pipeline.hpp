@@ -33,6 +33,9 @@ enum class BuildingStatus {
   fallback,  ///< reconstructed at a lower rung of the ladder (see reason)
   skipped,   ///< not reconstructed: nothing to reconstruct (invalid footprint, no points)
   failed,    ///< every rung failed (see stage and reason)
+  /// reconstructed (at any rung) from points that cover too little of its footprint: the tiles
+  /// given leave part of it out (BuildingReport::coverage, the run's min_coverage); see reason
+  partial,
 };
 
 /// The rung of the fallback ladder a model comes from.
@@ -152,6 +155,11 @@ struct BuildingReport {
   std::string lods_reconstructed;   ///< levels that are reconstructions of this building's points
   double footprint_area = 0.0;      ///< square metres, plan view
   double point_density = 0.0;       ///< building points per square metre of footprint
+  /// Share (0-1) of the footprint's area inside the tiles' extents, and of its cells holding one of
+  /// its building points (FootprintCoverage, crop.hpp); NaN for single-building clouds and for
+  /// footprints skipped as they were read. Set by the batch run, which knows the tiles.
+  double coverage = std::numeric_limits<double>::quiet_NaN();
+  double point_coverage = std::numeric_limits<double>::quiet_NaN();
   double h_roof_50p = std::numeric_limits<double>::quiet_NaN();  ///< median z of the building points
   double h_roof_70p = std::numeric_limits<double>::quiet_NaN();  ///< 70th percentile (LoD1.2 roof)
   double h_roof_min = std::numeric_limits<double>::quiet_NaN();

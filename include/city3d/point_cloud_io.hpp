@@ -96,6 +96,13 @@ std::unique_ptr<PointCloudReader> open_point_cloud(const std::string& path, Poin
 /// As read_point_cloud(path, fields), decoding LAZ on `decode_threads` threads (see above).
 PointCloud read_point_cloud(const std::string& path, PointFields fields, unsigned decode_threads);
 
+/// The LAS, LAZ and PLY files of a folder (by extension, any case), sorted by name; not those of
+/// its subfolders. Throws IoError when the folder cannot be listed.
+std::vector<std::string> point_cloud_files_in(const std::string& folder);
+
+/// The name of a LAS class (ASPRS LAS 1.4 R15, with AHN's use of 26): "building", "ground", ...
+const char* las_class_name(int c);
+
 /// Reads only the header of a file. Throws IoError as open_point_cloud() does.
 PointCloudInfo read_point_cloud_info(const std::string& path);
 

@@ -81,38 +81,6 @@ bool scalar_text(const toml::node& node, bool numbers, bool strings, std::string
   return false;
 }
 
-/// Levenshtein distance, for "did you mean".
-std::size_t edit_distance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diagonal = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diagonal = up;
-    }
-  }
-  return row[b.size()];
-}
-
-std::string closest_key(const std::string& key) {
-  std::string best;
-  // A third of the key's letters may differ (one for short keys): "id_field" -> "id-field".
-  std::size_t best_distance = std::max<std::size_t>(1, key.size() / 3) + 1;
-  for (const OptionSpec& spec : option_table()) {
-    if (!in_config_file(spec)) continue;
-    const std::string candidate = spec.flag + 2;
-    const std::size_t d = edit_distance(key, candidate);
-    if (d < best_distance) {
-      best_distance = d;
-      best = candidate;
-    }
-  }
-  return best;
-}
-
 std::vector<ConfigEntry> read_table(const toml::table& table, const std::string& name) {
   std::vector<ConfigEntry> entries;
   std::vector<std::pair<long, std::string>> problems;  // by line: toml++ keeps keys sorted, not in file order
@@ -127,7 +95,7 @@ std::vector<ConfigEntry> read_table(const toml::table& table, const std::string&
       std::string message = where + "unknown key '" + key + "'";
       if (node.is_table())
         message += " (a table: the file has no sections, every key is a long option without '--')";
-      else if (const std::string near = closest_key(key); !near.empty())
+      else if (const std::string near = closest_option(key, true); !near.empty())
         message += " (did you mean '" + near + "'?)";
       else
         message += " (keys are the long options without '--'; city3d --print-config lists them)";

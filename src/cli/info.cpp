@@ -9,38 +9,16 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <vector>
 
 #include "city3d/error.hpp"
 #include "city3d/evaluation.hpp"
-#include "city3d/surface_support.hpp"
+#include "city3d/log.hpp"
 #include "city3d/model_io.hpp"
+#include "city3d/surface_support.hpp"
 
 namespace city3d {
 namespace {
-
-// ASPRS LAS 1.4 standard class names (R15); AHN uses 26 for civil structures ("kunstwerk").
-const char* class_name(int c) {
-  switch (c) {
-    case 0: return "never classified";
-    case 1: return "unclassified";
-    case 2: return "ground";
-    case 3: return "low vegetation";
-    case 4: return "medium vegetation";
-    case 5: return "high vegetation";
-    case 6: return "building";
-    case 7: return "low point (noise)";
-    case 9: return "water";
-    case 10: return "rail";
-    case 11: return "road surface";
-    case 13: return "wire guard";
-    case 14: return "wire conductor";
-    case 15: return "transmission tower";
-    case 17: return "bridge deck";
-    case 18: return "high noise";
-    case 26: return "user defined (AHN: civil structure)";
-    default: return c < 64 ? "reserved" : "user defined";
-  }
-}
 
 std::string fields_text(PointFields f) {
   std::string s = "xyz";
@@ -52,6 +30,11 @@ std::string fields_text(PointFields f) {
   if (f & kFieldNormal) s += " normal";
   return s;
 }
+
+/// Points farther than this outside the model's box in plan (metres) are not the model's building.
+constexpr double kBeyondModel = 1.0;
+/// More than this share of such points gets a warning: the RMSE is not the model's.
+constexpr double kBeyondModelShare = 0.05;
 
 std::string fixed(double v, int decimals) {
   char buf[64];
@@ -123,14 +106,14 @@ std::string describe_point_cloud(const PointCloudSummary& s) {
   if (s.has_classes) {
     out << "classes:\n";
     for (int c = 0; c < 256; ++c)
-      if (s.class_counts[c] > 0) out << "  " << c << " " << class_name(c) << ": " << s.class_counts[c] << "\n";
+      if (s.class_counts[c] > 0) out << "  " << c << " " << las_class_name(c) << ": " << s.class_counts[c] << "\n";
   } else {
     out << "classes: none in file\n";
   }
   return out.str();
 }
 
-std::string describe_footprints(const FootprintSet& f) {
+std::string describe_footprints(const FootprintSet& f, const std::vector<FieldSummary>& fields, std::size_t features) {
   std::ostringstream out;
   out << "file: " << f.path << "\n";
   out << "driver: " << f.driver << "\n";
@@ -138,6 +121,13 @@ std::string describe_footprints(const FootprintSet& f) {
   out << "features: " << f.feature_count << "\n";
   out << "footprints: " << f.footprints.size() << "\n";
   out << "id field: " << f.id_field << "\n";
+  if (!fields.empty()) {
+    out << "fields (of " << features << " features; * unique: usable as --id-field):\n";
+    for (const FieldSummary& field : fields)
+      out << "  " << field.name << ": " << field.type << ", " << field.distinct << " distinct"
+          << (field.values < features ? ", " + std::to_string(features - field.values) + " null" : std::string())
+          << (field.unique(features) ? " *" : "") << "\n";
+  }
   out << "srs: " << (f.srs.empty() ? "none recorded" : f.srs) << "\n";
   std::size_t multi = 0;
   Box2 bounds;
@@ -193,6 +183,18 @@ std::string evaluate_model(const std::string& model_path, const std::string& poi
   for (const Point3& p : cloud.points) highest_point = std::max(highest_point, p.z);
   for (const Point3& v : model.mesh.vertices) highest_vertex = std::max(highest_vertex, v.z);
   out << "highest_vertex_above_points: " << fixed(highest_vertex - highest_point, 3) << "\n";
+  // Points of more than the building (a whole tile, a neighbour) make the RMSE measure them too.
+  std::size_t beyond = 0;
+  for (const Point3& p : cloud.points)
+    beyond += p.x < box.min.x - centre.x - kBeyondModel || p.x > box.max.x - centre.x + kBeyondModel ||
+              p.y < box.min.y - centre.y - kBeyondModel || p.y > box.max.y - centre.y + kBeyondModel;
+  const double beyond_share = cloud.empty() ? 0.0 : static_cast<double>(beyond) / static_cast<double>(cloud.size());
+  out << "points beyond the model: " << beyond << " (" << fixed(100.0 * beyond_share, 1)
+      << "%, farther than 1 m outside its box in plan)\n";
+  if (beyond_share > kBeyondModelShare)
+    log_warning("evaluate: " + fixed(100.0 * beyond_share, 1) + "% of the points of " + points_path +
+                " lie more than 1 m outside the model's box in plan, and the RMSE measures them too: give the "
+                "points of this building only");
   out << "closed: " << yes(v.closed) << "\n";
   out << "manifold: " << yes(v.manifold) << "\n";
   out << "outward: " << yes(v.outward) << "\n";

@@ -36,6 +36,11 @@ const std::vector<OptionSpec>& option_table();
 /// --print-config): they have no key in the configuration file.
 bool in_config_file(const OptionSpec& spec);
 
+/// The long option nearest to `name` (a long option without "--", as mistyped), without "--", for
+/// "did you mean": at most a third of its letters differ (one for short names); empty when none is
+/// that near. With `config_file`, only the options a configuration file can set.
+std::string closest_option(const std::string& name, bool config_file);
+
 /// The shortest decimal text that reads back to exactly `v` ("0.34", "20", "1e-07").
 std::string number_text(double v);
 

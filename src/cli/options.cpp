@@ -148,6 +148,15 @@ const std::vector<OptionSpec>& option_table() {
       {"--ground-z", nullptr, "Z", "floor height for single-building clouds (default: their lowest point)",
        [](const O& o) { return o.batch.ground_z ? number_text(*o.batch.ground_z) : std::string(); },
        [](O& o, V v) { o.batch.ground_z = parse_double("--ground-z", v); }},
+      {"--min-coverage", nullptr, "SHARE",
+       "a building with less of its footprint's area inside the tiles' extents is 'partial', not ok (a tile "
+       "missing at a seam); less of its cells with points gives a note; 0: never",
+       [](const O& o) { return number_text(o.batch.min_coverage); },
+       [](O& o, V v) {
+         const double share = parse_double("--min-coverage", v);
+         if (!(share >= 0 && share <= 1)) throw ConfigError("option --min-coverage: '" + v + "' is not a share (0-1)");
+         o.batch.min_coverage = share;
+       }},
       {"--roof-percentile", nullptr, "P", "LoD1 roof height: percentile (0-100) of the building points' z",
        [](const O& o) { return number_text(o.batch.reconstruction.lod1.roof_percentile); },
        [](O& o, V v) { o.batch.reconstruction.lod1.roof_percentile = parse_double("--roof-percentile", v); }},
@@ -157,6 +166,13 @@ const std::vector<OptionSpec>& option_table() {
        "reconstructed roof); CityJSON holds each, OBJ/PLY the highest; 1.2 alone makes blocks without LoD2",
        [](const O& o) { return lod_set_text(o.batch.reconstruction.lods); },
        [](O& o, V v) {
+         // "2" is not read as 2.2 (LoD2 has four refinements; city3d makes one of them): say which.
+         std::stringstream items(v);
+         for (std::string item; std::getline(items, item, ',');)
+           if (item != "1.2" && item != "1.3" && item != "2.2" && item != "all")
+             throw ConfigError("option --lod: '" + item + "' is not a level city3d makes: 1.2, 1.3 or 2.2" +
+                               (item == "2" || item == "2.0" ? " (LoD2 here is 2.2)" : item == "1" || item == "1.0" ? " (LoD1 here is 1.2 or 1.3)" : "") +
+                               "; give a comma-separated list, e.g. 1.2,2.2");
          o.batch.reconstruction.lods = parse_lod_set(v);
          o.batch.reconstruction.max_level =
              o.batch.reconstruction.lods.lod22 || o.batch.reconstruction.lods.lod13 ? ModelLevel::lod22 : ModelLevel::lod12;
@@ -340,7 +356,8 @@ const std::vector<OptionSpec>& option_table() {
        "`city3d merge` combines the N folders",
        [](const O& o) { return o.batch.shards > 0 ? std::to_string(o.batch.shard) + "/" + std::to_string(o.batch.shards) : std::string(); },
        [](O& o, V v) { parse_shard(v, o.batch.shard, o.batch.shards); }},
-      {"--strict", nullptr, nullptr, "exit with code 4 when any building failed or none was reconstructed",
+      {"--strict", nullptr, nullptr,
+       "exit with code 4 when any building failed or is partial, 5 when more than half share one problem",
        [](const O& o) { return yes_no(o.strict); },
        [](O& o, V) { o.strict = true; }},
       {"--residuals", nullptr, "PATH", "evaluate: also write every point's distance to the model as CSV (x,y,z,distance)",
@@ -369,6 +386,42 @@ const std::vector<OptionSpec>& option_table() {
        [](O& o, V) { o.version = true; }},
   };
   return table;
+}
+
+namespace {
+
+/// Levenshtein distance, for "did you mean".
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+}  // namespace
+
+std::string closest_option(const std::string& key, bool config_file) {
+  std::string best;
+  // A third of the key's letters may differ (one for short keys): "id_field" -> "id-field".
+  std::size_t best_distance = std::max<std::size_t>(1, key.size() / 3) + 1;
+  for (const OptionSpec& spec : option_table()) {
+    if (config_file && !in_config_file(spec)) continue;
+    const std::string candidate = spec.flag + 2;
+    const std::size_t d = edit_distance(key, candidate);
+    if (d < best_distance) {
+      best_distance = d;
+      best = candidate;
+    }
+  }
+  return best;
 }
 
 bool in_config_file(const OptionSpec& spec) {
@@ -401,6 +454,7 @@ const char* const kCommands[][2] = {
     {"evaluate", "MODEL.obj POINTS         RMSE of points to a model, face count, validity"},
     {"info", "FILE...                        what point-cloud files (LAS, LAZ, PLY) and footprint sources hold"},
     {"merge", "SHARD_DIR... -o DIR            combine the folders of every shard (--shard K/N) of a run"},
+    {"help", "                               this text (as --help)"},
 };
 
 /// One option as given on the command line, before it is applied.
@@ -455,7 +509,9 @@ RunOptions parse_command_line(int argc, const char* const* argv) {
             arg = arg.substr(0, 2);
           }
       if (!spec) {
-        problems.push_back("unknown option '" + arg + "' (see city3d --help)");
+        const std::string near = arg.rfind("--", 0) == 0 ? detail::closest_option(arg.substr(2), false) : "";
+        problems.push_back("unknown option '" + arg + "'" + (near.empty() ? "" : " (did you mean '--" + near + "'?)") +
+                           " (see city3d --help)");
         continue;
       }
       if (spec->value_name && !has_inline_value) {
@@ -534,12 +590,13 @@ RunOptions parse_command_line(int argc, const char* const* argv) {
       bool known = false;
       for (const auto& c : kCommands) known = known || arg == c[0];
       if (!known)
-        problems.push_back("unknown command '" + arg + "' (commands: reconstruct, evaluate, info, merge; see city3d --help)");
+        problems.push_back("unknown command '" + arg + "' (commands: reconstruct, evaluate, info, merge, help; see city3d --help)");
       options.command = arg;
     } else {
       options.inputs.push_back(arg);
     }
   }
+  if (options.command == "help") options.help = true;
   if (!options.help && !options.version && !options.print_config && problems.empty()) {
     if (options.command.empty()) problems.push_back("no command given (see city3d --help)");
     if (options.command == "info" && options.inputs.empty()) problems.push_back("info: no file given");
@@ -587,12 +644,15 @@ std::string help_text() {
     }
     out << "\n";
   }
-  out << "\nexit codes:\n"
-      << "  0  the run finished\n"
-      << "  1  the run could not go on: unreadable or invalid input, unwritable output\n"
-      << "  2  bad command line or --config file: unknown command or option, bad value\n"
-      << "  3  internal error (a bug; please report it)\n"
-      << "  4  reconstruct --strict: the run finished but some buildings failed or none was reconstructed\n";
+  out << "\nexit codes: (docs/MESSAGES.md explains them and every warning)\n"
+      << "  0    the run finished and built something (some buildings may have failed: see the report)\n"
+      << "  1    the run could not go on: unreadable or invalid input, an id field that is not an id, a filter\n"
+      << "       that leaves no footprint, unwritable output; or it finished but built nothing (see the report)\n"
+      << "  2    bad command line or --config file: unknown command or option, bad value\n"
+      << "  3    internal error (a bug; please report it)\n"
+      << "  4    --strict: the run finished but some buildings failed or are partial\n"
+      << "  5    --strict: more than half of the buildings share one problem (the last lines name it)\n"
+      << "  130  interrupted (Ctrl-C; 143 SIGTERM): the same command resumes\n";
   return out.str();
 }
 

@@ -96,7 +96,30 @@ struct Collected {
   std::vector<Point3> building;
   std::vector<Point3> near_ground;  ///< within ground_buffer of the polygon
   std::vector<Point3> wide_ground;  ///< in the wide box but not near; kept only while near is short
+  PointPresence presence;           ///< cells of the footprint's box where a point of any class fell
 };
+
+/// An empty presence lattice over a footprint's box: 0.25 m cells, doubled until they are few enough.
+PointPresence presence_over(const Box2& box) {
+  PointPresence p;
+  if (box.empty()) return p;
+  for (;;) {
+    p.i0 = static_cast<std::int64_t>(std::floor(box.min.x / p.cell));
+    p.j0 = static_cast<std::int64_t>(std::floor(box.min.y / p.cell));
+    p.nx = static_cast<std::int64_t>(std::floor(box.max.x / p.cell)) - p.i0 + 1;
+    p.ny = static_cast<std::int64_t>(std::floor(box.max.y / p.cell)) - p.j0 + 1;
+    if (p.nx * p.ny <= kMaxPresenceCells) break;
+    p.cell *= 2;
+  }
+  p.marked.assign(static_cast<std::size_t>(p.nx * p.ny), false);
+  return p;
+}
+
+void mark(PointPresence& p, double x, double y) {
+  const auto i = static_cast<std::int64_t>(std::floor(x / p.cell)) - p.i0;
+  const auto j = static_cast<std::int64_t>(std::floor(y / p.cell)) - p.j0;
+  if (i >= 0 && j >= 0 && i < p.nx && j < p.ny) p.marked[static_cast<std::size_t>(j * p.nx + i)] = true;
+}
 
 /// A uniform grid over the wide boxes; each cell lists the footprints (ascending index) whose wide
 /// box overlaps it.
@@ -237,6 +260,7 @@ Cropper::Cropper(std::vector<Footprint> footprints, CropParams params)
     } else {
       f.near_box = detail::expanded(f.box, params_.ground_buffer);
       f.wide_box = detail::expanded(f.box, wide);
+      index.collected[i].presence = detail::presence_over(f.box);
     }
     // The origin comes from every vertex we have, so that even an unusable footprint gets one.
     if (!all_vertices.empty() && std::isfinite(all_vertices.min.x) && std::isfinite(all_vertices.max.y)) {
@@ -282,7 +306,6 @@ void Cropper::add(const PointCloud& chunk) {
   for (std::size_t i = 0; i < n; ++i) {
     const Point3& p = chunk.points[i];
     const Kind kind = use_classes ? static_cast<Kind>(kind_of[chunk.classification[i]]) : kBuilding;
-    if (kind == kOther) continue;
     if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) continue;
     if (p.x < index.x0 || p.y < index.y0 || p.x > index.x0 + static_cast<double>(index.nx) * index.cell ||
         p.y > index.y0 + static_cast<double>(index.ny) * index.cell)
@@ -290,6 +313,10 @@ void Cropper::add(const PointCloud& chunk) {
     const std::size_t k = static_cast<std::size_t>(index.row(p.y) * index.nx + index.column(p.x));
     const std::uint32_t* first = index.cell_items.data() + index.cell_start[k];
     const std::uint32_t* last = index.cell_items.data() + index.cell_start[k + 1];
+    // Every point, whatever its class, says that the tiles have data there (a box test: cheap).
+    for (const std::uint32_t* it = first; it != last; ++it)
+      if (detail::box_contains(index.prepared[*it].box, p.x, p.y)) detail::mark(index.collected[*it].presence, p.x, p.y);
+    if (kind == kOther) continue;
 
     bool inside_any = false;
     for (const std::uint32_t* it = first; it != last; ++it) {
@@ -347,6 +374,7 @@ std::vector<BuildingInput> Cropper::finish() {
       for (Ring2& hole : polygon.holes) to_local(hole);
     }
     b.points = std::move(c.building);
+    b.presence = std::move(c.presence);
 
     // The ground ladder: buffer percentile, wide-buffer percentile, lowest building point, nothing.
     b.ground_points = std::move(c.near_ground);

@@ -30,6 +30,10 @@ struct FootprintReadMode {
 FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOptions& options,
                                  const FootprintReadMode& mode = {});
 
+/// summarise_fields() for an OGR vector source. Throws IoError.
+std::vector<FieldSummary> summarise_ogr_fields(const std::string& path, const FootprintReadOptions& options,
+                                               std::size_t max_features, std::size_t& features);
+
 /// Layer names of an OGR vector source. Throws IoError.
 std::vector<std::string> list_ogr_layers(const std::string& path);
 

@@ -61,7 +61,7 @@ const char* kPage1 = R"HTML(<!DOCTYPE html>
 <meta name="viewport" content="width=device-width, initial-scale=1">
 <title>city3d run overview</title>
 <style>
-:root { --ok: #2e9e5b; --fallback: #e0a526; --skipped: #9aa3ad; --failed: #d64545; --ink: #1d2733; --muted: #5f6b78;
+:root { --ok: #2e9e5b; --fallback: #e0a526; --partial: #8e5bd6; --skipped: #9aa3ad; --failed: #d64545; --ink: #1d2733; --muted: #5f6b78;
         --line: #dde3ea; --panel: #ffffff; --bg: #f3f5f8; --accent: #2f6fdf; }
 * { box-sizing: border-box; }
 body { margin: 0; font: 14px/1.45 system-ui, -apple-system, "Segoe UI", Roboto, Helvetica, Arial, sans-serif;
@@ -75,7 +75,7 @@ h2 { margin: 0 0 10px; font-size: 15px; font-weight: 650; }
 .card .v { font-size: 22px; font-weight: 650; }
 .card .k { color: var(--muted); font-size: 12px; text-transform: uppercase; letter-spacing: 0.04em; }
 .card.ok .v { color: var(--ok); } .card.fallback .v { color: #b7811a; } .card.failed .v { color: var(--failed); }
-.card.skipped .v { color: #6f7983; }
+.card.skipped .v { color: #6f7983; } .card.partial .v { color: var(--partial); }
 main { display: grid; grid-template-columns: minmax(0, 1.35fr) minmax(0, 1fr); gap: 16px; padding: 0 28px 28px; }
 .panel { background: var(--panel); border: 1px solid var(--line); border-radius: 12px; padding: 14px 16px; min-width: 0; }
 .wide { grid-column: 1 / -1; }
@@ -143,7 +143,7 @@ const char* kPage2 = R"HTML(</script>
 "use strict";
 const D = JSON.parse(document.getElementById("data").textContent);
 const B = D.buildings;
-const COLORS = { ok: "#2e9e5b", fallback: "#e0a526", skipped: "#9aa3ad", failed: "#d64545" };
+const COLORS = { ok: "#2e9e5b", fallback: "#e0a526", partial: "#8e5bd6", skipped: "#9aa3ad", failed: "#d64545" };
 const SVGNS = "http://www.w3.org/2000/svg";
 const $ = (id) => document.getElementById(id);
 const fmt = (v, d) => (v === null || v === undefined ? "–" : Number(v).toFixed(d));
@@ -161,14 +161,14 @@ function median(xs) {
 }
 
 // Summary.
-const counts = { ok: 0, fallback: 0, skipped: 0, failed: 0 };
+const counts = { ok: 0, fallback: 0, partial: 0, skipped: 0, failed: 0 };
 B.forEach((b) => { counts[b.s] = (counts[b.s] || 0) + 1; });
 const rmses = B.filter((b) => b.rmse !== null).map((b) => b.rmse);
 const faces = B.filter((b) => b.f > 0).map((b) => b.f);
 const secs = B.map((b) => b.t);
 $("subtitle").textContent = B.length + " buildings" + (D.crs ? " · " + D.crs : "") + " · city3d " + D.version;
 [["buildings", B.length, ""], ["ok", counts.ok, "ok"], ["fallback", counts.fallback, "fallback"],
- ["skipped", counts.skipped, "skipped"], ["failed", counts.failed, "failed"],
+ ["partial", counts.partial, "partial"], ["skipped", counts.skipped, "skipped"], ["failed", counts.failed, "failed"],
  ["median RMSE (m)", fmt(median(rmses), 3), ""], ["faces", faces.reduce((a, b) => a + b, 0), ""],
  ["seconds (sum)", fmt(secs.reduce((a, b) => a + b, 0), 1), ""]].forEach(([k, v, c]) => {
   const card = el("div", { class: "card " + c }, $("cards"));
@@ -284,10 +284,10 @@ histogram("RMSE", rmses, "m", 3);
 histogram("Faces", faces, "", 0);
 histogram("Seconds", secs, "s", 2);
 
-// Worst buildings: failed, then fallback, then the least faithful models both ways (the share of the
-// points farther than 1 m from the model, plus the share of the footprint's area that the model covers
-// with surface no point supports), then the highest RMSE.
-const rank = { failed: 0, fallback: 1, ok: 2, skipped: 3 };
+// Worst buildings: failed, then partly covered, then fallback, then the least faithful models both ways
+// (the share of the points farther than 1 m from the model, plus the share of the footprint's area that
+// the model covers with surface no point supports), then the highest RMSE.
+const rank = { failed: 0, partial: 1, fallback: 2, ok: 3, skipped: 4 };
 const unfaithful = (b) => (b.us || 0) + (b.ua && b.fa ? b.ua / b.fa : 0);
 const worst = B.map((b, i) => i).filter((i) => B[i].s !== "skipped" || B[i].r)
   .sort((a, b) => rank[B[a].s] - rank[B[b].s] || unfaithful(B[b]) - unfaithful(B[a]) ||
@@ -433,7 +433,7 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
     const BuildingReport& b = r.report;
     const double unfaithful = (std::isfinite(b.unexplained_share) ? b.unexplained_share : 0.0) +
                               (std::isfinite(b.unsupported_area) && b.footprint_area > 0 ? b.unsupported_area / b.footprint_area : 0.0);
-    keys[k] = {r.report.status == BuildingStatus::fallback, unfaithful, r.report.rmse,
+    keys[k] = {b.status == BuildingStatus::fallback || b.status == BuildingStatus::partial, unfaithful, b.rmse,
                r.lods.empty() ? 0 : r.lods.back().model.mesh.vertices.size(), !r.lods.empty()};
   }
   const bool have_footprints = !extent.empty();

@@ -8,13 +8,16 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <map>
 #include <memory>
+#include <optional>
 #include <utility>
 
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
 #include "io/input_file.hpp"
+#include "io/las_reader.hpp"
 
 namespace city3d::detail {
 namespace {
@@ -56,12 +59,52 @@ std::unique_ptr<OGRSpatialReference> parse_crs(const std::string& text, const st
   return srs;
 }
 
+/// The header facts of a LAS/LAZ file, or nullopt when `path` is no readable LAS/LAZ file (its
+/// reader names the problem later).
+std::optional<PointCloudInfo> las_header(const std::string& path) {
+  try {
+    InputFile file(path, "input");
+    char signature[4] = {};
+    if (file.read_at(0, signature, 4) != 4 || std::memcmp(signature, "LASF", 4) != 0) return std::nullopt;
+    return read_las_info(path);
+  } catch (const Error&) {
+    return std::nullopt;
+  }
+}
+
+/// True when two headers could be of one tile: the same point count, format, record length,
+/// scale and offset, and bounds within half a scale step (LASzip writes the bounds it recomputes
+/// from the quantised points, a last bit off: laz/cases/las12_pf0_point10). The LAS version and
+/// the VLRs may differ (a LAZ file has one more).
+bool same_header_facts(const PointCloudInfo& a, const PointCloudInfo& b) {
+  if (a.point_count != b.point_count || a.point_format != b.point_format || a.record_length != b.record_length ||
+      a.scale != b.scale || a.offset != b.offset || a.bounds.empty() != b.bounds.empty())
+    return false;
+  if (a.bounds.empty()) return true;
+  const double ax[] = {a.bounds.min.x, a.bounds.min.y, a.bounds.min.z, a.bounds.max.x, a.bounds.max.y, a.bounds.max.z};
+  const double bx[] = {b.bounds.min.x, b.bounds.min.y, b.bounds.min.z, b.bounds.max.x, b.bounds.max.y, b.bounds.max.z};
+  for (int k = 0; k < 6; ++k)
+    if (!(std::fabs(ax[k] - bx[k]) <= std::fabs(a.scale[k % 3]) / 2)) return false;
+  return true;
+}
+
+/// True when two LAS/LAZ files hold the same point records at both ends.
+bool same_end_records(const std::string& a, const std::string& b) {
+  try {
+    return read_las_end_records(a, kTwinRecords) == read_las_end_records(b, kTwinRecords);
+  } catch (const Error&) {
+    return false;  // its reader names the problem when the file is read
+  }
+}
+
 }  // namespace
 
-std::vector<std::string> distinct_inputs(const std::vector<std::string>& files) {
+std::vector<std::string> distinct_inputs(const std::vector<std::string>& files, Repeats repeats) {
   std::vector<std::string> kept;
   std::map<std::pair<dev_t, ino_t>, std::string> by_identity;
   std::multimap<off_t, std::string> by_size;  // kept files, for the copy check
+  // Kept LAS/LAZ files by point count, with their headers, for the twin check.
+  std::multimap<std::uint64_t, std::pair<PointCloudInfo, std::string>> by_count;
   for (const std::string& f : files) {
     struct stat st {};
     if (::stat(f.c_str(), &st) != 0) {  // the reader names the problem
@@ -80,11 +123,28 @@ std::vector<std::string> distinct_inputs(const std::vector<std::string>& files) 
       for (auto k = range.first; k != range.second && copy_of.empty(); ++k)
         if (ends_of(k->second, static_cast<std::uint64_t>(st.st_size)) == mine) copy_of = k->second;
     }
-    if (!copy_of.empty()) {
+    if (!copy_of.empty() && repeats == Repeats::clouds) {
+      log_warning("input: " + f + " holds the same bytes as " + copy_of +
+                  ": each is a building of its own (without footprints every file is one)");
+    } else if (!copy_of.empty()) {
       log_warning("input: " + f + " is a copy of " + copy_of + " (same size and content): read once");
       continue;
     }
     by_size.emplace(st.st_size, f);
+    const std::optional<PointCloudInfo> header = repeats == Repeats::tiles ? las_header(f) : std::nullopt;
+    if (header) {
+      std::string twin_of;
+      const auto same = by_count.equal_range(header->point_count);
+      for (auto k = same.first; k != same.second && twin_of.empty(); ++k)
+        if (same_header_facts(*header, k->second.first) && same_end_records(f, k->second.second))
+          twin_of = k->second.second;
+      if (!twin_of.empty()) {
+        log_warning("input: " + f + " holds the same points as " + twin_of + " (the same header and first and last " +
+                    std::to_string(kTwinRecords) + " point records, in another encoding): read once");
+        continue;
+      }
+      by_count.emplace(header->point_count, std::make_pair(*header, f));
+    }
     kept.push_back(f);
   }
   return kept;

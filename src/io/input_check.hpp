@@ -10,11 +10,26 @@
 
 namespace city3d::detail {
 
-/// `files` without repeats, first occurrence kept, in order. A repeat is the same file under another
-/// name (a second mention, a folder holding a file also given alone, a symbolic or hard link) or a
-/// copy (same size, same first and last 64 KiB). Each dropped file gets a warning naming both:
-/// reading a tile twice would double the points of every building on it.
-std::vector<std::string> distinct_inputs(const std::vector<std::string>& files);
+/// What distinct_inputs() drops.
+enum class Repeats {
+  /// Tiles (with footprints): the same file under another name, a copy of its bytes, and a twin
+  /// holding the same points in another encoding (a LAS file and its LAZ): reading a tile twice
+  /// would double the points of every building on it.
+  tiles,
+  /// Single-building clouds: only the same file under another name. Each file is a building, so a
+  /// copy is a building of its own (with a warning: it is seldom meant).
+  clouds,
+};
+
+/// `files` without repeats, first occurrence kept, in order. The same file is one under another
+/// name (a second mention, a folder holding a file also given alone, a symbolic or hard link); a
+/// copy has the same size and the same first and last 64 KiB; a twin is a LAS or LAZ file with the
+/// same header facts (point count, format, record length, scale, offset; bounds within half a scale
+/// step) and the same first and last kTwinRecords point records, decompressed. Each dropped file gets a warning naming both.
+std::vector<std::string> distinct_inputs(const std::vector<std::string>& files, Repeats repeats = Repeats::tiles);
+
+/// Point records compared at each end of two LAS/LAZ files with the same header facts.
+constexpr std::size_t kTwinRecords = 64;
 
 /// The CRS the point clouds share ("EPSG:n" or WKT as the files record it), or empty when none of
 /// them records one. Throws IoError when two files record different CRSs, or when the CRS is

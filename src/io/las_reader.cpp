@@ -398,6 +398,7 @@ class LazRecordSource final : public RecordSource {
   std::size_t read_records(std::uint8_t* out, std::size_t max_records) override {
     return decoder_->decode(out, max_records);
   }
+  const detail::LazDecoder& decoder() const { return *decoder_; }
 
  private:
   std::unique_ptr<detail::LazDecoder> decoder_;
@@ -722,6 +723,54 @@ PointCloudInfo read_las_info(const std::string& path) {
   PointCloudInfo info;
   read_header(file, info);
   return info;
+}
+
+std::string read_las_end_records(const std::string& path, std::size_t n) {
+  InputFile file(path, "las");
+  PointCloudInfo info;
+  const LasHeader h = read_header(file, info);
+  const std::size_t length = h.record_length;
+  const std::uint64_t count = h.point_count;
+  const std::size_t k = static_cast<std::size_t>(std::min<std::uint64_t>(n, count));
+  std::string first(k * length, '\0'), last(k * length, '\0');
+  if (k == 0) return {};
+  if (!h.compressed) {
+    const std::uint64_t begin = h.offset_to_point_data;
+    if (file.read_at(begin, first.data(), first.size()) != first.size() ||
+        file.read_at(begin + (count - k) * length, last.data(), last.size()) != last.size())
+      throw IoError("las: " + path + " ends before its last point record");
+    return first + last;
+  }
+  // The same decoder as open_las(), one thread.
+  const auto source = make_record_source(std::move(file), h, 1);
+  auto& laz = dynamic_cast<LazRecordSource&>(*source);
+  const detail::LazDecoder& decoder = laz.decoder();
+  const std::size_t chunks = decoder.chunk_count();
+  if (chunks > 1 && decoder.chunk_points(0) >= k && decoder.chunk_points(chunks - 1) >= k) {
+    std::vector<std::uint8_t> chunk(static_cast<std::size_t>(decoder.chunk_points(0)) * length);
+    decoder.decode_chunk(0, chunk.data());
+    std::memcpy(first.data(), chunk.data(), first.size());
+    chunk.resize(static_cast<std::size_t>(decoder.chunk_points(chunks - 1)) * length);
+    decoder.decode_chunk(chunks - 1, chunk.data());
+    std::memcpy(last.data(), chunk.data() + chunk.size() - last.size(), last.size());
+    return first + last;
+  }
+  // One stream (or chunks smaller than n): decode through, keeping the first k and a window that
+  // ends with the last k.
+  constexpr std::size_t kBatch = 1 << 16;
+  std::vector<std::uint8_t> batch(kBatch * length);
+  std::string window;
+  std::uint64_t done = 0;
+  for (std::size_t got; (got = laz.read_records(batch.data(), kBatch)) > 0; done += got) {
+    if (done < k) {
+      const std::size_t take = static_cast<std::size_t>(std::min<std::uint64_t>(k - done, got));
+      std::memcpy(first.data() + done * length, batch.data(), take * length);
+    }
+    window.append(reinterpret_cast<const char*>(batch.data()), got * length);
+    if (window.size() > last.size()) window.erase(0, window.size() - last.size());
+  }
+  if (window.size() != last.size()) throw IoError("laz: " + path + " ends before its last point record");
+  return first + window;
 }
 
 }  // namespace city3d::detail

@@ -18,4 +18,11 @@ std::unique_ptr<PointCloudReader> open_las(const std::string& path, PointFields 
 /// Header facts of a LAS or LAZ file (LAZ works: compressed = true, format "LAZ").
 PointCloudInfo read_las_info(const std::string& path);
 
+/// The raw point records at both ends of a LAS or LAZ file: the first min(n, count) records, then
+/// the last min(n, count) (so a file of fewer than 2n points gives some twice), record_length bytes
+/// each, decompressed for LAZ. A LAZ file of several chunks decodes its first and last chunk only;
+/// one of a single stream (compressor 1) is decoded through. What tells a LAS file and its LAZ twin
+/// (the same records, other bytes) without reading either whole. Throws IoError as open_las() does.
+std::string read_las_end_records(const std::string& path, std::size_t n);
+
 }  // namespace city3d::detail

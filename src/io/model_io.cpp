@@ -3,6 +3,7 @@
 #include "city3d/model_io.hpp"
 
 #include <cinttypes>
+#include <cstdio>
 #include <cstring>
 
 #include "city3d/error.hpp"
@@ -159,13 +160,24 @@ std::string mesh_extension(MeshFormat format) { return format == MeshFormat::obj
 std::string model_file_name(const BuildingId& id, MeshFormat format) {
   std::string name;
   name.reserve(id.size());
+  bool changed = false;
   for (char c : id) {
     const bool safe = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '.' ||
                       c == '_' || c == '-';
     name += safe ? c : '_';
+    changed = changed || !safe;
   }
   // Never empty, never a hidden file or "..".
-  if (name.empty() || name[0] == '.') name.insert(name.begin(), '_');
+  if (name.empty() || name[0] == '.') name.insert(name.begin(), '_'), changed = true;
+  // Two ids that differ only where characters were replaced ("a b" and "a_b", "DALES/00011" and
+  // "DALES_00011") must not share a file: a changed name carries the id's hash (32-bit FNV-1a).
+  if (changed) {
+    std::uint32_t hash = 2166136261u;
+    for (unsigned char c : id) hash = (hash ^ c) * 16777619u;
+    char suffix[16];
+    std::snprintf(suffix, sizeof suffix, "-%08x", hash);
+    name += suffix;
+  }
   return name + mesh_extension(format);
 }
 

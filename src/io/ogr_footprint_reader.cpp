@@ -17,6 +17,7 @@
 #include <mutex>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -326,6 +327,35 @@ RepairedPolygons check_and_repair(const std::vector<Polygon2>& polygons, bool re
   return repair_multipolygon(std::move(multi), repair);
 }
 
+std::vector<FieldSummary> summarise_ogr_fields(const std::string& path, const FootprintReadOptions& options,
+                                               std::size_t max_features, std::size_t& features) {
+  QuietGdalErrors quiet;
+  GDALDatasetUniquePtr dataset = open_vector(path);
+  OGRLayer& layer = select_layer(*dataset, path, options.layer);
+  OGRFeatureDefn* definition = layer.GetLayerDefn();
+  std::vector<FieldSummary> fields(static_cast<std::size_t>(definition->GetFieldCount()));
+  std::vector<std::unordered_set<std::string>> seen(fields.size());
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    const OGRFieldDefn* field = definition->GetFieldDefn(static_cast<int>(i));
+    fields[i].name = field->GetNameRef();
+    fields[i].type = OGRFieldDefn::GetFieldTypeName(field->GetType());
+  }
+  if (!options.attribute_filter.empty() && layer.SetAttributeFilter(options.attribute_filter.c_str()) != OGRERR_NONE)
+    throw IoError(kModule + std::string("bad attribute filter '") + options.attribute_filter + "' on " + path);
+  features = 0;
+  layer.ResetReading();
+  for (OGRFeatureUniquePtr feature(layer.GetNextFeature()); feature && features < max_features;
+       feature.reset(layer.GetNextFeature())) {
+    ++features;
+    for (std::size_t i = 0; i < fields.size(); ++i) {
+      if (!feature->IsFieldSetAndNotNull(static_cast<int>(i))) continue;
+      ++fields[i].values;
+      if (seen[i].insert(feature->GetFieldAsString(static_cast<int>(i))).second) ++fields[i].distinct;
+    }
+  }
+  return fields;
+}
+
 std::vector<std::string> list_ogr_layers(const std::string& path) {
   QuietGdalErrors quiet;
   GDALDatasetUniquePtr dataset = open_vector(path);
@@ -423,6 +453,10 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
 
   std::unordered_map<BuildingId, std::int64_t> first_fid_of_id;
   std::size_t polygon_features = 0;
+  // Duplicated ids are told after the read: when most ids are, the field is no id (one error, not a
+  // warning per feature).
+  std::vector<std::string> duplicate_warnings;
+  std::string first_duplicate;
   auto skip = [&](const BuildingId& id, const std::string& reason) {
     warn(kModule + std::string("skipped ") + id + " in " + where + ": " + reason);
     set.skipped.push_back({id, reason});
@@ -481,8 +515,12 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
     const auto [first, inserted] =
         mode.keep_duplicates ? std::make_pair(first_fid_of_id.end(), true) : first_fid_of_id.emplace(id, fid);
     if (!inserted) {
-      skip(id,
-           "duplicated id (first at fid " + std::to_string(first->second) + ", this is " + fid_text + ")");
+      const std::string reason =
+          "duplicated id (first at fid " + std::to_string(first->second) + ", this is " + fid_text + ")";
+      duplicate_warnings.push_back(kModule + std::string("skipped ") + id + " in " + where + ": " + reason);
+      if (first_duplicate.empty())
+        first_duplicate = "'" + id + "' at fid " + std::to_string(first->second) + " and again at " + fid_text;
+      set.skipped.push_back({id, reason});
       continue;
     }
 
@@ -534,6 +572,26 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
       set.footprints.push_back(std::move(footprint));
   }
 
+  // An id field that repeats for more than half of the features is no id (a height class: 159 of
+  // Delft's 160 footprints share rel_hoogte 0): an error naming the fields that are unique. A few
+  // duplicated ids are the source's own mistakes: those features are skipped with a warning each.
+  if (duplicate_warnings.size() * 2 > set.feature_count) {
+    constexpr std::size_t kFieldSample = 20000;
+    std::size_t read = 0;
+    std::string unique;
+    for (const FieldSummary& f : summarise_ogr_fields(path, options, kFieldSample, read))
+      if (f.unique(read)) unique += (unique.empty() ? "" : ", ") + f.name;
+    const std::string field = use_fid ? "the feature id (FID)" : "--id-field " + options.id_field;
+    throw IoError(kModule + field + " is not an id of " + where + ": " + std::to_string(duplicate_warnings.size()) +
+                  " of its " + std::to_string(set.feature_count) + " features repeat an earlier one's value (the first: " +
+                  first_duplicate + "); " +
+                  (unique.empty() ? std::string("no field has a value of its own for every feature")
+                                  : "fields with a value of its own for every feature" +
+                                        std::string(read == kFieldSample ? " (of the first " + std::to_string(read) + ")" : "") +
+                                        ": " + unique));
+  }
+  for (const std::string& message : duplicate_warnings) warn(message);
+
   // No polygon at all: an error when the unfiltered layer has none either; an empty selection
   // (filters that match nothing) is a valid result.
   if (polygon_features == 0) {
@@ -542,6 +600,7 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
     if (!layer_has_polygon_feature(layer)) {
       throw IoError(kModule + where + " has no polygon features");
     }
+    if (set.feature_count == 0) set.unfiltered_count = static_cast<std::size_t>(std::max<GIntBig>(0, layer.GetFeatureCount()));
   }
   const std::string summary = kModule + std::to_string(set.feature_count - set.skipped.size()) +
                               " footprints from " + where + " (" + std::to_string(set.skipped.size()) + " skipped, " +
@@ -566,6 +625,13 @@ bool is_obj_path(const std::string& path) {
 FootprintSet read_footprints(const std::string& path, const FootprintReadOptions& options) {
   return is_obj_path(path) ? detail::read_obj_footprints(path, options)
                            : detail::read_ogr_footprints(path, options);
+}
+
+std::vector<FieldSummary> summarise_fields(const std::string& path, const FootprintReadOptions& options,
+                                           std::size_t max_features, std::size_t& features) {
+  features = 0;
+  if (is_obj_path(path)) return {};
+  return detail::summarise_ogr_fields(path, options, max_features, features);
 }
 
 std::vector<std::string> list_footprint_layers(const std::string& path) {

@@ -33,7 +33,8 @@ std::size_t count_of(const json& o, const char* key) {
 }
 
 BuildingStatus status_of(const std::string& s) {
-  for (BuildingStatus b : {BuildingStatus::ok, BuildingStatus::fallback, BuildingStatus::skipped, BuildingStatus::failed})
+  for (BuildingStatus b : {BuildingStatus::ok, BuildingStatus::fallback, BuildingStatus::skipped, BuildingStatus::failed,
+                           BuildingStatus::partial})
     if (s == to_string(b)) return b;
   return BuildingStatus::failed;
 }
@@ -76,6 +77,8 @@ BuildingReport parse_report(const std::string& text, std::size_t position) {
   r.lods_reconstructed = text_of(o, "lods_reconstructed");
   r.footprint_area = number_or_nan(o, "footprint_area");
   r.point_density = number_or_nan(o, "point_density");
+  r.coverage = number_or_nan(o, "coverage");
+  r.point_coverage = number_or_nan(o, "point_coverage");
   r.h_roof_50p = number_or_nan(o, "h_roof_50p");
   r.h_roof_70p = number_or_nan(o, "h_roof_70p");
   r.h_roof_min = number_or_nan(o, "h_roof_min");

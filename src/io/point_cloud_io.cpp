@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cstring>
+#include <filesystem>
 #include <string>
 
 #include "city3d/error.hpp"
@@ -67,6 +68,44 @@ PointCloud read_point_cloud(const std::string& path, PointFields fields, unsigne
   while (reader->read(cloud, kReadChunk) > 0) {
   }
   return cloud;
+}
+
+std::vector<std::string> point_cloud_files_in(const std::string& folder) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> found;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    std::string ext = entry.path().extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (entry.is_regular_file() && (ext == ".las" || ext == ".laz" || ext == ".ply")) found.push_back(entry.path().string());
+  }
+  if (ec) throw IoError("input: cannot list folder " + folder + ": " + ec.message());
+  std::sort(found.begin(), found.end());
+  return found;
+}
+
+// ASPRS LAS 1.4 standard class names (R15); AHN uses 26 for civil structures ("kunstwerk").
+const char* las_class_name(int c) {
+  switch (c) {
+    case 0: return "never classified";
+    case 1: return "unclassified";
+    case 2: return "ground";
+    case 3: return "low vegetation";
+    case 4: return "medium vegetation";
+    case 5: return "high vegetation";
+    case 6: return "building";
+    case 7: return "low point (noise)";
+    case 9: return "water";
+    case 10: return "rail";
+    case 11: return "road surface";
+    case 13: return "wire guard";
+    case 14: return "wire conductor";
+    case 15: return "transmission tower";
+    case 17: return "bridge deck";
+    case 18: return "high noise";
+    case 26: return "user defined (AHN: civil structure)";
+    default: return c < 64 ? "reserved" : "user defined";
+  }
 }
 
 PointCloudInfo read_point_cloud_info(const std::string& path) {

@@ -9,10 +9,14 @@
 #include "city3d/batch.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
+#include <charconv>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <functional>
@@ -23,6 +27,8 @@
 #include <mutex>
 #include <numeric>
 #include <set>
+#include <sstream>
+#include <system_error>
 #include <thread>
 
 #include "city3d/error.hpp"
@@ -43,14 +49,13 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
+// Adds a note to a report row (after the pipeline's own, "; "-separated).
+void add_note(BuildingReport& report, const std::string& note) {
+  report.note += (report.note.empty() ? "" : "; ") + note;
 }
 
-bool is_point_cloud_file(const fs::path& p) {
-  std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext == ".las" || ext == ".laz" || ext == ".ply";
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
 // Files as given, folders expanded to their LAS/LAZ/PLY files sorted by name (deterministic).
@@ -59,12 +64,8 @@ std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
   for (const std::string& in : inputs) {
     std::error_code ec;
     if (fs::is_directory(in, ec)) {
-      std::vector<std::string> found;
-      for (const auto& entry : fs::directory_iterator(in, ec))
-        if (entry.is_regular_file() && is_point_cloud_file(entry.path())) found.push_back(entry.path().string());
-      if (ec) throw IoError("input: cannot list folder " + in + ": " + ec.message());
+      const std::vector<std::string> found = point_cloud_files_in(in);
       if (found.empty()) throw IoError("input: folder " + in + " holds no .las, .laz or .ply file");
-      std::sort(found.begin(), found.end());
       files.insert(files.end(), found.begin(), found.end());
     } else if (fs::exists(in, ec)) {
       files.push_back(in);
@@ -74,6 +75,51 @@ std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
   }
   if (files.empty()) throw ConfigError("input: no point-cloud file given");
   return files;
+}
+
+/// A single-building cloud's id and, when it is not the file name, how it was made.
+struct CloudId {
+  BuildingId id;
+  std::string note;
+};
+
+// Each cloud's id: its file name without extension; when several files share that name, each of
+// them gets its path below their common folder, without extension (with it when that is still
+// shared: x.las and x.laz side by side). Ids are unique in every output, whatever the files' names.
+std::vector<CloudId> cloud_ids(const std::vector<std::string>& files) {
+  std::vector<CloudId> ids(files.size());
+  std::map<std::string, std::vector<std::size_t>> by_name;
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    ids[i].id = fs::path(files[i]).stem().string();
+    by_name[ids[i].id].push_back(i);
+  }
+  for (const auto& [name, group] : by_name) {
+    if (group.size() < 2) continue;
+    std::vector<fs::path> paths;
+    for (std::size_t i : group) paths.push_back(fs::absolute(files[i]).lexically_normal());
+    fs::path common = paths.front().parent_path();
+    for (const fs::path& p : paths)
+      while (!common.empty() && p.parent_path().lexically_relative(common).string().rfind("..", 0) == 0)
+        common = common.parent_path();
+    std::map<std::string, std::size_t> uses;
+    for (const fs::path& p : paths) ++uses[p.lexically_relative(common).replace_extension().generic_string()];
+    for (std::size_t k = 0; k < group.size(); ++k) {
+      fs::path below = paths[k].lexically_relative(common);
+      if (uses[fs::path(below).replace_extension().generic_string()] == 1) below.replace_extension();
+      ids[group[k]].id = below.generic_string();
+      ids[group[k]].note = "id: the path below " + common.string() + ", since " + std::to_string(group.size()) +
+                           " files are named " + name;
+    }
+  }
+  // Names that still meet (a path that is another file's name, say): numbered in input order.
+  std::map<std::string, std::size_t> seen;
+  for (CloudId& c : ids)
+    if (const std::size_t n = ++seen[c.id]; n > 1) {
+      c.note = (c.note.empty() ? "" : c.note + "; ") + "id: " + c.id + " numbered " + std::to_string(n) +
+               ", since another input has that id";
+      c.id += "~" + std::to_string(n);
+    }
+  return ids;
 }
 
 std::vector<Point3> read_all_points(const std::string& path) {
@@ -105,10 +151,21 @@ double area(const Footprint& f) {
   return std::max(a, 0.0);
 }
 
+/// The classes of the tiles' points, each tile counted once, as the crop streamed them: what the
+/// advice of a run without building points names.
+struct ClassCounts {
+  std::vector<bool> counted;            ///< per tile
+  bool any = false;                     ///< some tile had classes
+  std::array<std::uint64_t, 256> n{};   ///< points per class
+};
+
 // Streams every tile that overlaps `extent` (a block's footprints and their ground buffers) into the
-// cropper.
-void crop_tiles(const std::vector<std::string>& files, const Box2& extent, unsigned threads, Cropper& cropper) {
-  for (const std::string& file : files) {
+// cropper. A tile whose header has no bounds (PLY) gets them from its points, in `bounds`; a tile
+// streamed the first time adds its classes to `classes`.
+void crop_tiles(const std::vector<std::string>& files, const Box2& extent, unsigned threads, Cropper& cropper,
+                std::vector<Box3>& bounds, ClassCounts& classes) {
+  for (std::size_t t = 0; t < files.size(); ++t) {
+    const std::string& file = files[t];
     // Cropping runs between reconstructions, so every thread can decode LAZ chunks meanwhile.
     auto reader = open_point_cloud(file, kFieldClassification, threads);
     const PointCloudInfo& info = reader->info();
@@ -121,6 +178,7 @@ void crop_tiles(const std::vector<std::string>& files, const Box2& extent, unsig
         continue;
       }
     }
+    Box3 seen;
     PointCloud chunk;
     std::uint64_t n = 0;
     for (;;) {
@@ -128,9 +186,46 @@ void crop_tiles(const std::vector<std::string>& files, const Box2& extent, unsig
       const std::size_t got = reader->read(chunk, 1 << 20);
       if (got == 0) break;
       n += got;
+      if (info.bounds.empty())
+        for (const Point3& p : chunk.points) seen.add(p);
+      if (!classes.counted[t]) {
+        classes.any = classes.any || !chunk.classification.empty();
+        for (std::uint8_t c : chunk.classification) ++classes.n[c];
+      }
       cropper.add(chunk);
     }
+    classes.counted[t] = true;
+    if (info.bounds.empty()) bounds[t] = seen;
     log_info("crop: " + file + ": " + std::to_string(n) + " points streamed");
+  }
+}
+
+// What the coverage of a footprint (FootprintCoverage) says about its building, in its report row.
+// Below `min_coverage` of its area inside the tiles' extents, a building reconstructed from what
+// points there are is `partial` (a tile left out: its model is wrong); a skipped or failed one keeps
+// its status, with a note. Cells without any point inside the extents are the data's own gaps (glass
+// roofs, water: 2 of Delft's 160 footprints have none over half their area): a note says so.
+void apply_coverage(const FootprintCoverage& c, double min_coverage, BuildingReport& r) {
+  r.coverage = c.area;
+  r.point_coverage = c.cells;
+  char buf[200];
+  if (c.area < min_coverage) {
+    if (c.area > 0)
+      std::snprintf(buf, sizeof buf, "partly covered: %.1f%% of the footprint lies outside every tile given (coverage %.3f)",
+                    100.0 * (1.0 - c.area), c.area);
+    else
+      std::snprintf(buf, sizeof buf, "the footprint lies outside every tile given (coverage 0)");
+    if (r.status == BuildingStatus::ok || r.status == BuildingStatus::fallback) {
+      r.status = BuildingStatus::partial;
+      r.reason = buf + (r.reason.empty() ? "" : "; " + r.reason);
+      if (r.stage.empty()) r.stage = "coverage";
+    } else {
+      add_note(r, buf);
+    }
+  } else if (c.cells < min_coverage) {
+    std::snprintf(buf, sizeof buf, "no point at all over %.1f%% of the footprint (point_coverage %.3f)",
+                  100.0 * (1.0 - c.cells), c.cells);
+    add_note(r, buf);
   }
 }
 
@@ -187,14 +282,56 @@ detail::BuildingRecord skipped_record(std::uint64_t index, const SkippedFootprin
   return record;
 }
 
-void print_progress(std::size_t done, std::size_t total, Clock::time_point start) {
-  const double elapsed = seconds_since(start);
-  const double rate = elapsed > 0 ? done / elapsed : 0.0;
-  const double left = rate > 0 ? (total - done) / rate : 0.0;
-  std::fprintf(stderr, "\rbuildings %zu/%zu  %.1f/s  %.0f s left   ", done, total, rate, left);
-  if (done == total) std::fputc('\n', stderr);
-  std::fflush(stderr);
-}
+/// The progress line on stderr. Its rate counts the buildings this run reconstructed over the time
+/// it spent reconstructing (reading tiles and resumed buildings left out: they made the first
+/// estimate of the Delft block 86 s for a 5.8 s run), and it says nothing of the time left until
+/// a few buildings (kProgressSample, or 2% of them) are done.
+class Progress {
+ public:
+  static constexpr std::size_t kProgressSample = 5;
+  Progress(bool on, std::size_t total, std::size_t resumed) : on_(on), total_(total), done_(resumed) {}
+  /// While tiles are read for the next buildings.
+  void reading(std::size_t tiles, std::size_t buildings) {
+    if (!on_) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::fprintf(stderr, "\rbuildings %zu/%zu  reading %zu tile%s for the next %zu...%20s", done_, total_, tiles,
+                 tiles == 1 ? "" : "s", buildings, "");
+    std::fflush(stderr);
+  }
+  void start_reconstructing() { std::lock_guard<std::mutex> lock(mutex_); since_ = Clock::now(); }
+  void stop_reconstructing() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    spent_ += seconds_since(since_);
+  }
+  /// One more building finished.
+  void building_done() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++done_;
+    ++built_;
+    if (!on_) return;
+    const double spent = spent_ + seconds_since(since_);
+    const double rate = spent > 0 ? built_ / spent : 0.0;
+    if (built_ < std::max<std::size_t>(kProgressSample, total_ / 50) || rate <= 0)
+      std::fprintf(stderr, "\rbuildings %zu/%zu  estimating the time left...%20s", done_, total_, "");
+    else
+      std::fprintf(stderr, "\rbuildings %zu/%zu  %.1f/s  about %.0f s left%20s", done_, total_, rate,
+                   std::ceil((total_ - done_) / rate), "");
+    std::fflush(stderr);
+  }
+  /// Ends the line (the summary follows on its own).
+  void finish() {
+    if (!on_) return;
+    std::fprintf(stderr, "\rbuildings %zu/%zu%60s\n", done_, total_, "");
+    std::fflush(stderr);
+  }
+
+ private:
+  bool on_;
+  std::size_t total_, done_, built_ = 0;
+  double spent_ = 0.0;
+  Clock::time_point since_ = Clock::now();
+  std::mutex mutex_;
+};
 
 // What a run does, known before any building is reconstructed and the same in every shard: the
 // buildings (in output order), their blocks, and the footprints that were not kept.
@@ -205,8 +342,26 @@ struct Plan {
   std::vector<std::vector<std::uint64_t>> blocks;   ///< building indices per block, row-major
   std::vector<double> weights;                      ///< per block: footprint area, or cloud file size
   std::vector<SkippedFootprint> skipped;            ///< indices buildings, buildings + 1, ...
+  std::vector<CloudId> cloud_ids;                   ///< single-building clouds: per file
   std::string crs;
 };
+
+// Throws IoError when --where or --bbox leave no footprint of a layer that has some: a run of no
+// building is a mistake to say before anything is written, not a report without rows.
+void check_selection(const FootprintSet& set, const BatchOptions& o) {
+  if (set.feature_count > 0 || (o.footprint.attribute_filter.empty() && !o.footprint.bbox)) return;
+  std::string filters;
+  if (!o.footprint.attribute_filter.empty()) filters = "--where \"" + o.footprint.attribute_filter + "\"";
+  if (o.footprint.bbox) {
+    const Box2& b = *o.footprint.bbox;
+    char box[160];
+    std::snprintf(box, sizeof box, "--bbox %.3f,%.3f,%.3f,%.3f", b.min.x, b.min.y, b.max.x, b.max.y);
+    filters += (filters.empty() ? "" : " and ") + std::string(box);
+  }
+  throw IoError("footprints: " + filters + " leave" + (o.footprint.attribute_filter.empty() || !o.footprint.bbox ? "s" : "") +
+                " no footprint of the " + std::to_string(set.unfiltered_count) + " features of " + set.path +
+                " layer '" + set.layer + "': nothing to reconstruct");
+}
 
 // Footprints grouped into square blocks of `extent` metres by their bounding-box centres, blocks in
 // row-major order, footprints in input order within a block. extent <= 0: one block.
@@ -255,6 +410,79 @@ std::vector<int> assign_shards(const std::vector<std::size_t>& order, const std:
   return owner;
 }
 
+// "name = value" lines with each number in its shortest form that reads back the same (0.2, not
+// parameters_text()'s 0.20000000000000001), for the log.
+std::string readable_numbers(const std::string& lines) {
+  std::stringstream in(lines);
+  std::string out;
+  for (std::string line; std::getline(in, line);) {
+    const std::size_t eq = line.find(" = ");
+    if (eq != std::string::npos) {
+      const std::string value = line.substr(eq + 3);
+      char* end = nullptr;
+      const double v = std::strtod(value.c_str(), &end);
+      if (!value.empty() && end && *end == '\0') {
+        char buf[32];
+        const auto [last, error] = std::to_chars(buf, buf + sizeof buf, v);
+        if (error == std::errc()) line = line.substr(0, eq + 3) + std::string(buf, last);
+      }
+    }
+    out += line + "\n";
+  }
+  return out;
+}
+
+std::string with_thousands(std::uint64_t n) {
+  std::string digits = std::to_string(n), out;
+  for (std::size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
+    out += digits[i];
+  }
+  return out;
+}
+
+// One line naming the problem most rows share (BatchSummary::main_problem) and its likely fix, from
+// what the run knows: the classes its tiles hold (`classes`, when it streamed any with classes) and
+// its options (`building_classes`: --building-classes as given; empty for a merge).
+std::string advice_for(const BatchSummary& s, const ClassCounts* classes, const std::string& building_classes) {
+  if (s.main_problem.empty()) return {};
+  const std::string rows = std::to_string(s.main_problem_rows) + " of " + std::to_string(s.buildings);
+  const std::string problem = s.main_problem.substr(s.main_problem.find(": ") + 2);
+  if (s.main_problem == "skipped: no building points inside the footprint") {
+    if (s.main_problem_outside == s.main_problem_rows)
+      return rows + " footprints are skipped: they lie outside every tile given; give the tiles that cover them, "
+             "or choose the footprints of these tiles (--bbox, --where)";
+    std::string present, wanted;
+    bool building_points = false;
+    if (classes) {
+      for (int c = 0; c < 256; ++c)
+        if (classes->n[static_cast<std::size_t>(c)] > 0)
+          present += (present.empty() ? "" : ", ") + std::to_string(c) + " (" + las_class_name(c) + ", " +
+                     with_thousands(classes->n[static_cast<std::size_t>(c)]) + ")";
+      std::stringstream list(building_classes);
+      for (std::string c; std::getline(list, c, ',');)
+        building_points = building_points || (!c.empty() && classes->n[static_cast<std::size_t>(std::stoi(c)) & 255] > 0);
+    }
+    if (classes && !building_classes.empty() && !building_points)
+      return rows + " footprints are skipped for want of building points: the tiles hold no point of class " +
+             building_classes + " (--building-classes) but of classes " + present +
+             "; give the building classes with --building-classes, or --ignore-classes to take every point inside "
+             "a footprint";
+    if (s.main_problem_outside > 0)
+      return rows + " footprints are skipped for want of building points; " + std::to_string(s.main_problem_outside) +
+             " of them lie outside every tile given: give the tiles that cover them, or choose the footprints of "
+             "these tiles (--bbox, --where)";
+    return rows + " footprints are skipped for want of building points inside them: are the tiles and the "
+           "footprints of the same place (and the points classified as --building-classes says)?";
+  }
+  if (s.main_problem.rfind("partial: ", 0) == 0)
+    return rows + " buildings are partial: the tiles given cover too little of their footprints (the coverage "
+           "column); give the neighbouring tiles too";
+  const std::string status = s.main_problem.substr(0, s.main_problem.find(':'));
+  return rows + (status == "failed" ? " buildings failed" : " footprints are " + status) + " for one reason: " +
+         problem + "; see the reason column of " + s.report_path;
+}
+
 detail::RunLayout layout_of(const BatchOptions& o) {
   detail::RunLayout l;
   l.cityjson = o.cityjson;
@@ -282,11 +510,19 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   if (sharded && !(options.shards >= 1 && options.shard >= 1 && options.shard <= options.shards))
     throw ConfigError("batch: shard " + std::to_string(options.shard) + "/" + std::to_string(options.shards) +
                       " does not exist (K/N with 1 <= K <= N)");
-  const std::vector<std::string> files = detail::distinct_inputs(expand_inputs(options.point_clouds));
+  // Tiles given twice are read once; single-building clouds are buildings, each file its own.
+  const std::vector<std::string> files = detail::distinct_inputs(
+      expand_inputs(options.point_clouds),
+      options.footprints.empty() ? detail::Repeats::clouds : detail::Repeats::tiles);
   // Every header is checked before anything is written, and gives the CRS and extents.
   std::vector<PointCloudInfo> infos;
   for (const std::string& f : files) infos.push_back(read_point_cloud_info(f));
-  log_info("parameters:\n" + parameters_text(options.reconstruction));
+  // Each tile's bounds (a PLY's once its points are streamed), for the footprints' coverage.
+  std::vector<Box3> tile_bounds;
+  for (const PointCloudInfo& info : infos) tile_bounds.push_back(info.bounds);
+  ClassCounts classes;
+  classes.counted.assign(files.size(), false);
+  log_info("parameters:\n" + readable_numbers(parameters_text(options.reconstruction)));
 
   // The plan: every building of the run, in output order, and its block.
   Plan plan;
@@ -306,6 +542,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
       extent.add(plan.boxes.back().min);
       extent.add(plan.boxes.back().max);
     });
+    check_selection(set, options);
     detail::check_footprints_meet_points(plan.boxes, set, infos, points_crs);
     plan.layout.crs = set.srs.rfind("EPSG:", 0) == 0 ? set.srs : "";
     plan.skipped = set.skipped;
@@ -314,6 +551,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   } else {
     // Single-building clouds: each cloud is its own block.
     plan.buildings = files.size();
+    plan.cloud_ids = cloud_ids(files);
     for (std::uint64_t i = 0; i < files.size(); ++i) {
       std::error_code ec;
       const auto size = fs::file_size(files[i], ec);
@@ -391,7 +629,9 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   if (!options.reconstruction.debug_dir.empty()) detail::prepare_output_folder(options.reconstruction.debug_dir, "debug");
   if (options.per_building_files)
     detail::prepare_output_folder((fs::path(options.output_dir) / "models").string(), "output");
-  detail::OutputFolder folder(options.output_dir);
+  detail::OutputFolder folder(options.output_dir,
+                             detail::run_level_files(plan.layout, sharded ? detail::FinaliseScope::shard
+                                                                          : detail::FinaliseScope::whole_run));
   detail::Journal journal(options.output_dir, header, options.resume);
   folder.remove_earlier_models(journal.earlier_models());
 
@@ -401,13 +641,16 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
 
   // Reconstructs buildings `indices` (global, output order) in parallel; id_of(k) and make_input(k)
   // give the id and input of indices[k], the input made by the worker that reconstructs it.
-  std::atomic<std::size_t> done{journal.restored()};
   const std::size_t total = header.expected;
+  Progress progress(options.progress, total, journal.restored());
   // outline_of(k) gives its footprint's polygons in world coordinates (nullptr for clouds).
+  // amend(k, result) adds what the run knows about the building beyond its input (coverage, how
+  // its id was made).
   auto reconstruct_all = [&](const std::vector<std::uint64_t>& indices,
                              const std::function<BuildingId(std::size_t)>& id_of,
                              const std::function<BuildingInput(std::size_t)>& make_input,
-                             const std::function<const std::vector<Polygon2>*(std::size_t)>& outline_of) {
+                             const std::function<const std::vector<Polygon2>*(std::size_t)>& outline_of,
+                             const std::function<void(std::size_t, BuildingResult&)>& amend) {
     std::atomic<std::size_t> next{0};
     std::exception_ptr failure;
     std::mutex failure_mutex;
@@ -427,6 +670,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
           }
           const BuildingInput input = make_input(k);
           BuildingResult result = reconstruct_building(input, options.reconstruction);
+          amend(k, result);
           journal.append(make_record(indices[k], std::move(result), options, plan.layout, input.footprint.attributes,
                                      outline_of(k)));
         } catch (...) {
@@ -436,14 +680,15 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
           if (!failure) failure = std::current_exception();
           return;
         }
-        const std::size_t d = ++done;
-        if (options.progress) print_progress(d, total, start);
+        progress.building_done();
       }
     };
+    progress.start_reconstructing();
     std::vector<std::thread> pool;
     for (int t = 1; t < options.threads; ++t) pool.emplace_back(worker);
     worker();
     for (std::thread& t : pool) t.join();
+    progress.stop_reconstructing();
     if (failure) std::rethrow_exception(failure);
   };
 
@@ -456,11 +701,14 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
     if (all_done) continue;
     if (!source) {
       const std::string& file = files[indices.front()];
-      const BuildingId id = fs::path(file).stem().string();
+      const CloudId& cloud = plan.cloud_ids[indices.front()];
       reconstruct_all(
-          indices, [&](std::size_t) { return id; },
-          [&](std::size_t) { return building_from_cloud(id, read_all_points(file), options.ground_z); },
-          [](std::size_t) { return nullptr; });
+          indices, [&](std::size_t) { return cloud.id; },
+          [&](std::size_t) { return building_from_cloud(cloud.id, read_all_points(file), options.ground_z); },
+          [](std::size_t) { return nullptr; },
+          [&](std::size_t, BuildingResult& result) {
+            if (!cloud.note.empty()) add_note(result.report, cloud.note);
+          });
       continue;
     }
     // The group's footprints and every other footprint that can reach into their ground buffers
@@ -502,7 +750,8 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
     if (plan.layout.gpkg || plan.layout.html)
       for (std::size_t k = 0; k < indices.size(); ++k) outlines.push_back(footprints[k].polygons);
     Cropper cropper(std::move(footprints), options.crop);
-    crop_tiles(files, extent, static_cast<unsigned>(options.threads), cropper);
+    progress.reading(files.size(), indices.size());
+    crop_tiles(files, extent, static_cast<unsigned>(options.threads), cropper, tile_bounds, classes);
     // Keep only the group's own inputs (the first indices.size()).
     std::vector<BuildingInput> inputs = cropper.finish();
     inputs.resize(indices.size());
@@ -513,11 +762,37 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
         in.ground_method = "footprint attribute";
         in.ground_measured = true;
       }
+    // The tiles' extents, for the coverage each worker measures before it reconstructs.
+    std::vector<Box2> extents;
+    std::vector<double> spacings;
+    for (std::size_t t = 0; t < files.size(); ++t) {
+      extents.push_back(tile_extent(tile_bounds[t], infos[t].point_count));
+      spacings.push_back(point_spacing(tile_bounds[t], infos[t].point_count));
+    }
+    std::vector<FootprintCoverage> coverage(indices.size());
     reconstruct_all(
-        indices, [&](std::size_t k) { return inputs[k].id; }, [&](std::size_t k) { return std::move(inputs[k]); },
-        [&](std::size_t k) { return outlines.empty() ? nullptr : &outlines[k]; });
+        indices, [&](std::size_t k) { return inputs[k].id; },
+        [&](std::size_t k) {
+          // In the building's local frame, where its footprint and points are.
+          const Point3& origin = inputs[k].origin;
+          std::vector<Box2> local;
+          double spacing = 0.0;
+          for (std::size_t t = 0; t < extents.size(); ++t) {
+            if (extents[t].empty() || !extents[t].intersects(plan.boxes[indices[k]])) continue;
+            Box2 e;
+            e.add({extents[t].min.x - origin.x, extents[t].min.y - origin.y});
+            e.add({extents[t].max.x - origin.x, extents[t].max.y - origin.y});
+            local.push_back(e);
+            spacing = std::max(spacing, spacings[t]);
+          }
+          coverage[k] = footprint_coverage(inputs[k], local, spacing);
+          return std::move(inputs[k]);
+        },
+        [&](std::size_t k) { return outlines.empty() ? nullptr : &outlines[k]; },
+        [&](std::size_t k, BuildingResult& result) { apply_coverage(coverage[k], options.min_coverage, result.report); });
   }
   journal.close();
+  progress.finish();
 
   // The run-level files, from the journal's records.
   const detail::JournalReader reader(journal.path());
@@ -531,11 +806,16 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   detail::RunManifest manifest;
   manifest.header = header;
   manifest.records = sources.size();
-  const BatchSummary summary =
-      detail::finalise_run(options.output_dir, plan.layout, sources, seconds_since(start),
+  BatchSummary summary =
+      detail::finalise_run(options.output_dir, plan.layout, sources, seconds_since(start), journal.restored(),
                            sharded ? detail::FinaliseScope::shard : detail::FinaliseScope::whole_run, manifest.outputs);
   manifest.seconds = seconds_since(start);
   folder.write_manifest(manifest);
+  std::string building_classes;  // empty when classes are not used
+  if (options.crop.use_classes != ClassUse::never)
+    for (std::uint8_t c : options.crop.building_classes)
+      building_classes += (building_classes.empty() ? "" : ",") + std::to_string(c);
+  summary.advice = advice_for(summary, classes.any ? &classes : nullptr, building_classes);
   return summary;
 }
 
@@ -614,7 +894,7 @@ BatchSummary merge_shards(const MergeOptions& options) {
     throw IoError("merge: the shards hold " + std::to_string(sources.size()) + " of " +
                   std::to_string(layout.records) + " buildings");
 
-  detail::OutputFolder folder(options.output_dir);
+  detail::OutputFolder folder(options.output_dir, detail::run_level_files(layout, detail::FinaliseScope::whole_run));
   detail::JournalHeader whole = first;
   whole.shard = whole.shards = 0;
   whole.block_size = 0.0;
@@ -649,8 +929,9 @@ BatchSummary merge_shards(const MergeOptions& options) {
   detail::RunManifest manifest;
   manifest.header = whole;
   manifest.records = sources.size();
-  const BatchSummary summary =
-      detail::finalise_run(options.output_dir, layout, sources, seconds, detail::FinaliseScope::whole_run, manifest.outputs);
+  BatchSummary summary =
+      detail::finalise_run(options.output_dir, layout, sources, seconds, 0, detail::FinaliseScope::whole_run, manifest.outputs);
+  summary.advice = advice_for(summary, nullptr, "");
   manifest.seconds = seconds;
   folder.write_manifest(manifest);
   log_info("merge: " + std::to_string(shards.size()) + " shards, " + std::to_string(sources.size()) +

@@ -6,6 +6,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -74,6 +75,29 @@ class JournalOverview : public OverviewSource {
   const RunLayout& layout_;
 };
 
+// What a row's problem is, whatever its numbers: "status: reason", the reason up to its first ';'
+// (a further reason), without parenthesised details, digits as '#' ("skipped: duplicated id",
+// "failed: planes: no roof plane among # points"). A partial row's reason says how much of it lies
+// outside the tiles, before any fallback's: one key for all of them.
+std::string problem_key(BuildingStatus status, const std::string& reason) {
+  if (status == BuildingStatus::partial) return "partial: partly covered by the tiles given";
+  std::string key = std::string(to_string(status)) + ": ";
+  int depth = 0;
+  bool digits = false;
+  for (char c : reason.substr(0, reason.find(';'))) {
+    if (c == '(') ++depth;
+    if (depth == 0) {
+      const bool digit = c >= '0' && c <= '9';
+      if (digit && !digits) key += '#';
+      if (!digit && !(digits && c == '.')) key += c;
+      digits = digit || (digits && c == '.');
+    }
+    if (c == ')' && depth > 0) --depth;
+  }
+  while (!key.empty() && key.back() == ' ') key.pop_back();
+  return key;
+}
+
 }  // namespace
 
 std::string file_stamp_of(const std::string& path) {
@@ -105,7 +129,20 @@ bool read_manifest(const std::string& dir, RunManifest& manifest) {
   }
 }
 
-OutputFolder::OutputFolder(std::string dir) : dir_(std::move(dir)) {
+std::vector<std::string> run_level_files(const RunLayout& layout, FinaliseScope scope) {
+  if (scope == FinaliseScope::shard) return {"report.csv", "report.json"};
+  std::vector<std::string> names;
+  if (layout.cityjson) names.push_back("buildings.city.json");
+  if (layout.cityjson_seq) names.push_back("buildings.city.jsonl");
+  if (layout.merged_file) names.push_back("models" + mesh_extension(layout.format));
+  names.push_back("report.csv");
+  names.push_back("report.json");
+  if (layout.gpkg) names.push_back("buildings.gpkg");
+  if (layout.html) names.push_back("report.html");
+  return names;
+}
+
+OutputFolder::OutputFolder(std::string dir, const std::vector<std::string>& rewritten) : dir_(std::move(dir)) {
   std::error_code ec;
   fs::create_directories(dir_, ec);
   if (ec) throw IoError("output: cannot create " + dir_ + ": " + ec.message());
@@ -131,12 +168,19 @@ OutputFolder::OutputFolder(std::string dir) : dir_(std::move(dir)) {
   // not would describe other buildings than the models beside them.
   RunManifest previous;
   if (read_manifest(dir_, previous)) {
+    std::string gone;  // removed and not written again: the user should know
     for (const auto& [name, stamp] : previous.outputs) {
       const fs::path file = fs::path(dir_) / name;
       if (name.find('/') != std::string::npos || name.find("..") != std::string::npos) continue;
-      if (!stamp.empty() && file_stamp_of(file.string()) == stamp && fs::remove(file, ec))
+      if (!stamp.empty() && file_stamp_of(file.string()) == stamp && fs::remove(file, ec)) {
         log_debug("output: removed " + file.string() + " of the previous run");
+        if (std::find(rewritten.begin(), rewritten.end(), name) == rewritten.end())
+          gone += (gone.empty() ? "" : ", ") + name;
+      }
     }
+    if (!gone.empty())
+      log_warning("output: removed " + gone + " from " + dir_ + ": the earlier run there wrote " +
+                  (gone.find(',') == std::string::npos ? "it" : "them") + ", this one does not");
   }
   fs::remove(fs::path(dir_) / kManifest, ec);
 }
@@ -154,8 +198,8 @@ void OutputFolder::remove_earlier_models(const std::vector<std::pair<std::string
     if (!hash.empty() && file_hash(file.string()) == hash && fs::remove(file, ec)) ++removed;
   }
   if (removed > 0)
-    log_info("output: removed " + std::to_string(removed) + " model files an earlier run of other inputs or "
-             "parameters wrote into " + (fs::path(dir_) / "models").string());
+    log_warning("output: removed the " + std::to_string(removed) + " model files an earlier run of other inputs or "
+                "options wrote into " + (fs::path(dir_) / "models").string() + "; this run writes its own");
 }
 
 void OutputFolder::write_manifest(const RunManifest& m) {
@@ -176,7 +220,8 @@ void OutputFolder::write_manifest(const RunManifest& m) {
 }
 
 BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const std::vector<RecordSource>& records,
-                          double seconds, FinaliseScope scope, std::map<std::string, std::string>& outputs) {
+                          double seconds, std::size_t resumed, FinaliseScope scope,
+                          std::map<std::string, std::string>& outputs) {
   const fs::path out(dir);
   const bool whole = scope == FinaliseScope::whole_run;
   if (whole) {
@@ -195,8 +240,10 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const
     summary.fallback += r.ref->status == BuildingStatus::fallback;
     summary.skipped += r.ref->status == BuildingStatus::skipped;
     summary.failed += r.ref->status == BuildingStatus::failed;
+    summary.partial += r.ref->status == BuildingStatus::partial;
   }
   summary.seconds = seconds;
+  summary.resumed = resumed;
   summary.report_path = (out / "report.csv").string();
 
   const CityJsonOptions cityjson_options{layout.crs, layout.scale, ""};
@@ -213,9 +260,20 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const
   }
   ReportWriter report((out / "report.csv").string(), (out / "report.json").string(), summary);
 
+  std::map<std::string, std::pair<std::size_t, std::size_t>> problems;  // key -> rows, rows outside every tile
   for (const RecordSource& source : records) {
     BuildingRecord r = source.journal->read(*source.ref);
     report.add(r.report_csv, r.report_json);
+    // A fallback has its model (a lower rung): not a problem of the run.
+    if (r.status != BuildingStatus::ok && r.status != BuildingStatus::fallback) {
+      const json row = json::parse(r.report_json, nullptr, false);
+      if (!row.is_discarded()) {
+        auto& [rows, outside] = problems[problem_key(r.status, row.value("reason", std::string()))];
+        ++rows;
+        const auto coverage = row.find("coverage");
+        outside += coverage != row.end() && coverage->is_number() && coverage->get<double>() == 0.0;
+      }
+    }
     if (r.feature.empty()) continue;
     if (cityjson) cityjson->add(r.feature);
     if (seq) {
@@ -227,6 +285,14 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const
       merged.push_back(std::move(*r.mesh));
     }
   }
+
+  // The problem most rows share, when more than half do (ties: the first key).
+  for (const auto& [key, counts] : problems)
+    if (2 * counts.first > summary.buildings && counts.first > summary.main_problem_rows) {
+      summary.main_problem = key;
+      summary.main_problem_rows = counts.first;
+      summary.main_problem_outside = counts.second;
+    }
 
   std::vector<std::string> written;
   if (cityjson) {
@@ -256,6 +322,7 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const
     if (layout.html) {
       write_report_html((out / "report.html").string(), overview, layout.crs);
       written.push_back("report.html");
+      summary.report_path = (out / "report.html").string();
     }
   }
   for (const std::string& name : written) outputs[name] = file_stamp_of((out / name).string());

@@ -32,14 +32,24 @@ struct RunManifest {
   std::map<std::string, std::string> outputs;
 };
 
+/// What finalise_run() writes.
+enum class FinaliseScope {
+  whole_run,  ///< every run-level file of the layout
+  shard,      ///< only report.csv and report.json of the shard's records
+};
+
+/// The names of the run-level files finalise_run() writes for a layout.
+std::vector<std::string> run_level_files(const RunLayout& layout, FinaliseScope scope);
+
 /// The output folder of a run or a merge, held for the time city3d writes into it.
 class OutputFolder {
  public:
   /// Creates the folder, takes an exclusive lock on it (IoError when another city3d
   /// writes into it), removes temporary files a killed run left there, and sets aside run.json
   /// (removing the run-level files it lists that are unchanged since that run wrote them: a run
-  /// rewrites what it needs, and a folder without run.json is not finished).
-  explicit OutputFolder(std::string dir);
+  /// rewrites what it needs, and a folder without run.json is not finished). Those of them not in
+  /// `rewritten` (the run-level files this run writes) get a warning naming them.
+  OutputFolder(std::string dir, const std::vector<std::string>& rewritten);
   ~OutputFolder();
   OutputFolder(const OutputFolder&) = delete;
   OutputFolder& operator=(const OutputFolder&) = delete;
@@ -63,16 +73,12 @@ bool read_manifest(const std::string& dir, RunManifest& manifest);
 /// "size mtime" of a file, as run.json records it; empty when it does not exist.
 std::string file_stamp_of(const std::string& path);
 
-/// What finalise_run() writes.
-enum class FinaliseScope {
-  whole_run,  ///< every run-level file of the layout
-  shard,      ///< only report.csv and report.json of the shard's records
-};
-
 /// Writes the run-level files into `dir` from `records` (sorted by index) and returns the summary
-/// (counts of the records, `seconds`). For a whole run the records must be exactly the indices
-/// 0..layout.records-1. `outputs` receives the files written. Throws IoError.
+/// (counts of the records, `seconds`, `resumed`: the records an earlier run left, and the problem
+/// most rows share). For a whole run the records must be exactly the indices 0..layout.records-1.
+/// `outputs` receives the files written. Throws IoError.
 BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const std::vector<RecordSource>& records,
-                          double seconds, FinaliseScope scope, std::map<std::string, std::string>& outputs);
+                          double seconds, std::size_t resumed, FinaliseScope scope,
+                          std::map<std::string, std::string>& outputs);
 
 }  // namespace city3d::detail

@@ -23,7 +23,8 @@ using json = nlohmann::json;
 namespace {
 
 // 3: records carry their footprint for buildings.gpkg and report.html, the layout says whether to write them.
-constexpr int kJournalVersion = 3;
+// 4: report rows carry coverage and point_coverage; the status partial.
+constexpr int kJournalVersion = 4;
 constexpr std::size_t kHashDigits = 16;
 
 std::string dump(const json& j) { return j.dump(-1, ' ', false, json::error_handler_t::replace); }
@@ -45,7 +46,8 @@ std::optional<std::string> checked_text(const std::string& line) {
 const char* status_name(BuildingStatus s) { return to_string(s); }
 
 BuildingStatus parse_status(const std::string& s) {
-  for (BuildingStatus v : {BuildingStatus::ok, BuildingStatus::fallback, BuildingStatus::skipped, BuildingStatus::failed})
+  for (BuildingStatus v : {BuildingStatus::ok, BuildingStatus::fallback, BuildingStatus::skipped, BuildingStatus::failed,
+                           BuildingStatus::partial})
     if (s == to_string(v)) return v;
   throw std::runtime_error("unknown status " + s);
 }
@@ -281,7 +283,7 @@ std::string batch_fingerprint(const BatchOptions& o, const std::vector<std::stri
     << num(o.crop.ground_buffer) << '|' << num(o.crop.wide_buffer_factor) << '|' << num(o.crop.ground_percentile)
     << '|' << o.crop.min_ground_points << '\n';
   s << parameters_text(o.reconstruction) << '\n';
-  s << (o.ground_z ? num(*o.ground_z) : "-") << '\n';
+  s << (o.ground_z ? num(*o.ground_z) : "-") << '|' << num(o.min_coverage) << '\n';
   // What a building's record holds: its model file, its CityJSONFeature, its mesh for models.<ext>.
   s << static_cast<int>(o.format) << '|' << o.local_coordinates << '|' << o.per_building_files << '|'
     << o.merged_file << '|' << o.timings_in_cityjson << '\n';

@@ -33,6 +33,7 @@ const char* to_string(BuildingStatus status) {
     case BuildingStatus::fallback: return "fallback";
     case BuildingStatus::skipped: return "skipped";
     case BuildingStatus::failed: return "failed";
+    case BuildingStatus::partial: return "partial";
   }
   return "failed";
 }

@@ -71,6 +71,8 @@ const Extra kExtras[] = {
     {"lods_reconstructed", -1, nullptr, &BuildingReport::lods_reconstructed},
     {"footprint_area", 2, &BuildingReport::footprint_area, nullptr},
     {"point_density", 2, &BuildingReport::point_density, nullptr},
+    {"coverage", 3, &BuildingReport::coverage, nullptr},
+    {"point_coverage", 3, &BuildingReport::point_coverage, nullptr},
     {"h_roof_50p", 3, &BuildingReport::h_roof_50p, nullptr},
     {"h_roof_70p", 3, &BuildingReport::h_roof_70p, nullptr},
     {"h_roof_min", 3, &BuildingReport::h_roof_min, nullptr},
@@ -148,9 +150,9 @@ ReportWriter::ReportWriter(const std::string& csv_path, const std::string& json_
   std::fputs((report_csv_header() + "\n").c_str(), impl_->csv.file());
   std::fprintf(impl_->json.file(),
                "{\n  \"summary\": {\"buildings\": %zu, \"ok\": %zu, \"fallback\": %zu, \"skipped\": %zu, "
-               "\"failed\": %zu, \"seconds\": %s},\n  \"buildings\": [",
-               summary.buildings, summary.ok, summary.fallback, summary.skipped, summary.failed,
-               fixed(summary.seconds, 3).c_str());
+               "\"failed\": %zu, \"partial\": %zu, \"resumed\": %zu, \"seconds\": %s},\n  \"buildings\": [",
+               summary.buildings, summary.ok, summary.fallback, summary.skipped, summary.failed, summary.partial,
+               summary.resumed, fixed(summary.seconds, 3).c_str());
 }
 
 ReportWriter::~ReportWriter() = default;
@@ -209,6 +211,8 @@ Attributes building_attributes(const BuildingReport& r, bool timings) {
       {"repairs", text_or_null(r.repairs)},
       {"b3_opp_grond", rounded(r.footprint_area, 2)},
       {"point_density", rounded(r.point_density, 2)},
+      {"coverage", rounded(r.coverage, 3)},
+      {"point_coverage", rounded(r.point_coverage, 3)},
       {"points", count(r.points)},
       {"planes", count(r.planes)},
       {"faces", count(r.faces)},

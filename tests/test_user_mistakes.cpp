@@ -1,0 +1,551 @@
+// Issue 24: nothing silently wrong. The ordinary mistakes of a new user, each caught, stated, or
+// given its own output: twin tiles, footprints the tiles only partly cover, clouds of the same name
+// or the same bytes, a non-unique id field, runs that build nothing, reruns into a folder, and the
+// small things of the command line. Each test checks outputs (ids, counts, status, coverage, exit
+// code), not the wording of messages; real data where it exists (../shared/data), else made here.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "city3d/point_cloud_io.hpp"
+#include "io/input_check.hpp"
+#include "las_writer.hpp"
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+struct Result {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+Result run_shell(const std::string& command_line) {
+  Result r;
+  FILE* pipe = popen((command_line + " 2>&1").c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf;
+  std::size_t n;
+  while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+Result run(const std::string& arguments) { return run_shell(std::string(CITY3D_EXE) + " " + arguments); }
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+const std::string kShared = CITY3D_SHARED_DATA;
+const std::string kDelft = kShared + "/ahn3_delft";
+const std::string kTile1 = kDelft + "/ahn3_cropped_1.las";
+const std::string kTile2 = kDelft + "/ahn3_cropped_2.las";
+const std::string kGpkg = kDelft + "/footprints/bgt_pand_laz_area.gpkg";
+const std::string kSample = CITY3D_SAMPLE_DATA;
+
+/// report.json of an output folder.
+json report(const fs::path& out) { return json::parse(read_file(out / "report.json")); }
+
+/// id -> that building's row of report.json.
+std::map<std::string, json> rows_by_id(const fs::path& out) {
+  std::map<std::string, json> rows;
+  const json whole = report(out);
+  for (const json& row : whole.at("buildings")) rows[row.at("id").get<std::string>()] = row;
+  return rows;
+}
+
+class Mistakes : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("city3d_mistakes_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+  static void require_shared_data() {
+    if (!fs::exists(kTile1)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  }
+  fs::path dir_;
+};
+
+}  // namespace
+
+// --- 1. twins: a folder with LAS and LAZ of the same tiles doubled every point ---
+
+TEST_F(Mistakes, folder_with_las_and_laz_twins_reads_each_tile_once) {
+  require_shared_data();
+  const std::string tail = " -f " + kGpkg + " --id-field gml_id -j 2 --no-progress -o ";
+  ASSERT_EQ(run("reconstruct " + kTile1 + " " + kTile2 + tail + (dir_ / "las").string()).exit_code, 0);
+  const Result folder = run("reconstruct " + kDelft + tail + (dir_ / "folder").string());
+  ASSERT_EQ(folder.exit_code, 0) << folder.output;
+  // The same points per building (76,818 -> 153,636 before), so the same models.
+  const auto las = rows_by_id(dir_ / "las"), twins = rows_by_id(dir_ / "folder");
+  ASSERT_EQ(twins.size(), 160u);
+  std::size_t points = 0;
+  for (const auto& [id, row] : las) {
+    ASSERT_TRUE(twins.count(id)) << id;
+    EXPECT_EQ(twins.at(id).at("points"), row.at("points")) << id;
+    points += row.at("points").get<std::size_t>();
+  }
+  EXPECT_GT(points, 70000u);
+  EXPECT_EQ(read_file(dir_ / "folder" / "buildings.city.json"), read_file(dir_ / "las" / "buildings.city.json"));
+}
+
+// The LAZ set's manifest gives each pair's point-block SHA-256: files of one SHA hold the same
+// points (a LAS file and its LAZ, and the same records as LAS 1.2, 1.3 and 1.4), and only those.
+TEST(Twins, files_of_the_laz_set_are_one_tile_exactly_when_their_point_blocks_are_the_same) {
+  const fs::path set = kShared + "/laz";
+  if (!fs::exists(set / "manifest.json")) GTEST_SKIP() << "../shared/data is not beside the repository";
+  const json manifest = json::parse(read_file(set / "manifest.json"));
+  std::map<std::string, std::string> sha_of;  // file name -> point-block SHA-256
+  for (const json& pair : manifest.at("pairs")) {
+    // Two files without points have the same (empty) block; in other point formats they are other tiles.
+    const std::string name = pair.at("name").get<std::string>(),
+                      sha = pair.at("point_block_sha256").get<std::string>() + " " + pair.at("point_format").dump();
+    sha_of[name + ".las"] = sha_of[name + ".laz"] = sha;
+  }
+  ASSERT_EQ(sha_of.size(), 52u);
+  std::vector<std::string> files, expected;
+  std::set<std::string> seen;
+  for (const auto& [name, sha] : sha_of) {  // sorted by name: NAME.las before NAME.laz
+    files.push_back((set / "cases" / name).string());
+    if (seen.insert(sha).second) expected.push_back(files.back());
+  }
+  EXPECT_EQ(expected.size(), 23u);  // 26 pairs, three of them the records of another pair
+  EXPECT_EQ(city3d::detail::distinct_inputs(files), expected);
+}
+
+TEST_F(Mistakes, tiles_of_one_header_but_other_end_records_are_both_read) {
+  std::vector<city3d::test::LasPoint> points;
+  for (int i = 0; i < 500; ++i) points.push_back({85000.0 + (i % 20) * 0.5, 447550.0 + (i / 20) * 0.5, 5.0 + i % 3, 6});
+  city3d::test::write_las((dir_ / "a.las").string(), points);
+  // The same header facts (count, bounds, scale, offset), one record at the end swapped.
+  std::swap(points[498], points[499]);
+  city3d::test::write_las((dir_ / "b.las").string(), points);
+  // And a twin in all but the first record's class.
+  points[0].classification = 2;
+  std::swap(points[498], points[499]);
+  city3d::test::write_las((dir_ / "c.las").string(), points);
+  const std::vector<std::string> files = {(dir_ / "a.las").string(), (dir_ / "b.las").string(),
+                                          (dir_ / "c.las").string()};
+  EXPECT_EQ(city3d::detail::distinct_inputs(files), files);
+  // And the same file's bytes under another name is still one tile.
+  fs::copy_file(dir_ / "a.las", dir_ / "d.las");
+  EXPECT_EQ(city3d::detail::distinct_inputs({files[0], (dir_ / "d.las").string()}), std::vector<std::string>{files[0]});
+}
+
+// --- 3. clouds of the same file name overwrote each other's model and shared an id ---
+
+TEST_F(Mistakes, clouds_of_the_same_name_get_ids_from_their_paths_and_files_of_their_own) {
+  const fs::path dales = kShared + "/city3d_dev/Dales3d/00011.ply", vaihingen = kShared + "/city3d_dev/Vaihingen/00011.ply";
+  if (!fs::exists(dales)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  const Result r = run("reconstruct " + dales.string() + " " + vaihingen.string() + " --no-progress -o " +
+                       (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto rows = rows_by_id(dir_ / "out");
+  ASSERT_EQ(rows.size(), 2u);
+  ASSERT_TRUE(rows.count("Dales3d/00011")) << r.output;
+  ASSERT_TRUE(rows.count("Vaihingen/00011")) << r.output;
+  // Each note says how its id was made; each building has its own model file and CityJSON object.
+  for (const auto& [id, row] : rows) EXPECT_TRUE(contains(row.at("note").get<std::string>(), "id: the path below")) << id;
+  EXPECT_NE(rows.at("Dales3d/00011").at("points"), rows.at("Vaihingen/00011").at("points"));
+  std::size_t models = 0;
+  for (const auto& entry : fs::directory_iterator(dir_ / "out" / "models")) models += entry.is_regular_file();
+  EXPECT_EQ(models, 2u);
+  const json city = json::parse(read_file(dir_ / "out" / "buildings.city.json"));
+  EXPECT_TRUE(city.at("CityObjects").contains("Dales3d/00011"));
+  EXPECT_TRUE(city.at("CityObjects").contains("Vaihingen/00011"));
+  // A file of the same name beside them again, in one of the folders' copies: x.ply and x.PLY do
+  // not meet, but a path that is still shared keeps its extension.
+  fs::create_directories(dir_ / "twin");
+  fs::copy_file(vaihingen, dir_ / "twin" / "00011.ply");
+  fs::copy_file(vaihingen, dir_ / "twin" / "00011.PLY");
+  const Result same_folder = run("reconstruct " + (dir_ / "twin").string() + " --no-progress -o " + (dir_ / "out2").string());
+  ASSERT_EQ(same_folder.exit_code, 0) << same_folder.output;
+  const auto rows2 = rows_by_id(dir_ / "out2");
+  EXPECT_EQ(rows2.size(), 2u);
+  EXPECT_TRUE(rows2.count("00011.ply") && rows2.count("00011.PLY")) << same_folder.output;
+}
+
+// --- 4. two clouds of identical bytes: the second was "read once" and vanished without a row ---
+
+TEST_F(Mistakes, clouds_of_identical_bytes_are_two_buildings_with_a_row_each) {
+  const fs::path cloud = kShared + "/city3d_dev/AHN3/00262.ply";
+  if (!fs::exists(cloud)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  fs::create_directories(dir_ / "clouds");
+  fs::copy_file(cloud, dir_ / "clouds" / "a.ply");
+  fs::copy_file(cloud, dir_ / "clouds" / "b.ply");
+  const Result r = run("reconstruct " + (dir_ / "clouds").string() + " --no-progress -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto rows = rows_by_id(dir_ / "out");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows.at("a").at("points"), rows.at("b").at("points"));
+  EXPECT_EQ(rows.at("a").at("status"), rows.at("b").at("status"));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "models" / "a.obj"));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "models" / "b.obj"));
+  // The same file named twice is still one building.
+  const Result twice = run("reconstruct " + (dir_ / "clouds" / "a.ply").string() + " " + (dir_ / "clouds").string() +
+                           " --no-progress -o " + (dir_ / "out2").string());
+  ASSERT_EQ(twice.exit_code, 0) << twice.output;
+  EXPECT_EQ(rows_by_id(dir_ / "out2").size(), 2u);
+}
+
+// --- 2. footprints the tiles given only partly cover came out ok and wrong ---
+
+namespace {
+
+// The seven footprints across the Delft seam (x = 85000) with the share of their area in tile 1
+// (x < 85000): b11282794 99.9%, b31bdfb64 91.9%, b11282799 72.6%, b31bdfb67 46.0%, b31be22a8 30.8%,
+// b1105d28c (fid 95) 13.8%, b31bdfb6a 4.1%; and b31bdd428, wholly in tile 2.
+const std::vector<std::string> kSeam = {
+    "b11282794-00ba-11e6-b420-2bdcc4ab5d7f", "b31bdfb64-00ba-11e6-b420-2bdcc4ab5d7f",
+    "b11282799-00ba-11e6-b420-2bdcc4ab5d7f", "b31bdfb67-00ba-11e6-b420-2bdcc4ab5d7f",
+    "b31be22a8-00ba-11e6-b420-2bdcc4ab5d7f", "b1105d28c-00ba-11e6-b420-2bdcc4ab5d7f",
+    "b31bdfb6a-00ba-11e6-b420-2bdcc4ab5d7f"};
+const std::string kInTile2 = "b31bdd428-00ba-11e6-b420-2bdcc4ab5d7f";
+
+std::string seam_where() {
+  std::string where = "--where \"gml_id IN ('" + kInTile2 + "'";
+  for (const std::string& id : kSeam) where += ", '" + id + "'";
+  return where + ")\"";
+}
+
+}  // namespace
+
+TEST_F(Mistakes, footprints_the_tiles_cover_only_in_part_are_partial_in_every_output_and_fail_a_strict_run) {
+  require_shared_data();
+  const std::string tail = " -f " + kGpkg + " --id-field gml_id " + seam_where() + " --gpkg -j 2 --no-progress -o ";
+  // Both tiles: every seam footprint is covered in full, and ok.
+  const Result both = run("reconstruct " + kTile1 + " " + kTile2 + tail + (dir_ / "both").string());
+  ASSERT_EQ(both.exit_code, 0) << both.output;
+  auto rows = rows_by_id(dir_ / "both");
+  ASSERT_EQ(rows.size(), 8u);
+  for (const std::string& id : kSeam) {
+    EXPECT_EQ(rows.at(id).at("status"), "ok") << id;
+    EXPECT_EQ(rows.at(id).at("coverage"), 1.0) << id;
+  }
+  // Tile 1 alone: the six it cuts by more than 1% of their area are partial, the seventh ok; the
+  // footprint wholly in tile 2 has coverage 0 (and no points, so skipped).
+  const Result one = run("reconstruct " + kTile1 + tail + (dir_ / "one").string());
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  rows = rows_by_id(dir_ / "one");
+  ASSERT_EQ(rows.size(), 8u);
+  EXPECT_EQ(rows.at(kSeam[0]).at("status"), "ok");
+  EXPECT_GE(rows.at(kSeam[0]).at("coverage").get<double>(), 0.95);
+  double previous = 1.0;
+  for (std::size_t k = 1; k < kSeam.size(); ++k) {
+    const json& row = rows.at(kSeam[k]);
+    EXPECT_EQ(row.at("status"), "partial") << kSeam[k];
+    const double coverage = row.at("coverage").get<double>();
+    EXPECT_LT(coverage, 0.95) << kSeam[k];
+    EXPECT_LT(coverage, previous) << kSeam[k];  // in the order of their share in tile 1
+    previous = coverage;
+    EXPECT_NE(row.at("level"), "none") << kSeam[k];  // still reconstructed, from what points there are
+  }
+  EXPECT_LT(rows.at(kSeam[6]).at("coverage").get<double>(), 0.1);
+  EXPECT_EQ(rows.at(kInTile2).at("status"), "skipped");
+  EXPECT_EQ(rows.at(kInTile2).at("coverage"), 0.0);
+  EXPECT_EQ(report(dir_ / "one").at("summary").at("partial"), 6);
+  // The same in CityJSON's attributes and in the GeoPackage.
+  const json city = json::parse(read_file(dir_ / "one" / "buildings.city.json"));
+  const json& fid95 = city.at("CityObjects").at("b1105d28c-00ba-11e6-b420-2bdcc4ab5d7f").at("attributes");
+  EXPECT_EQ(fid95.at("status"), "partial");
+  EXPECT_LT(fid95.at("coverage").get<double>(), 0.2);
+  const Result gpkg = run_shell("ogrinfo -q -sql \"SELECT gml_id, status, coverage FROM buildings WHERE status = "
+                                "'partial'\" " + (dir_ / "one" / "buildings.gpkg").string());
+  ASSERT_EQ(gpkg.exit_code, 0) << gpkg.output;
+  std::size_t partial_features = 0;
+  for (std::size_t at = gpkg.output.find("status (String) = partial"); at != std::string::npos;
+       at = gpkg.output.find("status (String) = partial", at + 1))
+    ++partial_features;
+  EXPECT_EQ(partial_features, 6u) << gpkg.output;
+  EXPECT_TRUE(contains(gpkg.output, "coverage (Real) = 0.14")) << gpkg.output;
+  // --strict makes it a failure: 4 on the whole block with tile 1 (6 partial of 160), 5 here, where
+  // they are most of the buildings (the run's main problem).
+  EXPECT_EQ(run("reconstruct " + kTile1 + " -f " + kGpkg + " --id-field gml_id -j 2 --no-progress --no-html --strict -o " +
+                (dir_ / "strict").string())
+                .exit_code,
+            4);
+  EXPECT_EQ(run("reconstruct " + kTile1 + tail + (dir_ / "strict_most").string() + " --strict").exit_code, 5);
+  // --min-coverage 0 turns the check off.
+  const Result off = run("reconstruct " + kTile1 + tail + (dir_ / "off").string() + " --min-coverage 0");
+  ASSERT_EQ(off.exit_code, 0) << off.output;
+  EXPECT_EQ(report(dir_ / "off").at("summary").at("partial"), 0);
+  EXPECT_EQ(rows_by_id(dir_ / "off").at(kSeam[5]).at("coverage"), rows.at(kSeam[5]).at("coverage"));
+}
+
+// --- 5. a non-unique --id-field: 159 warnings, then 1 ok and 159 skipped, exit 0 ---
+
+TEST_F(Mistakes, an_id_field_most_footprints_share_is_one_error_naming_the_fields_that_are_ids) {
+  require_shared_data();
+  const Result r = run("reconstruct " + kTile1 + " " + kTile2 + " -f " + kGpkg + " --id-field rel_hoogte --no-progress -o " +
+                       (dir_ / "out").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "out")) << "a run refused on its inputs leaves no folder";
+  EXPECT_FALSE(contains(r.output, "warning")) << "one error, not a warning per footprint:\n" << r.output;
+  EXPECT_TRUE(contains(r.output, "rel_hoogte")) << r.output;
+  for (const char* id_field : {"gml_id", "lokaalid", "bag_pnd"}) EXPECT_TRUE(contains(r.output, id_field)) << r.output;
+}
+
+TEST_F(Mistakes, a_few_duplicated_ids_are_skipped_each_and_the_others_reconstructed) {
+  // The sample's footprints with a field "pid": gml_id, but the same value for two of the 15.
+  const fs::path footprints = dir_ / "pid.gpkg";
+  const Result made = run_shell("ogr2ogr -f GPKG " + footprints.string() + " " + kSample +
+                                "/delft_sample_footprints.gpkg -dialect sqlite -sql \"SELECT *, CASE WHEN gml_id IN "
+                                "('b31e1d795-00ba-11e6-b420-2bdcc4ab5d7f', 'b11282794-00ba-11e6-b420-2bdcc4ab5d7f') "
+                                "THEN 'twice' ELSE gml_id END AS pid FROM buildingpart\" -nln buildingpart");
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  const Result r = run("reconstruct " + kSample + "/delft_sample_1.las " + kSample + "/delft_sample_2.las -f " +
+                       footprints.string() + " --id-field pid --no-progress -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json whole = report(dir_ / "out");
+  EXPECT_EQ(whole.at("summary").at("buildings"), 15);
+  EXPECT_EQ(whole.at("summary").at("skipped"), 1);
+  EXPECT_EQ(whole.at("summary").at("ok").get<int>() + whole.at("summary").at("fallback").get<int>(), 14);
+  // The first feature of an id keeps it; the second's row says whose it is (skipped rows come last).
+  std::vector<std::string> twice;
+  for (const json& row : whole.at("buildings"))
+    if (row.at("id") == "twice") twice.push_back(row.at("status").get<std::string>() + " " + row.at("reason").get<std::string>());
+  ASSERT_EQ(twice.size(), 2u);
+  EXPECT_TRUE(twice[0] == "ok " || twice[0].rfind("fallback ", 0) == 0) << twice[0];
+  EXPECT_EQ(twice[1].rfind("skipped duplicated id (first at fid", 0), 0u) << twice[1];
+}
+
+// --- 6. runs that build nothing exited 0 ---
+
+TEST_F(Mistakes, a_filter_that_leaves_no_footprint_is_an_error_before_anything_is_written) {
+  const std::string base = "reconstruct " + kSample + "/delft_sample_1.las -f " + kSample +
+                           "/delft_sample_footprints.gpkg --id-field gml_id --no-progress ";
+  Result r = run(base + "--where \"gml_id = 'nope'\" -o " + (dir_ / "where").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "where"));
+  EXPECT_TRUE(contains(r.output, "gml_id = 'nope'")) << r.output;
+  r = run(base + "--bbox 0,0,10,10 -o " + (dir_ / "bbox").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "bbox"));
+  // A filter that keeps one is a run.
+  r = run(base + "--where \"gml_id = 'b31be49eb-00ba-11e6-b420-2bdcc4ab5d7f'\" -o " + (dir_ / "one").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(report(dir_ / "one").at("summary").at("buildings"), 1);
+}
+
+TEST_F(Mistakes, tiles_without_the_building_class_build_nothing_exit_1_and_name_the_classes_present) {
+  // The sample tiles with every building point made class 1: a run skips every footprint.
+  for (const char* tile : {"delft_sample_1.las", "delft_sample_2.las"}) {
+    const city3d::PointCloud cloud = city3d::read_point_cloud(kSample + "/" + tile, city3d::kFieldClassification);
+    std::vector<city3d::test::LasPoint> points;
+    for (std::size_t i = 0; i < cloud.size(); ++i)
+      points.push_back({cloud.points[i].x, cloud.points[i].y, cloud.points[i].z,
+                        static_cast<std::uint8_t>(cloud.classification[i] == 6 ? 1 : cloud.classification[i])});
+    city3d::test::write_las((dir_ / tile).string(), points);
+  }
+  const std::string tiles = (dir_ / "delft_sample_1.las").string() + " " + (dir_ / "delft_sample_2.las").string();
+  const std::string tail = " -f " + kSample + "/delft_sample_footprints.gpkg --id-field gml_id --no-progress -o ";
+  const Result r = run("reconstruct " + tiles + tail + (dir_ / "none").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  const json whole = report(dir_ / "none");  // the report is written, every row with its reason
+  EXPECT_EQ(whole.at("summary").at("buildings"), 15);
+  EXPECT_EQ(whole.at("summary").at("skipped"), 15);
+  // The last lines name the option and the classes the tiles do hold (1 and 2, not 6).
+  EXPECT_TRUE(contains(r.output, "--building-classes")) << r.output;
+  EXPECT_TRUE(contains(r.output, "1 (unclassified")) << r.output;
+  EXPECT_TRUE(contains(r.output, "2 (ground")) << r.output;
+  EXPECT_FALSE(contains(r.output, "6 (building")) << r.output;
+  EXPECT_EQ(run("reconstruct " + tiles + tail + (dir_ / "strict").string() + " --strict").exit_code, 1);
+  // With the class the points have, the same tiles give buildings (and ground 2 stays ground).
+  const Result fixed = run("reconstruct " + tiles + tail + (dir_ / "fixed").string() + " --building-classes 1");
+  EXPECT_EQ(fixed.exit_code, 0) << fixed.output;
+  EXPECT_EQ(report(dir_ / "fixed").at("summary").at("skipped"), 0);
+}
+
+TEST_F(Mistakes, a_run_whose_buildings_mostly_share_one_problem_says_so_and_fails_strict_with_5) {
+  require_shared_data();
+  // Tile 2 alone under the block's 160 footprints: 132 lie outside it.
+  const std::string args = "reconstruct " + kTile2 + " -f " + kGpkg + " --id-field gml_id -j 2 --no-progress --no-html -o ";
+  const Result r = run(args + (dir_ / "lax").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  const json whole = report(dir_ / "lax");
+  EXPECT_GT(whole.at("summary").at("skipped").get<int>(), 80);
+  EXPECT_TRUE(contains(r.output, "outside every tile given")) << r.output;
+  EXPECT_EQ(run(args + (dir_ / "strict").string() + " --strict").exit_code, 5);
+  // Both tiles: no main problem, 0 under --strict.
+  EXPECT_EQ(run("reconstruct " + kTile1 + " " + kTile2 + " -f " + kGpkg +
+                " --id-field gml_id -j 2 --no-progress --no-html --strict -o " + (dir_ / "both").string())
+                .exit_code,
+            0);
+}
+
+// --- 7. reruns into a folder: quiet about the journal, about the time, about what they removed ---
+
+TEST_F(Mistakes, a_rerun_counts_what_it_took_from_the_journal_and_names_the_outputs_it_removed) {
+  const std::string args = "reconstruct " + kSample + "/delft_sample_1.las " + kSample + "/delft_sample_2.las -f " +
+                           kSample + "/delft_sample_footprints.gpkg --id-field gml_id --no-progress -o " +
+                           (dir_ / "out").string();
+  Result r = run(args + " --gpkg");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(report(dir_ / "out").at("summary").at("resumed"), 0);
+  ASSERT_TRUE(fs::exists(dir_ / "out" / "buildings.gpkg"));
+  // The same run again: every building from the journal, and the summary says so.
+  r = run(args + " --gpkg");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(report(dir_ / "out").at("summary").at("resumed"), 15);
+  EXPECT_TRUE(contains(r.output, "15 of them taken from the journal")) << r.output;
+  // Without --gpkg: buildings.gpkg of the earlier run goes, with a warning naming it.
+  r = run(args);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "buildings.gpkg"));
+  EXPECT_TRUE(contains(r.output, "warning: output: removed buildings.gpkg")) << r.output;
+  // Other parameters: the journal is set aside and the earlier models replaced, with warnings.
+  r = run(args + " --lambda-data 0.5");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(report(dir_ / "out").at("summary").at("resumed"), 0);
+  EXPECT_TRUE(contains(r.output, "is from another run")) << r.output;
+  EXPECT_TRUE(contains(r.output, "model files an earlier run")) << r.output;
+}
+
+// --- 8. the smaller things a newcomer trips on ---
+
+TEST(CommandLineMistakes, a_misspelt_option_gets_the_nearest_one_and_lod_2_is_refused) {
+  Result r = run("reconstruct x.las --id-feild gml_id");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(contains(r.output, "did you mean '--id-field'")) << r.output;
+  r = run("reconstruct x.las --frobnicate");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_FALSE(contains(r.output, "did you mean")) << r.output;
+  for (const char* lod : {"2", "1", "2.1", "2.2,3"}) {
+    r = run(std::string("reconstruct x.las --lod ") + lod);
+    EXPECT_EQ(r.exit_code, 2) << lod;
+  }
+  EXPECT_EQ(run("reconstruct x.las --lod 2.2 --print-config").exit_code, 0);
+}
+
+TEST(CommandLineMistakes, help_is_a_command_too) {
+  const Result help = run("help"), flag = run("--help");
+  EXPECT_EQ(help.exit_code, 0) << help.output;
+  EXPECT_EQ(help.output, flag.output);
+  EXPECT_TRUE(contains(help.output, "exit codes:"));
+}
+
+TEST(CommandLineMistakes, info_takes_a_folder_and_lists_a_footprint_sources_fields) {
+  if (!fs::exists(kTile1)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  Result r = run("info " + kDelft);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::size_t files = 0;
+  for (std::size_t at = r.output.find("file: "); at != std::string::npos; at = r.output.find("file: ", at + 1)) ++files;
+  EXPECT_EQ(files, 4u) << r.output;  // two tiles, each as LAS and LAZ
+  EXPECT_TRUE(contains(r.output, "points: 640510\n")) << r.output;
+  r = run("info " + kGpkg);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "  gml_id: String, 160 distinct *\n")) << r.output;
+  EXPECT_TRUE(contains(r.output, "  rel_hoogte: Integer, 1 distinct\n")) << r.output;
+}
+
+TEST_F(Mistakes, the_progress_line_shows_tiles_being_read_and_waits_for_a_sample_before_an_eta) {
+  const Result r = run("reconstruct " + kSample + "/delft_sample_1.las " + kSample + "/delft_sample_2.las -f " + kSample +
+                       "/delft_sample_footprints.gpkg --id-field gml_id --progress -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::vector<std::string> lines;
+  std::stringstream ss(r.output);
+  for (std::string line; std::getline(ss, line, '\r');) lines.push_back(line);
+  ASSERT_GT(lines.size(), 16u) << r.output;
+  EXPECT_TRUE(contains(lines[1], "reading 2 tiles")) << lines[1];
+  for (std::size_t k = 2; k < 2 + 4; ++k) EXPECT_FALSE(contains(lines[k], "s left")) << lines[k];
+  EXPECT_TRUE(contains(lines[10], "s left")) << lines[10];
+  // The last line points to the page a person reads.
+  EXPECT_TRUE(contains(r.output, "report " + (dir_ / "out" / "report.html").string())) << r.output;
+}
+
+TEST_F(Mistakes, verbose_parameters_are_printed_without_float_noise) {
+  const Result r = run("reconstruct " + kSample + "/delft_sample_1.las -f " + kSample +
+                       "/delft_sample_footprints.gpkg --id-field gml_id --where \"gml_id = "
+                       "'b31be49eb-00ba-11e6-b420-2bdcc4ab5d7f'\" -v --no-progress -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "planes.max_distance = 0.2\n")) << r.output;
+  EXPECT_FALSE(contains(r.output, "0000000000")) << r.output;
+}
+
+TEST_F(Mistakes, a_terminated_run_says_what_is_kept_and_the_rerun_resumes) {
+  require_shared_data();
+  const fs::path out = dir_ / "out";
+  // Terminated once three buildings are in the journal (its header and two records).
+  const std::string command = "(" + std::string(CITY3D_EXE) + " reconstruct " + kTile1 + " " + kTile2 + " -f " + kGpkg +
+                              " --id-field gml_id --no-progress -j 1 -o " + out.string() + " & pid=$!; " +
+                              "while [ \"$(cat " + out.string() + "/resume.journal 2>/dev/null | wc -l)\" -lt 3 ]; do "
+                              "sleep 0.02; done; kill -TERM $pid; wait $pid; echo \"exit=$?\")";
+  const Result r = run_shell(command);
+  EXPECT_TRUE(contains(r.output, "exit=143")) << r.output;
+  EXPECT_TRUE(contains(r.output, "interrupted")) << r.output;
+  const Result again = run("reconstruct " + kTile1 + " " + kTile2 + " -f " + kGpkg + " --id-field gml_id -j 2 --no-progress -o " +
+                           out.string());
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  const json whole = report(out);
+  EXPECT_GE(whole.at("summary").at("resumed").get<int>(), 2);
+  EXPECT_EQ(whole.at("summary").at("buildings"), 160);
+}
+
+TEST_F(Mistakes, evaluating_a_model_against_a_whole_tile_warns_that_the_points_reach_beyond_it) {
+  const fs::path model = kShared + "/city3d_dev/AHN3/00262.obj", own = kShared + "/city3d_dev/AHN3/00262.ply";
+  if (!fs::exists(model)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  Result r = run("evaluate " + model.string() + " " + own.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(contains(r.output, "warning")) << r.output;
+  EXPECT_TRUE(contains(r.output, "points beyond the model: 0 ")) << r.output;
+  // A model of the sample block against the whole tile it came from.
+  ASSERT_EQ(run("reconstruct " + kSample + "/delft_sample_1.las -f " + kSample + "/delft_sample_footprints.gpkg " +
+                "--id-field gml_id --where \"gml_id = 'b31be49eb-00ba-11e6-b420-2bdcc4ab5d7f'\" --no-progress -o " +
+                (dir_ / "out").string())
+                .exit_code,
+            0);
+  r = run("evaluate " + (dir_ / "out" / "models" / "b31be49eb-00ba-11e6-b420-2bdcc4ab5d7f.obj").string() + " " + kSample +
+          "/delft_sample_1.las");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "warning: evaluate:")) << r.output;
+}
+
+TEST_F(Mistakes, a_shard_that_builds_nothing_succeeds_and_its_merge_says_so) {
+  // Tile 2 alone, the block in 4 shards of 100 m blocks: shard 3 builds nothing. Each shard must
+  // finish with 0 (4 under --strict for partial buildings: a Slurm merge
+  // waits for every shard to succeed); the merge of all of them judges the run.
+  require_shared_data();
+  const std::string args = "reconstruct " + kTile2 + " -f " + kGpkg +
+                           " --id-field gml_id --block-size 100 --no-progress --no-html --strict -o ";
+  std::string folders;
+  for (int k = 1; k <= 4; ++k) {
+    const fs::path folder = dir_ / ("shard" + std::to_string(k));
+    folders += " " + folder.string();
+    const Result r = run(args + folder.string() + " --shard " + std::to_string(k) + "/4");
+    EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 4) << "shard " << k << ": " << r.output;
+  }
+  // Shard 3 has no building of its own (its blocks' footprints went to the others' tiles' runs).
+  const json third = report(dir_ / "shard3");
+  EXPECT_EQ(third.at("summary").at("ok").get<int>() + third.at("summary").at("fallback").get<int>() +
+                third.at("summary").at("partial").get<int>(),
+            0)
+      << "shard 3 was meant to build nothing";
+  const Result merged = run("merge" + folders + " --strict -o " + (dir_ / "merged").string());
+  EXPECT_EQ(merged.exit_code, 5) << merged.output;  // 132 of 160 outside the tile
+  EXPECT_EQ(report(dir_ / "merged").at("summary").at("buildings"), 160);
+}
