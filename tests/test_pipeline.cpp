@@ -261,17 +261,16 @@ TEST(Smoke, tiny_buildings_get_lod2_from_smaller_planes_and_the_convex_hull) {
 // Issue 10, "every point explained": three clouds of city3d_dev_large whose first model left more
 // than 5% of the points farther than 1 m (City3D's own models: 0.0%, 0.0%, 0.9%), each fixed by a
 // different rebuild: 00731's ground points form a plane whose face prior put a third of a flat roof
-// at ground level; 08171's flat roof has a band without returns that cut the outline; 05389 has a
-// roof part of fewer points than a plane needs; 09083 has a crown of scattered returns 1-2.5 m above a
+// at ground level; 08171's flat roof has a band without returns that cut the outline; 09083 has a crown of scattered returns 1-2.5 m above a
 // shed, in no plane (a roof level of its own); 19772 has a 0.35 m strip of returns 1.05 m above its
 // eave, a plane whose lines the regularisation merged into the eave's (a cell of its own). With the rebuilds off (retry_unexplained_share 1)
-// each leaves more than 5%.
+// each leaves more than 5%. (05389, a roof part of fewer points than a plane needs, was one until
+// issue 23: its first model now explains its points, RMSE 0.16 m against 0.44 m before.)
 TEST(Smoke, poorly_explained_models_are_rebuilt_until_their_points_are_explained) {
   const std::string folder = std::string(CITY3D_SHARED_DATA) + "/city3d_dev_large/AHN3/";
   if (!fs::exists(folder)) GTEST_SKIP() << "../shared/data is not beside the repository";
   const std::pair<const char*, const char*> cases[] = {{"00731", "rebuilt (without the face prior)"},
                                                        {"08171", "rebuilt (an outline closing gaps"},
-                                                       {"05389", "rebuilt (roof planes of at least 10 points"},
                                                        {"09083", "rebuilt (roofs for the points left out"},
                                                        {"19772", "rebuilt (roofs for the points left out"}};
   for (const auto& [name, note] : cases) {
@@ -301,6 +300,88 @@ TEST(Smoke, poorly_explained_models_are_rebuilt_until_their_points_are_explained
 
 // A building the rebuilds cannot help says so in its report, with the share it leaves (AHN3/06023:
 // 40% of its 75 points farther than 1 m, as from City3D's model).
+// Issue 23: two Delft buildings whose first model carries surface no point supports, each a low part whose
+// few points (16 at 2.5 m; 17 at 3.4 m) form no plane of 20 under a roof plane extended over it. The
+// points beneath that surface count as left out, and a rebuild gives them a roof: smaller planes for
+// b31bbff4a, a roof level for the points left out for b31bc4dbd.
+TEST(Smoke, models_with_unsupported_surface_are_rebuilt_until_the_points_support_them) {
+  require_delft();
+  FootprintReadOptions by_id;
+  by_id.id_field = "gml_id";
+  const FootprintSet set = read_footprints(kDelft + "/footprints/bgt_pand_laz_area.gpkg", by_id);
+  const std::pair<const char*, const char*> cases[] = {{"b31bbff4a", "rebuilt (roof planes of at least 10 points"},
+                                                       {"b31bc4dbd", "rebuilt (roofs for the points left out"}};
+  std::vector<Footprint> chosen;
+  for (const Footprint& f : set.footprints)
+    for (const auto& c : cases)
+      if (f.id.rfind(c.first, 0) == 0) chosen.push_back(f);
+  ASSERT_EQ(chosen.size(), 2u);
+  Cropper cropper(chosen, {});
+  for (const char* tile : {"/ahn3_cropped_1.las", "/ahn3_cropped_2.las"})
+    cropper.add(read_point_cloud(kDelft + tile, kFieldClassification));
+  const std::vector<BuildingInput> inputs = cropper.finish();
+  ASSERT_EQ(inputs.size(), 2u);
+  for (const BuildingInput& input : inputs) {
+    SCOPED_TRACE(input.id);
+    const auto c = std::find_if(std::begin(cases), std::end(cases),
+                                [&](const auto& k) { return input.id.rfind(k.first, 0) == 0; });
+    ASSERT_NE(c, std::end(cases));
+    ReconstructionParams off;
+    off.retry_unsupported_area = 1e9;
+    const BuildingResult before = reconstruct_building(input, off);
+    EXPECT_GT(before.report.unsupported_area, 10.0);
+    EXPECT_LT(before.report.unexplained_share, 0.05);  // the points alone see nothing wrong
+    const BuildingResult r = reconstruct_building(input, {});
+    EXPECT_EQ(r.report.status, BuildingStatus::ok) << r.report.reason;
+    ASSERT_TRUE(r.model.has_value());
+    EXPECT_NE(r.report.note.find(c->second), std::string::npos) << r.report.note;
+    EXPECT_NE(r.report.note.find("unsupported surface"), std::string::npos) << r.report.note;
+    EXPECT_LT(r.report.unsupported_area, 1.0);
+    EXPECT_LT(r.report.rmse, before.report.rmse);
+  }
+}
+
+// Issue 23: the Delft tiles at every 4th point record (about 2 points per m2, as older or non-Dutch surveys
+// have them). Six houses then hold 7 to 28 points, too few or too sparse for region growing: each still
+// gets a LoD2.2 model, its planes fitted through triples of its points, closer to its points than the
+// LoD1.2 block it fell back to before.
+TEST(Smoke, sparse_small_houses_get_lod22_from_planes_through_triples_of_their_points) {
+  require_delft();
+  FootprintReadOptions by_id;
+  by_id.id_field = "gml_id";
+  const FootprintSet set = read_footprints(kDelft + "/footprints/bgt_pand_laz_area.gpkg", by_id);
+  const std::vector<std::string> houses = {"b31be22b0", "b31e18918", "b31e18912", "b31bdd43a", "b31e1d770", "b31e1feb7"};
+  std::vector<Footprint> chosen;
+  for (const Footprint& f : set.footprints)
+    if (std::any_of(houses.begin(), houses.end(), [&](const std::string& h) { return f.id.rfind(h, 0) == 0; }))
+      chosen.push_back(f);
+  ASSERT_EQ(chosen.size(), houses.size());
+  Cropper cropper(chosen, {});
+  for (const char* tile : {"/ahn3_cropped_1.las", "/ahn3_cropped_2.las"}) {
+    const PointCloud full = read_point_cloud(kDelft + tile, kFieldClassification);
+    PointCloud every_4th;
+    for (std::size_t i = 0; i < full.size(); i += 4) {
+      every_4th.points.push_back(full.points[i]);
+      every_4th.classification.push_back(full.classification[i]);
+    }
+    cropper.add(every_4th);
+  }
+  const std::vector<BuildingInput> inputs = cropper.finish();
+  ASSERT_EQ(inputs.size(), houses.size());
+  for (const BuildingInput& input : inputs) {
+    SCOPED_TRACE(input.id);
+    EXPECT_LE(input.points.size(), 30u);
+    const BuildingResult r = reconstruct_building(input, {});
+    EXPECT_EQ(r.report.status, BuildingStatus::ok) << r.report.reason;
+    EXPECT_EQ(r.report.level, ModelLevel::lod22) << r.report.reason;
+    EXPECT_NE(r.report.note.find("few points: planes fitted"), std::string::npos) << r.report.note;
+    ASSERT_TRUE(r.model.has_value());
+    EXPECT_TRUE(check_mesh(r.model->mesh).valid());
+    EXPECT_LT(r.report.rmse, r.report.rmse_lod12);
+    EXPECT_LT(r.report.unsupported_area, 1.5);
+  }
+}
+
 TEST(Smoke, a_model_no_rebuild_improves_is_kept_and_reported) {
   const std::string file = std::string(CITY3D_SHARED_DATA) + "/city3d_dev_large/AHN3/06023.ply";
   if (!fs::exists(file)) GTEST_SKIP() << "../shared/data is not beside the repository";

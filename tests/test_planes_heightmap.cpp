@@ -224,6 +224,37 @@ TEST(DetectPlanes, gable_roof_gives_two_planes_with_the_true_slope_and_ridge_dir
     EXPECT_NEAR(-(s.plane.a * 6.0 + s.plane.b * 4.0 + s.plane.d) / s.plane.c, ridge_z, 0.1);
 }
 
+// A gable house in a sparse survey: 26 points, 13 per slope in three staggered rows, with 3 cm noise. Region
+// growing finds no plane (the k-neighbour normals of so few points mix both slopes); every triple finds both.
+TEST(DetectPlanes, few_points_of_a_sparse_gable_give_its_two_planes_through_triples) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  std::vector<Point3> points;
+  const double t = std::tan(kGableSlope * kPi / 180.0);
+  for (int i = 0; i < 13; ++i)
+    for (int side = 0; side < 2; ++side) {
+      const double x = 0.9 * i, y = side ? 0.5 + 1.3 * (i % 3) : 7.5 - 1.3 * ((i + 1) % 3);
+      points.push_back({x, y, 5.0 + t * (4.0 - std::abs(y - 4.0)) + noise(rng)});
+    }
+  EXPECT_TRUE(detect_planes(points, PlaneParams{}).empty());
+  const auto segments = detect_planes_of_few_points(points, PlaneParams{}, (points.size() + 3) / 4);
+  ASSERT_EQ(segments.size(), 2u);
+  for (const auto& s : segments) {
+    EXPECT_EQ(s.kind, PlanarSegment::Kind::roof);
+    EXPECT_NEAR(tilt_degrees(s.plane), kGableSlope, 3.0);
+    EXPECT_EQ(s.points.size(), 13u);
+    EXPECT_GT(s.plane.c, 0.0);
+  }
+  EXPECT_LT(segments[0].plane.b * segments[1].plane.b, 0.0);  // the slopes face opposite sides
+  // Seven points of a flat roof are one plane; three are none (any three make a plane), nor are more than
+  // max_points (the triples grow with their cube).
+  const std::vector<Point3> shed = {{0, 0, 3}, {2, 0, 3.02}, {4, 0, 2.98}, {0, 2, 3}, {2, 2, 3.01}, {4, 2, 3}, {1, 1, 2.99}};
+  ASSERT_EQ(detect_planes_of_few_points(shed, PlaneParams{}, 2).size(), 1u);
+  EXPECT_EQ(detect_planes_of_few_points(shed, PlaneParams{}, 2)[0].points.size(), 7u);
+  EXPECT_TRUE(detect_planes_of_few_points({shed[0], shed[1], shed[2]}, PlaneParams{}, 1).empty());
+  EXPECT_TRUE(detect_planes_of_few_points(points, PlaneParams{}, 7, 20).empty());
+}
+
 TEST(DetectPlanes, two_flat_roofs_at_different_heights_give_two_planes) {
   const auto points = two_flat_roofs(3);
   const auto segments = detect_planes(points, PlaneParams{});

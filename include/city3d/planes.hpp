@@ -71,4 +71,15 @@ struct PlanarSegment {
 std::vector<PlanarSegment> detect_planes(const std::vector<Point3>& local_points,
                                          const PlaneParams& params);
 
+/// The planes of a building too small or too sparse for region growing (a shed of a few points, a house
+/// in a survey of 2 points per m2, whose k-neighbour normals mix its roof's slopes): the plane through
+/// three of the points that holds the most of them within max_distance, every triple tried, refitted
+/// by least squares, its points taken; again on the rest while a plane holds at least `min_inliers`
+/// (at least 4: any three points make a plane) of them. Labelled and ordered as detect_planes() does.
+/// Returns nothing for fewer than min_inliers or more than `max_points` points (the triples grow with
+/// the cube of the count), or a non-finite coordinate. Deterministic.
+std::vector<PlanarSegment> detect_planes_of_few_points(const std::vector<Point3>& local_points,
+                                                       const PlaneParams& params, std::size_t min_inliers,
+                                                       std::size_t max_points = 60);
+
 }  // namespace city3d

@@ -425,6 +425,16 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
       if (has_roof(segments)) add_note(report, note);
     }
   }
+  if (!has_roof(segments)) {
+    // Too few points, or too sparse, for region growing (k-neighbour normals then mix a roof's slopes:
+    // every 4th point of the Delft tiles, about 2 per m2, left six houses of 7 to 28 points without a
+    // plane): planes through triples of the points, each holding at least a quarter of them.
+    const std::vector<PlanarSegment> few = detect_planes_of_few_points(points, params.planes, (points.size() + 3) / 4);
+    if (has_roof(few)) {
+      segments = few;
+      add_note(report, "few points: planes fitted through every three of its " + std::to_string(points.size()) + " points");
+    }
+  }
   std::vector<PlanarSegment> roofs;
   std::vector<std::pair<Point2, Point2>> detected_walls;
   for (const PlanarSegment& s : segments) {

@@ -84,6 +84,41 @@ Fit fit_plane(const IndexRange& indices, PointAt point_at) {
   return {centroid, normal.normalized()};
 }
 
+Eigen::Vector3d centroid_of(const std::vector<Point3>& points) {
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const Point3& p : points) c += Eigen::Vector3d(p.x, p.y, p.z);
+  return points.empty() ? c : Eigen::Vector3d(c / static_cast<double>(points.size()));
+}
+
+/// The segment of the points `region` (ascending indices): their least-squares plane, labelled roof or
+/// wall by |n_z|, roof normals up, wall normals away from `building_centroid` in plan.
+template <typename IndexRange>
+PlanarSegment segment_of(const IndexRange& region, const std::vector<Point3>& points, const PlaneParams& params,
+                         const Eigen::Vector3d& building_centroid) {
+  const auto point_at = [&](std::size_t i) { return Eigen::Vector3d(points[i].x, points[i].y, points[i].z); };
+  const Fit fit = fit_plane(region, point_at);
+  Eigen::Vector3d n = fit.normal;
+  PlanarSegment segment;
+  segment.kind = std::abs(n.z()) < params.wall_max_normal_z ? PlanarSegment::Kind::wall : PlanarSegment::Kind::roof;
+  if (segment.kind == PlanarSegment::Kind::roof) {
+    if (n.z() < 0.0) n = -n;
+  } else {
+    // Outward from the building's centroid, measured horizontally (walls are near vertical).
+    const Eigen::Vector3d out = fit.centroid - building_centroid;
+    if (n.x() * out.x() + n.y() * out.y() < 0.0) n = -n;
+  }
+  segment.plane = {n.x(), n.y(), n.z(), -n.dot(fit.centroid)};
+  double sum_squares = 0.0;
+  segment.points.reserve(region.size());
+  for (std::size_t i : region) {
+    segment.points.push_back(static_cast<std::uint32_t>(i));
+    const double distance = segment.plane.signed_distance(points[i]);
+    sum_squares += distance * distance;
+  }
+  segment.rms = std::sqrt(sum_squares / static_cast<double>(region.size()));
+  return segment;
+}
+
 }  // namespace
 
 std::vector<PlanarSegment> detect_planes_of_distinct_points(const std::vector<Point3>& local_points,
@@ -243,36 +278,12 @@ std::vector<PlanarSegment> detect_planes_of_distinct_points(const std::vector<Po
     }
   }
 
-  Eigen::Vector3d building_centroid = Eigen::Vector3d::Zero();
-  for (std::size_t i = 0; i < local_points.size(); ++i) building_centroid += point_at(i);
-  building_centroid /= static_cast<double>(local_points.size());
-
+  const Eigen::Vector3d building_centroid = centroid_of(local_points);
   std::vector<PlanarSegment> segments;
   segments.reserve(regions.size());
   for (auto& region : regions) {
     std::sort(region.begin(), region.end());
-    const Fit fit = fit_plane(region, point_at);
-    Eigen::Vector3d n = fit.normal;
-    PlanarSegment segment;
-    segment.kind = std::abs(n.z()) < params.wall_max_normal_z ? PlanarSegment::Kind::wall
-                                                              : PlanarSegment::Kind::roof;
-    if (segment.kind == PlanarSegment::Kind::roof) {
-      if (n.z() < 0.0) n = -n;
-    } else {
-      // Outward from the building's centroid, measured horizontally (walls are near vertical).
-      const Eigen::Vector3d out = fit.centroid - building_centroid;
-      if (n.x() * out.x() + n.y() * out.y() < 0.0) n = -n;
-    }
-    segment.plane = {n.x(), n.y(), n.z(), -n.dot(fit.centroid)};
-    double sum_squares = 0.0;
-    segment.points.reserve(region.size());
-    for (std::size_t i : region) {
-      segment.points.push_back(static_cast<std::uint32_t>(i));
-      const double distance = segment.plane.signed_distance(local_points[i]);
-      sum_squares += distance * distance;
-    }
-    segment.rms = std::sqrt(sum_squares / static_cast<double>(region.size()));
-    segments.push_back(std::move(segment));
+    segments.push_back(segment_of(region, local_points, params, building_centroid));
   }
 
   // Largest first; regions are disjoint, so the smallest point index is a unique tie-breaker.
@@ -293,4 +304,61 @@ std::vector<PlanarSegment> detect_planes_of_distinct_points(const std::vector<Po
 }
 
 }  // namespace detail
+
+std::vector<PlanarSegment> detect_planes_of_few_points(const std::vector<Point3>& local_points,
+                                                       const PlaneParams& params, std::size_t min_inliers,
+                                                       std::size_t max_points) {
+  params.validate();
+  const std::size_t n = local_points.size();
+  min_inliers = std::max<std::size_t>(min_inliers, 4);
+  if (n < min_inliers || n > max_points) return {};
+  for (const Point3& p : local_points)
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return {};
+  const Eigen::Vector3d building_centroid = detail::centroid_of(local_points);
+  const auto point_at = [&](std::size_t i) {
+    return Eigen::Vector3d(local_points[i].x, local_points[i].y, local_points[i].z);
+  };
+  std::vector<bool> taken(n, false);
+  std::vector<PlanarSegment> segments;
+  for (;;) {
+    std::vector<std::size_t> free;
+    for (std::size_t i = 0; i < n; ++i)
+      if (!taken[i]) free.push_back(i);
+    if (free.size() < min_inliers) break;
+    // The plane through three free points that holds the most free points within max_distance (the
+    // first such triple in index order): every triple is tried, there are few.
+    std::vector<std::size_t> best;
+    const std::size_t m = free.size();
+    for (std::size_t a = 0; a < m; ++a)
+      for (std::size_t b = a + 1; b < m; ++b)
+        for (std::size_t c = b + 1; c < m; ++c) {
+          const Eigen::Vector3d pa = point_at(free[a]);
+          Eigen::Vector3d normal = (point_at(free[b]) - pa).cross(point_at(free[c]) - pa);
+          const double length = normal.norm();
+          if (!(length > 1e-9)) continue;  // collinear
+          normal /= length;
+          std::size_t count = 0;
+          for (std::size_t i : free) count += std::abs(normal.dot(point_at(i) - pa)) <= params.max_distance;
+          if (count <= best.size()) continue;
+          best.clear();
+          for (std::size_t i : free)
+            if (std::abs(normal.dot(point_at(i) - pa)) <= params.max_distance) best.push_back(i);
+        }
+    if (best.size() < min_inliers) break;
+    // Refitted by least squares; the points within max_distance of the refit are the segment.
+    PlanarSegment refit = detail::segment_of(best, local_points, params, building_centroid);
+    std::vector<std::size_t> inliers;
+    for (std::size_t i : free)
+      if (std::abs(refit.plane.signed_distance(local_points[i])) <= params.max_distance) inliers.push_back(i);
+    if (inliers.size() < min_inliers) inliers = best;
+    for (std::size_t i : inliers) taken[i] = true;
+    segments.push_back(detail::segment_of(inliers, local_points, params, building_centroid));
+  }
+  std::sort(segments.begin(), segments.end(), [](const PlanarSegment& l, const PlanarSegment& r) {
+    if (l.points.size() != r.points.size()) return l.points.size() > r.points.size();
+    return l.points.front() < r.points.front();
+  });
+  return segments;
+}
+
 }  // namespace city3d
