@@ -107,6 +107,7 @@ double sample_polygon(const std::vector<Point3>& face, double spacing, std::vect
 /// What surface_support() measured. Areas in m2, heights in metres.
 struct SurfaceSupport {
   double unsupported_area = 0.0;     ///< samples more than tolerance above their local top
+  double unsupported_roof_area = 0.0;  ///< of it, on roof faces
   double height_excess = 0.0;        ///< the largest height of those samples above their local top; 0: none
   double unpointed_roof_area = 0.0;  ///< roof samples with no point within radius in plan
   double sampled_area = 0.0;         ///< every face sampled (the ground excluded)

@@ -392,6 +392,7 @@ SurfaceSupport surface_support(const PolygonMesh& mesh, const std::vector<Surfac
     }
     out.face_unsupported_area[f] = unsupported;
     out.unsupported_area += unsupported;
+    if (type == SurfaceType::roof) out.unsupported_roof_area += unsupported;
   }
   return out;
 }
