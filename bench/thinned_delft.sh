@@ -24,7 +24,9 @@ for k in 1 2 4 8; do
       tiles+=("$work/tile${t}_every$k.las")
     fi
   done
-  echo "## every ${k}th point record"
+  case "$k" in 1) label="every point record (full density)" ;; 2) label="every 2nd point record" ;;
+    *) label="every ${k}th point record" ;; esac
+  echo "## $label"
   python3 "$here/delft_vs_roofer.py" --quiet --city3d "$city3d" --evaluator "$evaluator" --out "$work/out$k" \
     --tiles "${tiles[@]}" | grep -E '^(levels|\|)' | grep -v -- '---'
   echo

@@ -378,4 +378,27 @@ TEST(SurfaceSupport, ground_is_found_whatever_the_orientation_of_the_faces) {
 }
 
 }  // namespace
+// A gap in the points narrower than the sample spacing, next to a wall, counts for its own width (Delft
+// b112715ef: one 0.25 m column over such a gap was 1.1 of the 1.4 m2 it was measured with). A flat box
+// 10 x 10 x 5 m; its roof points run in a row 1.4 m from the south wall (y = 0) and fill the roof beyond
+// 2 m; the row has a gap that leaves the wall's foot without a roof point within 1.5 m for 0.16 m around
+// x = 5.125, the centre of a 0.25 m column, where one point at 1 m is the local top. The wall is
+// unsupported there from 2 m to 5 m: 0.16 x 3 = 0.48 m2 (the column alone would say 0.25 x 3 = 0.75).
+TEST(SurfaceSupport, a_gap_narrower_than_the_spacing_counts_for_its_own_width) {
+  const double reach = std::sqrt(1.5 * 1.5 - 1.4 * 1.4);  // how far along the row a point of it reaches
+  std::vector<Point3> points;
+  for (int i = 0; i <= 10000; ++i) {
+    const double x = 0.001 * i;
+    if (std::abs(x - 5.125) > reach + 0.08) points.push_back({x, 1.4, 5.0});
+  }
+  for (int i = 0; i <= 20; ++i)
+    for (int j = 4; j <= 20; ++j) points.push_back({0.5 * i, 0.5 * j, 5.0});
+  points.push_back({5.125, 0.2, 1.0});
+  const PolygonMesh house = box(10, 10, 5);
+  const SurfaceSupport s = surface_support(house, surface_types_unoriented(house), LocalTop(points, 1.5));
+  EXPECT_NEAR(s.unsupported_area, 0.48, 0.05);
+  EXPECT_NEAR(s.height_excess, 4.0, 1e-9);
+  EXPECT_EQ(s.unsupported_roof_area, 0.0);
+}
+
 }  // namespace city3d

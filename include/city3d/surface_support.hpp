@@ -120,7 +120,10 @@ struct SurfaceSupport {
 /// Measures `mesh` against the points of `local_top` (same frame). `types` gives each face's semantic
 /// type (surface_types() of model_io.hpp classifies the faces of a model without semantics by their
 /// normal); a face without an entry counts as a wall. Faces with out-of-range indices are skipped.
-/// Never throws on bad geometry.
+/// Walls are measured as columns params.sample_spacing wide, other faces as sample_polygon's samples; an
+/// unsupported column or sample is measured again at a fifth of the spacing (its area, its excess and its
+/// unsupported samples are those of the finer ones), so that a gap in the points narrower than the
+/// spacing counts for its own width. Never throws on bad geometry.
 SurfaceSupport surface_support(const PolygonMesh& mesh, const std::vector<SurfaceType>& types,
                                const LocalTop& local_top, const SurfaceSupportParams& params = {});
 

@@ -18,13 +18,15 @@ namespace {
 // search instead of one per sample, and its unsupported part is measured exactly, not sampled.
 struct Column {
   Point2 at;
+  double u = 0.0;  // the column's centre along the foot, from the face's first vertex
   double width = 0.0;
   std::vector<std::pair<double, double>> spans;  // (low, high) heights inside the face, ascending
 };
 
 // The columns of `face` when it is vertical (its normal within ~0.06 degrees of horizontal); false
-// otherwise.
-bool vertical_columns(const std::vector<Point3>& face, double spacing, std::vector<Column>& columns) {
+// otherwise. With `range` (along the foot, as Column::u), only the part of the face within it.
+bool vertical_columns(const std::vector<Point3>& face, double spacing, std::vector<Column>& columns,
+                      const std::pair<double, double>* range = nullptr) {
   columns.clear();
   const std::size_t n = face.size();
   if (n < 3 || !(spacing > 0.0)) return false;
@@ -46,6 +48,7 @@ bool vertical_columns(const std::vector<Point3>& face, double spacing, std::vect
     u[i] = (face[i].x - o.x) * h.x + (face[i].y - o.y) * h.y;
     u0 = std::min(u0, u[i]), u1 = std::max(u1, u[i]);
   }
+  if (range != nullptr) u0 = std::max(u0, range->first), u1 = std::min(u1, range->second);
   if (!(u1 > u0)) return true;  // no width: no area
   const long count = std::max(1L, static_cast<long>(std::ceil((u1 - u0) / spacing)));
   const double width = (u1 - u0) / static_cast<double>(count);
@@ -59,7 +62,7 @@ bool vertical_columns(const std::vector<Point3>& face, double spacing, std::vect
       crossings.push_back(face[i].z + (c - u[i]) / (u[j] - u[i]) * (face[j].z - face[i].z));
     }
     std::sort(crossings.begin(), crossings.end());
-    Column column{{o.x + c * h.x, o.y + c * h.y}, width, {}};
+    Column column{{o.x + c * h.x, o.y + c * h.y}, c, width, {}};
     for (std::size_t i = 0; i + 1 < crossings.size(); i += 2) column.spans.emplace_back(crossings[i], crossings[i + 1]);
     if (!column.spans.empty()) columns.push_back(std::move(column));
   }
@@ -267,7 +270,15 @@ double LocalTopRaster::unsupported_area(const std::vector<Point3>& face, const S
   return piece * static_cast<double>(unsupported);
 }
 
-double sample_polygon(const std::vector<Point3>& face, double spacing, std::vector<Point3>& out) {
+namespace {
+
+// The in-plane axes of sample_polygon's grid: samples are the spacing apart along u and along v.
+struct SampleAxes {
+  Point3 u{0.0, 0.0, 0.0}, v{0.0, 0.0, 0.0};
+};
+
+double sample_polygon_axes(const std::vector<Point3>& face, double spacing, std::vector<Point3>& out,
+                           SampleAxes* axes) {
   out.clear();
   const std::size_t n = face.size();
   if (n < 3 || !(spacing > 0.0)) return 0.0;
@@ -339,7 +350,20 @@ double sample_polygon(const std::vector<Point3>& face, double spacing, std::vect
   if (samples.empty()) return 0.0;
   out.reserve(samples.size());
   for (const auto& [u, v] : samples) out.push_back({o.x + u * ux + v * vx, o.y + u * uy + v * vy, o.z + u * uz + v * vz});
+  if (axes != nullptr) *axes = {{ux, uy, uz}, {vx, vy, vz}};
   return area / static_cast<double>(samples.size());
+}
+
+// An unsupported sample or column is measured again at a fifth of the spacing (25 samples in its
+// square, 5 columns in its width): a gap in the points narrower than the spacing, next to a wall, then
+// counts for its own width, not for the spacing's (Delft b112715ef: a 0.25 m column 4.5 m high over one
+// such gap was 1.1 m2 of a 1.4 m2 total). Only unsupported samples are refined: the cost stays with them.
+constexpr int kRefine = 5;
+
+}  // namespace
+
+double sample_polygon(const std::vector<Point3>& face, double spacing, std::vector<Point3>& out) {
+  return sample_polygon_axes(face, spacing, out, nullptr);
 }
 
 SurfaceSupport surface_support(const PolygonMesh& mesh, const std::vector<SurfaceType>& types,
@@ -348,7 +372,7 @@ SurfaceSupport surface_support(const PolygonMesh& mesh, const std::vector<Surfac
   SurfaceSupport out;
   out.face_unsupported_area.assign(mesh.faces.size(), 0.0);
   std::vector<Point3> polygon, samples;
-  std::vector<Column> columns;
+  std::vector<Column> columns, narrow;
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
     const SurfaceType type = f < types.size() ? types[f] : SurfaceType::wall;
     if (type == SurfaceType::ground) continue;
@@ -358,22 +382,54 @@ SurfaceSupport surface_support(const PolygonMesh& mesh, const std::vector<Surfac
     for (const std::uint32_t v : face) polygon.push_back(mesh.vertices[v]);
     double unsupported = 0.0;
     if (type == SurfaceType::wall && vertical_columns(polygon, params.sample_spacing, columns)) {
+      // The unsupported part of a column (0 when supported or without a point near), its excess and
+      // its sample.
+      const auto measure = [&](const Column& column) {
+        const double highest = column.spans.back().second;
+        if (!(highest - local_top.lower_bound(column.at.x, column.at.y) > params.tolerance)) return 0.0;
+        const double top = local_top.at(column.at.x, column.at.y);
+        if (std::isnan(top) || !(highest - top > params.tolerance)) return 0.0;
+        double part = 0.0;
+        for (const auto& [low, high] : column.spans)
+          part += column.width * std::max(0.0, high - std::max(low, top + params.tolerance));
+        out.height_excess = std::max(out.height_excess, highest - top);
+        out.unsupported_samples.push_back({column.at.x, column.at.y, highest});
+        return part;
+      };
       for (const Column& column : columns) {
         for (const auto& [low, high] : column.spans) out.sampled_area += column.width * (high - low);
         const double highest = column.spans.back().second;
         if (!(highest - local_top.lower_bound(column.at.x, column.at.y) > params.tolerance)) continue;
         const double top = local_top.at(column.at.x, column.at.y);
         if (std::isnan(top) || !(highest - top > params.tolerance)) continue;
-        for (const auto& [low, high] : column.spans)
-          unsupported += column.width * std::max(0.0, high - std::max(low, top + params.tolerance));
-        out.height_excess = std::max(out.height_excess, highest - top);
-        out.unsupported_samples.push_back({column.at.x, column.at.y, highest});
+        const std::pair<double, double> range{column.u - 0.5 * column.width, column.u + 0.5 * column.width};
+        vertical_columns(polygon, column.width / kRefine, narrow, &range);
+        for (const Column& part : narrow) unsupported += measure(part);
       }
       out.face_unsupported_area[f] = unsupported;
       out.unsupported_area += unsupported;
       continue;
     }
-    const double area = sample_polygon(polygon, params.sample_spacing, samples);
+    SampleAxes axes;
+    const double area = sample_polygon_axes(polygon, params.sample_spacing, samples, &axes);
+    const double step = params.sample_spacing / kRefine;
+    // Whether a finer sample lies inside the face (even-odd, in the grid's axes): those beyond its edge
+    // are not of it. The face in those axes is made on the first unsupported sample.
+    std::vector<std::pair<double, double>> plane;
+    const auto inside = [&](const Point3& q) {
+      if (plane.empty())
+        for (const Point3& c : polygon)
+          plane.emplace_back(c.x * axes.u.x + c.y * axes.u.y + c.z * axes.u.z, c.x * axes.v.x + c.y * axes.v.y + c.z * axes.v.z);
+      const double qu = q.x * axes.u.x + q.y * axes.u.y + q.z * axes.u.z;
+      const double qv = q.x * axes.v.x + q.y * axes.v.y + q.z * axes.v.z;
+      bool in = false;
+      for (std::size_t i = 0, k = plane.size() - 1; i < plane.size(); k = i++) {
+        const auto &a = plane[i], &b = plane[k];
+        if ((a.second > qv) != (b.second > qv) && qu < a.first + (qv - a.second) / (b.second - a.second) * (b.first - a.first))
+          in = !in;
+      }
+      return in;
+    };
     for (const Point3& p : samples) {
       out.sampled_area += area;
       // Below a known lower bound of its local top (a point is near): supported, without a search.
@@ -383,11 +439,19 @@ SurfaceSupport surface_support(const PolygonMesh& mesh, const std::vector<Surfac
         if (type == SurfaceType::roof) out.unpointed_roof_area += area;
         continue;
       }
-      const double above = p.z - top;
-      if (above > params.tolerance) {
-        unsupported += area;
-        out.height_excess = std::max(out.height_excess, above);
-        out.unsupported_samples.push_back(p);
+      if (!(p.z - top > params.tolerance)) continue;
+      for (int i = 0; i < kRefine; ++i) {
+        for (int j = 0; j < kRefine; ++j) {
+          const double du = (i - kRefine / 2) * step, dv = (j - kRefine / 2) * step;
+          const Point3 q{p.x + du * axes.u.x + dv * axes.v.x, p.y + du * axes.u.y + dv * axes.v.y,
+                         p.z + du * axes.u.z + dv * axes.v.z};
+          if (!(q.z - local_top.lower_bound(q.x, q.y) > params.tolerance) || !inside(q)) continue;
+          const double sub_top = local_top.at(q.x, q.y);
+          if (std::isnan(sub_top) || !(q.z - sub_top > params.tolerance)) continue;
+          unsupported += area / (kRefine * kRefine);
+          out.height_excess = std::max(out.height_excess, q.z - sub_top);
+          out.unsupported_samples.push_back(q);
+        }
       }
     }
     out.face_unsupported_area[f] = unsupported;
