@@ -174,8 +174,9 @@ Attributes building_attributes(const BuildingReport& r, bool timings) {
   const auto count = [](std::size_t n) { return AttributeValue{static_cast<std::int64_t>(n)}; };
   const bool written = !r.lods.empty();
   const auto val3dity = [&](const char* lod) {
-    // The levels written are valid by construction (an invalid model is never written).
-    return written && r.lods.find(lod) != std::string::npos ? AttributeValue{std::string("[]")} : AttributeValue{};
+    // The val3dity codes of the level as written: none, since an invalid model is never written (a
+    // list, as 3DBAG's; null for a level not written).
+    return written && r.lods.find(lod) != std::string::npos ? AttributeValue{AttributeList{"[]"}} : AttributeValue{};
   };
   Attributes a = {
       {"status", std::string(to_string(r.status))},
