@@ -514,9 +514,10 @@ if (location.hash === "#check") {
     console.log("city3d report hover: " + (tip.style.display === "block" ? tip.textContent : "(nothing shown)"));
   }
   const sb = $("scalebar");
+  const r = map.getBoundingClientRect(), vb = map.viewBox.baseVal;
   console.log("city3d report map: " + paths.filter((p) => p).length + " outlines; scale bar " + (sb.dataset.metres || "none") +
-              " m = " + (sb.dataset.pixels || 0) + " px; map " + Math.round(map.getBoundingClientRect().width) + " px wide, " +
-              (map.viewBox.baseVal ? map.viewBox.baseVal.width.toFixed(1) : 0) + " m");
+              " m = " + (sb.dataset.pixels || 0) + " px; map " + r.width.toFixed(1) + " x " + r.height.toFixed(1) + " px, " +
+              (vb ? vb.width.toFixed(3) + " x " + vb.height.toFixed(3) : "0 x 0") + " m");
 }
 console.log("city3d report ready");
 </script>

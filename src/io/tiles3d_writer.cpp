@@ -702,6 +702,9 @@ std::vector<std::string> write_3dtiles(const std::string& folder, const Overview
           for (std::uint32_t v : fine.mesh.faces[f])
             s.coarse_error = std::max(s.coarse_error, std::fabs(fine.mesh.vertices[v].z + fine.origin.z - top));
     }
+    // Errors and heights to the millimetre, as the attributes (no binary noise in tileset.json).
+    s.coarse_error = std::round(s.coarse_error * 1000) / 1000;
+    s.height = std::round(s.height * 1000) / 1000;
     all.push_back(s);
     for (const auto& [name, value] : detail::output_attributes(r.report, r.footprint_attributes, false)) {
       const auto [it, fresh] = types.emplace(name, std::make_pair(PropertyType::string, false));

@@ -39,9 +39,14 @@ std::string json_string(const std::string& s) {
   return out + "\"";
 }
 
+// Rounded as the building attributes round (rounded() below: half away from zero on v x 10^d),
+// then printed: printf alone rounds the exact binary value, and 6.5215 (a median between two
+// millimetres) became 6.521 here but 6.522 in CityJSON (20 of 1,280 values of the Delft block).
 std::string fixed(double v, int decimals) {
   char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  const double scale = std::pow(10.0, decimals);
+  const double r = std::isfinite(v) && std::fabs(v) < 1e15 ? std::round(v * scale) / scale : v;
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, r == 0 ? 0.0 : r);
   return buf;
 }
 
