@@ -52,6 +52,7 @@ def evaluate(city3d, model, points, residuals):
     os.remove(residuals)
     return {"rmse": float(fields["rmse"]), "faces": int(fields["faces"]), "valid": fields["valid"] == "yes",
             "sq": sq, "n": n, "far": far, "unsupported": float(fields["unsupported_area"].split()[0]),
+            "unsupported_roof": float(fields["unsupported_roof_area"].split()[0]),
             "excess": float(fields["height_excess"]), "above": float(fields["highest_vertex_above_points"])}
 
 
@@ -88,7 +89,8 @@ def support_summary(label, rows, key):
     """Model to points (issue 23): unsupported surface and highest vertices above the building's points."""
     rs = [r[key] for r in rows if r[key]["n"] > 0]
     area = sum(r["unsupported"] for r in rs)
-    return (f"| {label} | {area:.1f} | {sum(r['unsupported'] > 1 for r in rs)} / {sum(r['unsupported'] > 10 for r in rs)} | "
+    roof = sum(r["unsupported_roof"] for r in rs)
+    return (f"| {label} | {area:.1f} ({roof:.1f} on roofs) | {sum(r['unsupported'] > 1 for r in rs)} / {sum(r['unsupported'] > 10 for r in rs)} | "
             f"{sum(r['above'] > 1 for r in rs)} / {sum(r['above'] > 3 for r in rs)} | "
             f"{max((r['excess'] for r in rs), default=0):.1f} |")
 
@@ -127,7 +129,7 @@ def main():
             row["city3d"] = evaluate(evaluator, model, points, os.path.join(out, bid + ".residuals.csv"))
         else:
             row["city3d"] = {"rmse": float("nan"), "faces": 0, "valid": False, "sq": 0.0, "n": 0, "far": 0,
-                             "unsupported": 0.0, "excess": 0.0, "above": 0.0}
+                             "unsupported": 0.0, "unsupported_roof": 0.0, "excess": 0.0, "above": 0.0}
         # roofer's model to points with this build's evaluator always; its RMSE from per_building.tsv unless
         # --roofer-eval (they agree to 0.1 mm).
         row["roofer"] = evaluate(evaluator, os.path.join(REF, "lod22", bid + ".obj"), points,

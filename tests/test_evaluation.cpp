@@ -277,11 +277,7 @@ TEST(SurfaceSupport, samples_of_a_nonconvex_face_cover_its_area_inside_it_and_no
   for (const auto& [x, y] : std::vector<std::pair<double, double>>{{0, 0}, {6, 0}, {6, 3}, {3, 3}, {3, 6}, {0, 6}})
     l.push_back({x, y, 0.5 * x});
   std::vector<Point3> samples;
-  double area = 0.0;
-  sample_polygon(l, 0.25, [&](const Point3& p, double a) {
-    samples.push_back(p);
-    area += a;
-  });
+  const double area = sample_polygon(l, 0.25, samples) * static_cast<double>(samples.size());
   const double expected = 27.0 * std::sqrt(1.25);  // plan area / cos(slope)
   EXPECT_NEAR(area, expected, 1e-9);
   for (const auto& p : samples) {
@@ -349,13 +345,12 @@ TEST(SurfaceSupport, a_blade_above_the_roof_is_measured_and_the_flat_roof_is_not
 TEST(SurfaceSupport, a_sliver_thinner_than_the_spacing_is_still_sampled_along_its_length) {
   // 20 m long, 5 cm wide, vertical: a sample every 0.25 m along it.
   const std::vector<Point3> sliver = {{0, 0, 0}, {20, 0, 0}, {20, 0, 0.05}, {0, 0, 0.05}};
-  std::size_t count = 0;
-  double area = 0.0, lo = 1e9, hi = -1e9;
-  sample_polygon(sliver, 0.25, [&](const Point3& p, double a) {
-    ++count;
-    area += a;
-    lo = std::min(lo, p.x), hi = std::max(hi, p.x);
-  });
+  std::vector<Point3> samples;
+  const double piece = sample_polygon(sliver, 0.25, samples);
+  const std::size_t count = samples.size();
+  const double area = piece * static_cast<double>(count);
+  double lo = 1e9, hi = -1e9;
+  for (const Point3& p : samples) lo = std::min(lo, p.x), hi = std::max(hi, p.x);
   EXPECT_NEAR(area, 1.0, 1e-12);
   EXPECT_EQ(count, 80u);
   EXPECT_LT(lo, 0.25);

@@ -145,6 +145,10 @@ struct HypothesisParams {
   /// height (see 2), metres, >= 0
   double support_cut_height = 0.5;
   double support_cut_rise = 2.0;
+  /// A plane's face over a cell that overhangs lower ground (more than this many m2 of it unsupported,
+  /// without rising beyond its points) is cut along the line, in a direction of the cell's edges, that
+  /// separates its points in the cell from that part (see 2), >= 0
+  double support_cut_area = 1.0;
   /// The measure of surface no point supports: each candidate face's unsupported area (E_u of
   /// selection.hpp) and the ranking above.
   SurfaceSupportParams surface_support;

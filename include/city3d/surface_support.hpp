@@ -4,11 +4,11 @@
 // direction, from the model to the points:
 //
 //   - every face but the ground is sampled, area-weighted, no two neighbouring samples farther apart
-//     than sample_spacing (each triangle of the face is cut into n x n similar triangles, one sample at
-//     each one's centroid, carrying its area);
+//     than sample_spacing (a square grid of that spacing in the face's plane, each sample carrying an
+//     equal share of the face's area);
 //   - a sample's local top is the highest point within radius of it in plan;
 //   - the unsupported area is the area of the samples more than tolerance above their local top, and
-//     the height excess the largest height of a sample above its local top (0 when none is above);
+//     the height excess the largest height of such a sample above its local top (0 when there is none);
 //   - the unpointed roof area is the area of the roof samples with no point within radius in plan.
 //
 // unexplained_points (points farther than 1 m from the model) asks the same question the other way:
@@ -20,7 +20,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <functional>
 #include <vector>
 
 #include "city3d/types.hpp"
@@ -39,65 +38,77 @@ struct SurfaceSupportParams {
 /// The highest of a set of points within a radius in plan of a position. Built once per building (a
 /// grid of bins of radius / 2, each bin's points by descending height), then queried in about a
 /// microsecond: a bin is skipped when its highest point cannot beat the best so far, taken whole when
-/// it lies inside the disc, and searched from the top otherwise.
+/// it lies inside the disc, and searched from the top otherwise. Each bin also keeps a lower bound of the
+/// local top anywhere in it (the highest point within radius minus half the bin's diagonal of its
+/// centre: within radius of every position in the bin), so that a sample well below it is known to be
+/// supported without a search.
 class LocalTop {
  public:
   LocalTop(const std::vector<Point3>& points, double radius);
   /// The highest z of the points within radius of (x, y) in plan (boundary included); NaN when there is
   /// none.
   double at(double x, double y) const;
+  /// A lower bound of at(x, y), -inf when none is known (no point near the bin's centre).
+  double lower_bound(double x, double y) const;
+  /// A lower bound of at() over `box`, -inf when none is known somewhere in it.
+  double lower_bound_in(const Box2& box) const;
   double radius() const { return radius_; }
 
  private:
   struct Bin {
     std::uint32_t begin = 0, end = 0;  // range of `points_` (by descending z)
   };
+  double search(double x, double y, double radius) const;
   double radius_;
   Point2 origin_{0.0, 0.0};
   double size_ = 1.0;
   long nx_ = 0, ny_ = 0;
   std::vector<Bin> bins_;
   std::vector<Point3> points_;  // grouped by bin, each bin by descending z (then x, y)
+  std::vector<double> bound_;   // per bin: the lower bound of at() in it, -inf: none
 };
 
 /// The local top on a raster, for the many candidate faces of the hypothesis (the selection's E_u and the
-/// support cuts): each cell of `cell` metres over `region` holds the local top at its centre, so a sample
-/// costs a lookup instead of a search, at the price of reading the local top up to cell / sqrt(2) away
-/// in plan. Blocks of 8 x 8 cells keep their lowest top, so that a face that cannot rise more than the
-/// tolerance above any top under it is passed over without sampling. Measures of a model (report,
-/// evaluate) use LocalTop itself.
+/// support cuts): each cell of `cell` metres over `region` stands for the local top at its centre, so the
+/// many samples of a face near one another cost one search, at the price of reading the local top up to
+/// cell / sqrt(2) away in plan. A cell's top is searched the first time it is read (a face well below
+/// the lower bounds of LocalTop is passed over without sampling, and a sample without a search), and
+/// kept. Not for concurrent use. Measures of a model (report, evaluate) use LocalTop itself. `local_top`
+/// must outlive the raster.
 class LocalTopRaster {
  public:
   LocalTopRaster(const LocalTop& local_top, const Box2& region, double cell);
   /// The local top at the centre of the cell holding (x, y); NaN outside the region or where no point is
   /// near.
   double at(double x, double y) const;
-  /// A lower bound of the local tops over `box` (+inf where none is known: no sample there can be
-  /// unsupported).
-  double lowest_in(const Box2& box) const;
+  /// A lower bound of at() over `box`, -inf when none is known somewhere in it.
+  double lower_bound_in(const Box2& box) const;
   /// The area of the polygon `face` more than params.tolerance above its local top, sampled as
   /// sample_polygon does at params.sample_spacing.
   double unsupported_area(const std::vector<Point3>& face, const struct SurfaceSupportParams& params) const;
 
  private:
-  static constexpr long kBlock = 8;
+  long cell_of(double x, double y) const;  // -1 outside the region
+  const LocalTop* local_top_;
   Point2 origin_{0.0, 0.0};
   double cell_ = 1.0;
-  long nx_ = 0, ny_ = 0, bx_ = 0, by_ = 0;
-  std::vector<float> top_;         // per cell, NaN: none
-  std::vector<float> block_low_;   // per block of kBlock x kBlock cells, +inf: none
+  long nx_ = 0, ny_ = 0;
+  mutable std::vector<float> top_;           // per cell, NaN: none
+  mutable std::vector<unsigned char> known_;  // per cell: top_ searched
 };
 
-/// Samples the polygon `face` (simple, planar, any orientation; non-convex allowed) as described in the
-/// file comment: calls visit(sample, area) for each sample, in a deterministic order. A polygon without
-/// area gives no sample.
-void sample_polygon(const std::vector<Point3>& face, double spacing,
-                    const std::function<void(const Point3&, double)>& visit);
+/// Samples the polygon `face` (simple, planar, any orientation; non-convex allowed) on a square grid of
+/// `spacing` in its plane, cell centres inside it (a face thinner than the spacing is scanned with closer
+/// rows, its samples still `spacing` apart along it): replaces `samples` with them, in a deterministic
+/// order, and returns the area each carries (the polygon's area over their count; 0 and no sample for a
+/// polygon without area).
+double sample_polygon(const std::vector<Point3>& face, double spacing, std::vector<Point3>& samples);
 
 /// What surface_support() measured. Areas in m2, heights in metres.
 struct SurfaceSupport {
   double unsupported_area = 0.0;     ///< samples more than tolerance above their local top
-  double height_excess = 0.0;        ///< the largest height of a sample above its local top, >= 0
+  double unsupported_roof_area = 0.0;  ///< of it, on roof faces
+  double height_excess = 0.0;        ///< the largest height of those samples above their local top; 0: none
   double unpointed_roof_area = 0.0;  ///< roof samples with no point within radius in plan
   double sampled_area = 0.0;         ///< every face sampled (the ground excluded)
   /// Per face of the mesh: its unsupported area (0 for the ground).

@@ -176,6 +176,7 @@ std::string evaluate_model(const std::string& model_path, const std::string& poi
   out << "unsupported_area: " << fixed(support.unsupported_area, 2) << " (m2 of surface more than "
       << fixed(support_params.tolerance, 1) << " m above the highest point within " << fixed(support_params.radius, 1)
       << " m in plan)\n";
+  out << "unsupported_roof_area: " << fixed(support.unsupported_roof_area, 2) << " (of it, on roof faces)\n";
   out << "height_excess: " << fixed(support.height_excess, 3) << "\n";
   out << "unpointed_roof_area: " << fixed(support.unpointed_roof_area, 2) << " (m2 of roof with no point within "
       << fixed(support_params.radius, 1) << " m in plan)\n";

@@ -11,6 +11,62 @@
 #include "city3d/error.hpp"
 
 namespace city3d {
+namespace {
+
+// A vertical face (a wall) as columns: at every `spacing` along its foot, the heights it spans there.
+// All the samples of a column share their position in plan, and so their local top: a column costs one
+// search instead of one per sample, and its unsupported part is measured exactly, not sampled.
+struct Column {
+  Point2 at;
+  double width = 0.0;
+  std::vector<std::pair<double, double>> spans;  // (low, high) heights inside the face, ascending
+};
+
+// The columns of `face` when it is vertical (its normal within ~0.06 degrees of horizontal); false
+// otherwise.
+bool vertical_columns(const std::vector<Point3>& face, double spacing, std::vector<Column>& columns) {
+  columns.clear();
+  const std::size_t n = face.size();
+  if (n < 3 || !(spacing > 0.0)) return false;
+  double nx = 0.0, ny = 0.0, nz = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Point3 &a = face[i], &b = face[(i + 1) % n];
+    nx += (a.y - b.y) * (a.z + b.z);
+    ny += (a.z - b.z) * (a.x + b.x);
+    nz += (a.x - b.x) * (a.y + b.y);
+  }
+  const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
+  const double plan = std::hypot(nx, ny);
+  if (!(length > 0.0) || !(plan > 0.0) || std::abs(nz) > 1e-3 * length) return false;
+  const Point2 h{-ny / plan, nx / plan};  // along the foot of the wall
+  const Point3& o = face[0];
+  std::vector<double> u(n);
+  double u0 = std::numeric_limits<double>::infinity(), u1 = -u0;
+  for (std::size_t i = 0; i < n; ++i) {
+    u[i] = (face[i].x - o.x) * h.x + (face[i].y - o.y) * h.y;
+    u0 = std::min(u0, u[i]), u1 = std::max(u1, u[i]);
+  }
+  if (!(u1 > u0)) return true;  // no width: no area
+  const long count = std::max(1L, static_cast<long>(std::ceil((u1 - u0) / spacing)));
+  const double width = (u1 - u0) / static_cast<double>(count);
+  std::vector<double> crossings;
+  for (long k = 0; k < count; ++k) {
+    const double c = u0 + (static_cast<double>(k) + 0.5) * width;
+    crossings.clear();
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t j = (i + 1) % n;
+      if ((u[i] <= c) == (u[j] <= c)) continue;
+      crossings.push_back(face[i].z + (c - u[i]) / (u[j] - u[i]) * (face[j].z - face[i].z));
+    }
+    std::sort(crossings.begin(), crossings.end());
+    Column column{{o.x + c * h.x, o.y + c * h.y}, width, {}};
+    for (std::size_t i = 0; i + 1 < crossings.size(); i += 2) column.spans.emplace_back(crossings[i], crossings[i + 1]);
+    if (!column.spans.empty()) columns.push_back(std::move(column));
+  }
+  return true;
+}
+
+}  // namespace
 
 void SurfaceSupportParams::validate() const {
   std::string problems;
@@ -53,16 +109,50 @@ LocalTop::LocalTop(const std::vector<Point3>& points, double radius) : radius_(r
       return a.z > c.z || (a.z == c.z && (a.x < c.x || (a.x == c.x && a.y < c.y)));
     });
   }
+  // Each bin's lower bound: the points within radius - half the diagonal of its centre lie within
+  // radius of every position in the bin.
+  const double inner = radius_ - size_ * std::sqrt(0.5);
+  bound_.assign(bins_.size(), -std::numeric_limits<double>::infinity());
+  if (inner > 0.0)
+    for (long j = 0; j < ny_; ++j)
+      for (long i = 0; i < nx_; ++i) {
+        const double z = search(origin_.x + (static_cast<double>(i) + 0.5) * size_,
+                                origin_.y + (static_cast<double>(j) + 0.5) * size_, inner);
+        if (!std::isnan(z)) bound_[static_cast<std::size_t>(j * nx_ + i)] = z;
+      }
 }
 
-double LocalTop::at(double x, double y) const {
+double LocalTop::at(double x, double y) const { return search(x, y, radius_); }
+
+double LocalTop::lower_bound(double x, double y) const {
+  if (bins_.empty()) return -std::numeric_limits<double>::infinity();
+  const double fi = std::floor((x - origin_.x) / size_), fj = std::floor((y - origin_.y) / size_);
+  if (!(fi >= 0.0 && fj >= 0.0 && fi < static_cast<double>(nx_) && fj < static_cast<double>(ny_)))
+    return -std::numeric_limits<double>::infinity();
+  return bound_[static_cast<std::size_t>(static_cast<long>(fj) * nx_ + static_cast<long>(fi))];
+}
+
+double LocalTop::lower_bound_in(const Box2& box) const {
+  const double none = -std::numeric_limits<double>::infinity();
+  if (bins_.empty() || box.empty()) return none;
+  const double fi0 = std::floor((box.min.x - origin_.x) / size_), fi1 = std::floor((box.max.x - origin_.x) / size_);
+  const double fj0 = std::floor((box.min.y - origin_.y) / size_), fj1 = std::floor((box.max.y - origin_.y) / size_);
+  if (!(fi0 >= 0.0 && fj0 >= 0.0 && fi1 < static_cast<double>(nx_) && fj1 < static_cast<double>(ny_))) return none;
+  double low = std::numeric_limits<double>::infinity();
+  for (long j = static_cast<long>(fj0); j <= static_cast<long>(fj1); ++j)
+    for (long i = static_cast<long>(fi0); i <= static_cast<long>(fi1); ++i)
+      low = std::min(low, bound_[static_cast<std::size_t>(j * nx_ + i)]);
+  return low;
+}
+
+double LocalTop::search(double x, double y, double radius) const {
   double best = -std::numeric_limits<double>::infinity();
   if (bins_.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const double r2 = radius_ * radius_;
-  const long i0 = std::max(0L, static_cast<long>(std::floor((x - radius_ - origin_.x) / size_)));
-  const long i1 = std::min(nx_ - 1, static_cast<long>(std::floor((x + radius_ - origin_.x) / size_)));
-  const long j0 = std::max(0L, static_cast<long>(std::floor((y - radius_ - origin_.y) / size_)));
-  const long j1 = std::min(ny_ - 1, static_cast<long>(std::floor((y + radius_ - origin_.y) / size_)));
+  const double r2 = radius * radius;
+  const long i0 = std::max(0L, static_cast<long>(std::floor((x - radius - origin_.x) / size_)));
+  const long i1 = std::min(nx_ - 1, static_cast<long>(std::floor((x + radius - origin_.x) / size_)));
+  const long j0 = std::max(0L, static_cast<long>(std::floor((y - radius - origin_.y) / size_)));
+  const long j1 = std::min(ny_ - 1, static_cast<long>(std::floor((y + radius - origin_.y) / size_)));
   // Two passes: the bins wholly inside the disc first (their highest point counts as it is), then the
   // others, searched from their top only while it can beat the best so far: on a roof the first pass
   // usually leaves little for the second.
@@ -94,47 +184,46 @@ double LocalTop::at(double x, double y) const {
   return std::isfinite(best) ? best : std::numeric_limits<double>::quiet_NaN();
 }
 
-LocalTopRaster::LocalTopRaster(const LocalTop& local_top, const Box2& region, double cell) {
+LocalTopRaster::LocalTopRaster(const LocalTop& local_top, const Box2& region, double cell) : local_top_(&local_top) {
   if (region.empty() || !(cell > 0.0)) return;
   cell_ = cell;
   origin_ = region.min;
   const double w = region.max.x - region.min.x, h = region.max.y - region.min.y;
-  // A bound on the work: a region of more than ~4M cells is read at a coarser cell.
-  while ((w / cell_ + 1.0) * (h / cell_ + 1.0) > 4e6) cell_ *= 2.0;
+  // A bound on the memory: a region of more than ~16M cells is read at a coarser cell.
+  while ((w / cell_ + 1.0) * (h / cell_ + 1.0) > 16e6) cell_ *= 2.0;
   nx_ = static_cast<long>(w / cell_) + 1;
   ny_ = static_cast<long>(h / cell_) + 1;
-  bx_ = (nx_ + kBlock - 1) / kBlock;
-  by_ = (ny_ + kBlock - 1) / kBlock;
   top_.assign(static_cast<std::size_t>(nx_ * ny_), std::numeric_limits<float>::quiet_NaN());
-  block_low_.assign(static_cast<std::size_t>(bx_ * by_), std::numeric_limits<float>::infinity());
-  for (long j = 0; j < ny_; ++j)
-    for (long i = 0; i < nx_; ++i) {
-      const double z = local_top.at(origin_.x + (static_cast<double>(i) + 0.5) * cell_,
-                                    origin_.y + (static_cast<double>(j) + 0.5) * cell_);
-      if (std::isnan(z)) continue;
-      top_[static_cast<std::size_t>(j * nx_ + i)] = static_cast<float>(z);
-      float& low = block_low_[static_cast<std::size_t>((j / kBlock) * bx_ + i / kBlock)];
-      low = std::min(low, static_cast<float>(z));
-    }
+  known_.assign(top_.size(), 0);
+}
+
+long LocalTopRaster::cell_of(double x, double y) const {
+  const double fi = std::floor((x - origin_.x) / cell_), fj = std::floor((y - origin_.y) / cell_);
+  if (!(fi >= 0.0 && fj >= 0.0 && fi < static_cast<double>(nx_) && fj < static_cast<double>(ny_))) return -1;
+  return static_cast<long>(fj) * nx_ + static_cast<long>(fi);
 }
 
 double LocalTopRaster::at(double x, double y) const {
-  const long i = static_cast<long>(std::floor((x - origin_.x) / cell_));
-  const long j = static_cast<long>(std::floor((y - origin_.y) / cell_));
-  if (i < 0 || j < 0 || i >= nx_ || j >= ny_) return std::numeric_limits<double>::quiet_NaN();
-  return top_[static_cast<std::size_t>(j * nx_ + i)];
+  const long k = cell_of(x, y);
+  if (k < 0) return std::numeric_limits<double>::quiet_NaN();
+  const auto c = static_cast<std::size_t>(k);
+  if (!known_[c]) {
+    const long i = k % nx_, j = k / nx_;
+    const double z = local_top_->at(origin_.x + (static_cast<double>(i) + 0.5) * cell_,
+                                    origin_.y + (static_cast<double>(j) + 0.5) * cell_);
+    top_[c] = std::isnan(z) ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(z);
+    known_[c] = 1;
+  }
+  return top_[c];
 }
 
-double LocalTopRaster::lowest_in(const Box2& box) const {
-  double low = std::numeric_limits<double>::infinity();
-  if (top_.empty() || box.empty()) return low;
-  const long i0 = std::max(0L, static_cast<long>(std::floor((box.min.x - origin_.x) / cell_)) / kBlock);
-  const long i1 = std::min(bx_ - 1, static_cast<long>(std::floor((box.max.x - origin_.x) / cell_)) / kBlock);
-  const long j0 = std::max(0L, static_cast<long>(std::floor((box.min.y - origin_.y) / cell_)) / kBlock);
-  const long j1 = std::min(by_ - 1, static_cast<long>(std::floor((box.max.y - origin_.y) / cell_)) / kBlock);
-  for (long j = j0; j <= j1; ++j)
-    for (long i = i0; i <= i1; ++i) low = std::min(low, static_cast<double>(block_low_[static_cast<std::size_t>(j * bx_ + i)]));
-  return low;
+double LocalTopRaster::lower_bound_in(const Box2& box) const {
+  if (box.empty()) return -std::numeric_limits<double>::infinity();
+  // A sample reads the top at its cell's centre, up to half a cell away.
+  Box2 grown = box;
+  grown.add({box.min.x - cell_, box.min.y - cell_});
+  grown.add({box.max.x + cell_, box.max.y + cell_});
+  return local_top_->lower_bound_in(grown);
 }
 
 double LocalTopRaster::unsupported_area(const std::vector<Point3>& face, const SurfaceSupportParams& params) const {
@@ -144,20 +233,44 @@ double LocalTopRaster::unsupported_area(const std::vector<Point3>& face, const S
     box.add({p.x, p.y});
     highest = std::max(highest, p.z);
   }
-  // No sample of the face can rise more than the tolerance above a top that is at least this low.
-  if (!(highest - lowest_in(box) > params.tolerance)) return 0.0;
-  double area = 0.0;
-  sample_polygon(face, params.sample_spacing, [&](const Point3& p, double a) {
+  // No sample of the face can rise more than the tolerance above a top that is at least this high.
+  if (!(highest - lower_bound_in(box) > params.tolerance)) return 0.0;
+  std::vector<Column> columns;
+  if (vertical_columns(face, params.sample_spacing, columns)) {
+    double area = 0.0;
+    for (const Column& column : columns) {
+      const long k = cell_of(column.at.x, column.at.y);
+      if (k < 0) continue;
+      const double cx = origin_.x + (static_cast<double>(k % nx_) + 0.5) * cell_;
+      const double cy = origin_.y + (static_cast<double>(k / nx_) + 0.5) * cell_;
+      const double bar = local_top_->lower_bound(cx, cy) + params.tolerance;
+      if (!(column.spans.back().second > bar)) continue;  // below a known lower bound
+      const double top = at(column.at.x, column.at.y);
+      if (std::isnan(top)) continue;
+      for (const auto& [low, high] : column.spans)
+        area += column.width * std::max(0.0, high - std::max(low, top + params.tolerance));
+    }
+    return area;
+  }
+  std::vector<Point3> samples;
+  const double piece = sample_polygon(face, params.sample_spacing, samples);
+  std::size_t unsupported = 0;
+  for (const Point3& p : samples) {
+    const long k = cell_of(p.x, p.y);
+    if (k < 0) continue;
+    const double cx = origin_.x + (static_cast<double>(k % nx_) + 0.5) * cell_;
+    const double cy = origin_.y + (static_cast<double>(k / nx_) + 0.5) * cell_;
+    if (!(p.z - local_top_->lower_bound(cx, cy) > params.tolerance)) continue;  // below a known lower bound
     const double top = at(p.x, p.y);
-    if (!std::isnan(top) && p.z - top > params.tolerance) area += a;
-  });
-  return area;
+    unsupported += !std::isnan(top) && p.z - top > params.tolerance;
+  }
+  return piece * static_cast<double>(unsupported);
 }
 
-void sample_polygon(const std::vector<Point3>& face, double spacing,
-                    const std::function<void(const Point3&, double)>& visit) {
+double sample_polygon(const std::vector<Point3>& face, double spacing, std::vector<Point3>& out) {
+  out.clear();
   const std::size_t n = face.size();
-  if (n < 3 || !(spacing > 0.0)) return;
+  if (n < 3 || !(spacing > 0.0)) return 0.0;
   // Newell's normal: twice the vector area, robust for non-convex polygons.
   double nx = 0.0, ny = 0.0, nz = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -167,7 +280,7 @@ void sample_polygon(const std::vector<Point3>& face, double spacing,
     nz += (a.x - b.x) * (a.y + b.y);
   }
   const double twice = std::sqrt(nx * nx + ny * ny + nz * nz);
-  if (!(twice > 0.0) || !std::isfinite(twice)) return;
+  if (!(twice > 0.0) || !std::isfinite(twice)) return 0.0;
   const double area = 0.5 * twice;
   nx /= twice, ny /= twice, nz /= twice;
   // The frame: u along the longest edge (a thin face then runs along the rows), v = n x u.
@@ -181,7 +294,7 @@ void sample_polygon(const std::vector<Point3>& face, double spacing,
   const Point3& o = face[longest];
   const Point3& e = face[(longest + 1) % n];
   const double el = std::sqrt(longest2);
-  if (!(el > 0.0)) return;
+  if (!(el > 0.0)) return 0.0;
   const double ux = (e.x - o.x) / el, uy = (e.y - o.y) / el, uz = (e.z - o.z) / el;
   const double vx = ny * uz - nz * uy, vy = nz * ux - nx * uz, vz = nx * uy - ny * ux;
   std::vector<double> pu(n), pv(n);
@@ -223,10 +336,10 @@ void sample_polygon(const std::vector<Point3>& face, double spacing,
       }
     }
   }
-  if (samples.empty()) return;
-  const double piece = area / static_cast<double>(samples.size());
-  for (const auto& [u, v] : samples)
-    visit({o.x + u * ux + v * vx, o.y + u * uy + v * vy, o.z + u * uz + v * vz}, piece);
+  if (samples.empty()) return 0.0;
+  out.reserve(samples.size());
+  for (const auto& [u, v] : samples) out.push_back({o.x + u * ux + v * vx, o.y + u * uy + v * vy, o.z + u * uz + v * vz});
+  return area / static_cast<double>(samples.size());
 }
 
 SurfaceSupport surface_support(const PolygonMesh& mesh, const std::vector<SurfaceType>& types,
@@ -234,7 +347,8 @@ SurfaceSupport surface_support(const PolygonMesh& mesh, const std::vector<Surfac
   params.validate();
   SurfaceSupport out;
   out.face_unsupported_area.assign(mesh.faces.size(), 0.0);
-  std::vector<Point3> polygon;
+  std::vector<Point3> polygon, samples;
+  std::vector<Column> columns;
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
     const SurfaceType type = f < types.size() ? types[f] : SurfaceType::wall;
     if (type == SurfaceType::ground) continue;
@@ -243,22 +357,42 @@ SurfaceSupport surface_support(const PolygonMesh& mesh, const std::vector<Surfac
     polygon.clear();
     for (const std::uint32_t v : face) polygon.push_back(mesh.vertices[v]);
     double unsupported = 0.0;
-    sample_polygon(polygon, params.sample_spacing, [&](const Point3& p, double area) {
+    if (type == SurfaceType::wall && vertical_columns(polygon, params.sample_spacing, columns)) {
+      for (const Column& column : columns) {
+        for (const auto& [low, high] : column.spans) out.sampled_area += column.width * (high - low);
+        const double highest = column.spans.back().second;
+        if (!(highest - local_top.lower_bound(column.at.x, column.at.y) > params.tolerance)) continue;
+        const double top = local_top.at(column.at.x, column.at.y);
+        if (std::isnan(top) || !(highest - top > params.tolerance)) continue;
+        for (const auto& [low, high] : column.spans)
+          unsupported += column.width * std::max(0.0, high - std::max(low, top + params.tolerance));
+        out.height_excess = std::max(out.height_excess, highest - top);
+        out.unsupported_samples.push_back({column.at.x, column.at.y, highest});
+      }
+      out.face_unsupported_area[f] = unsupported;
+      out.unsupported_area += unsupported;
+      continue;
+    }
+    const double area = sample_polygon(polygon, params.sample_spacing, samples);
+    for (const Point3& p : samples) {
       out.sampled_area += area;
+      // Below a known lower bound of its local top (a point is near): supported, without a search.
+      if (!(p.z - local_top.lower_bound(p.x, p.y) > params.tolerance)) continue;
       const double top = local_top.at(p.x, p.y);
       if (std::isnan(top)) {
         if (type == SurfaceType::roof) out.unpointed_roof_area += area;
-        return;
+        continue;
       }
       const double above = p.z - top;
-      out.height_excess = std::max(out.height_excess, above);
       if (above > params.tolerance) {
         unsupported += area;
+        out.height_excess = std::max(out.height_excess, above);
         out.unsupported_samples.push_back(p);
       }
-    });
+    }
     out.face_unsupported_area[f] = unsupported;
     out.unsupported_area += unsupported;
+    if (type == SurfaceType::roof) out.unsupported_roof_area += unsupported;
   }
   return out;
 }

@@ -147,6 +147,83 @@ double place_floor(const std::vector<PlanarSegment>& roofs, const PlainArrangeme
   return floor_z;
 }
 
+namespace {
+
+// The pieces of the line n . x = t (n a unit normal) that run inside the polygon, as curves. The
+// crossings of the polygon's edges, in order along the line, pair up (even-odd; a vertex on the line
+// counts as on the positive side); each piece overshoots the boundary a little, so that the exact
+// arrangement sees it cross (the overshoot is an antenna, which the arrangement removes).
+void add_chords(const std::vector<Point2>& poly, const Point2& n, double t, std::vector<InputCurve>& cuts) {
+  const Point2 dir{-n.y, n.x};
+  const Point2 base{t * n.x, t * n.y};
+  std::vector<double> crossings;
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const Point2 &p = poly[i], &q = poly[(i + 1) % poly.size()];
+    const double sp = n.x * p.x + n.y * p.y - t, sq = n.x * q.x + n.y * q.y - t;
+    if ((sp >= 0.0) == (sq >= 0.0)) continue;
+    const double f = sp / (sp - sq);
+    const Point2 x{p.x + f * (q.x - p.x), p.y + f * (q.y - p.y)};
+    crossings.push_back((x.x - base.x) * dir.x + (x.y - base.y) * dir.y);
+  }
+  std::sort(crossings.begin(), crossings.end());
+  constexpr double kOvershoot = 0.01;
+  for (std::size_t i = 0; i + 1 < crossings.size(); i += 2) {
+    const double t0 = crossings[i] - kOvershoot, t1 = crossings[i + 1] + kOvershoot;
+    cuts.push_back({{base.x + t0 * dir.x, base.y + t0 * dir.y}, {base.x + t1 * dir.x, base.y + t1 * dir.y},
+                    CurveKind::roof_line, -1});
+  }
+}
+
+// A line that separates a plane's own points in a cell from the part of its face there that rises over
+// no point: among the directions of the cell's edges (a building's lines are few, and mostly parallel or
+// orthogonal), the one along which the two sets overlap least, projected on its normal; the threshold
+// midway across the gap. Returns false when every direction leaves more than kMaxMixed of either set on
+// the wrong side (the two are interleaved: no line ends the face where its points end).
+bool separating_line(const std::vector<Point2>& poly, const std::vector<Point2>& own, const std::vector<Point2>& bare,
+                     Point2& normal, double& threshold) {
+  constexpr double kMaxMixed = 0.05;
+  std::vector<Point2> normals;
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const Point2 &p = poly[i], &q = poly[(i + 1) % poly.size()];
+    const double length = std::hypot(q.x - p.x, q.y - p.y);
+    if (!(length > 0.05)) continue;
+    Point2 n{-(q.y - p.y) / length, (q.x - p.x) / length};
+    if (n.x < 0.0 || (n.x == 0.0 && n.y < 0.0)) n = {-n.x, -n.y};  // one of +-n
+    const bool seen = std::any_of(normals.begin(), normals.end(),
+                                  [&](const Point2& m) { return std::abs(m.x * n.y - m.y * n.x) < 0.017; });
+    if (!seen) normals.push_back(n);
+  }
+  double best_mixed = std::numeric_limits<double>::infinity(), best_gap = 0.0;
+  for (const Point2& n : normals) {
+    std::vector<std::pair<double, int>> values;  // (projection, 0 own / 1 bare)
+    for (const Point2& p : own) values.emplace_back(n.x * p.x + n.y * p.y, 0);
+    for (const Point2& p : bare) values.emplace_back(n.x * p.x + n.y * p.y, 1);
+    std::sort(values.begin(), values.end());
+    // Sweep the cut between consecutive values: on one side own below and bare above, or the reverse.
+    std::size_t own_left = 0, bare_left = 0;
+    for (std::size_t i = 0; i + 1 < values.size(); ++i) {
+      (values[i].second ? bare_left : own_left)++;
+      const double gap = values[i + 1].first - values[i].first;
+      if (!(gap > 0.0)) continue;
+      const std::size_t own_right = own.size() - own_left, bare_right = bare.size() - bare_left;
+      for (int side = 0; side < 2; ++side) {
+        const std::size_t wrong_own = side ? own_left : own_right, wrong_bare = side ? bare_right : bare_left;
+        const double mixed = std::max(static_cast<double>(wrong_own) / static_cast<double>(own.size()),
+                                      static_cast<double>(wrong_bare) / static_cast<double>(bare.size()));
+        if (mixed < best_mixed - 1e-12 || (mixed <= best_mixed + 1e-12 && gap > best_gap)) {
+          best_mixed = mixed;
+          best_gap = gap;
+          normal = n;
+          threshold = 0.5 * (values[i].first + values[i + 1].first);
+        }
+      }
+    }
+  }
+  return best_mixed <= kMaxMixed;
+}
+
+}  // namespace
+
 std::vector<InputCurve> support_cuts(const std::vector<Point3>& points, const std::vector<PlanarSegment>& roofs,
                                      const PlainArrangement& arr, const std::vector<std::vector<int>>& cell_planes,
                                      const std::vector<std::vector<std::size_t>>& points_inside,
@@ -155,16 +232,20 @@ std::vector<InputCurve> support_cuts(const std::vector<Point3>& points, const st
   std::vector<double> top(roofs.size(), -std::numeric_limits<double>::infinity());
   for (std::size_t r = 0; r < roofs.size(); ++r)
     for (std::uint32_t k : roofs[r].points) top[r] = std::max(top[r], points[k].z);
+  const SurfaceSupportParams& sp = params.surface_support;
   std::vector<InputCurve> cuts;
   for (std::size_t c = 0; c < arr.cells.size(); ++c) {
     const auto& poly = arr.cells[c].polygon;
+    const std::size_t most =
+        points_inside[c].empty() ? 0 : *std::max_element(points_inside[c].begin(), points_inside[c].end());
     for (std::size_t k = 0; k < cell_planes[c].size(); ++k) {
       const int r = cell_planes[c][k];
       // A plane without points of its own in the cell is not its roof anywhere: the selection's E_u
       // keeps its face out. A plane with some is cut, even with few: most of its points can lie beside
-      // the cell, and the contour then stands in for a line the arrangement lacks (a ridge, a hip).
+      // the cell, and the cut then stands in for a line the arrangement lacks (a ridge, a hip, a step).
       if (points_inside[c][k] < static_cast<std::size_t>(params.min_support_points)) continue;
       const PlanarSegment& roof = roofs[static_cast<std::size_t>(r)];
+      const Plane3& pl = roof.plane;
       const double level = top[static_cast<std::size_t>(r)] + params.support_cut_height;
       double highest = -std::numeric_limits<double>::infinity(), lowest = -highest;
       for (const Point2& p : poly) {
@@ -172,37 +253,42 @@ std::vector<InputCurve> support_cuts(const std::vector<Point3>& points, const st
         highest = std::max(highest, z);
         lowest = std::min(lowest, z);
       }
-      // Only a blade is cut: a face that rises more than support_cut_rise beyond the cut within the
-      // cell, and whose part beyond it lies over no point. A face that leaves its points' height range
-      // by less is weighed by E_u as it is (a cut there would only add cells).
-      if (!(highest > level + params.support_cut_rise && lowest < level)) continue;
-      if (!(unsupported_over(roof, poly, local_top, params.surface_support) > params.max_unsupported_area)) continue;
-      // The contour a x + b y = -(c level + d) in plan, and where it runs inside the cell: the crossings
-      // of the polygon's edges, in order along the line, pair up (even-odd; a vertex on the line counts
-      // as on the positive side).
-      const Plane3& pl = roof.plane;
       const double norm = std::hypot(pl.a, pl.b);
-      const double offset = pl.c * level + pl.d;
-      const Point2 dir{-pl.b / norm, pl.a / norm};
-      const Point2 base{-offset * pl.a / (norm * norm), -offset * pl.b / (norm * norm)};
-      std::vector<double> crossings;
-      for (std::size_t i = 0; i < poly.size(); ++i) {
-        const Point2 &p = poly[i], &q = poly[(i + 1) % poly.size()];
-        const double sp = pl.a * p.x + pl.b * p.y + offset, sq = pl.a * q.x + pl.b * q.y + offset;
-        if ((sp >= 0.0) == (sq >= 0.0)) continue;
-        const double t = sp / (sp - sq);
-        const Point2 x{p.x + t * (q.x - p.x), p.y + t * (q.y - p.y)};
-        crossings.push_back((x.x - base.x) * dir.x + (x.y - base.y) * dir.y);
+      if (highest > level + params.support_cut_rise && lowest < level && norm > 0.0) {
+        // A blade: a face that rises more than support_cut_rise beyond its points' top plus
+        // support_cut_height within the cell, over no point there, is cut at its contour at that
+        // height, a x + b y = -(c level + d).
+        if (!(unsupported_over(roof, poly, local_top, sp) > params.max_unsupported_area)) continue;
+        add_chords(poly, {pl.a / norm, pl.b / norm}, -(pl.c * level + pl.d) / norm, cuts);
+        continue;
       }
-      std::sort(crossings.begin(), crossings.end());
-      // Each piece overshoots the cell's boundary a little, so that the exact arrangement sees it
-      // cross; the overshoot is an antenna, which the arrangement removes.
-      constexpr double kOvershoot = 0.01;
-      for (std::size_t i = 0; i + 1 < crossings.size(); i += 2) {
-        const double t0 = crossings[i] - kOvershoot, t1 = crossings[i + 1] + kOvershoot;
-        cuts.push_back({{base.x + t0 * dir.x, base.y + t0 * dir.y}, {base.x + t1 * dir.x, base.y + t1 * dir.y},
-                        CurveKind::roof_line, -1});
+      // A face that overhangs lower ground or a lower part (a roof plane over an annex beside it): where
+      // more than support_cut_area of it rises over no point, the line that separates its own points in
+      // the cell from that part, if one does. Only for the cell's own roof (a plane with at least half as
+      // many points in it as the plane with most): a cut adds cells and edges, and the complexity term,
+      // normalised by the number of edges, then weighs every corner less.
+      if (2 * points_inside[c][k] < most) continue;
+      std::vector<Point3> face;
+      for (const Point2& p : poly) face.push_back({p.x, p.y, roof_height(roof, p.x, p.y)});
+      Box2 box;
+      for (const Point2& p : poly) box.add(p);
+      if (!(highest - local_top.lower_bound_in(box) > sp.tolerance)) continue;
+      std::vector<Point2> bare;
+      std::vector<Point3> samples;
+      const double piece = sample_polygon(face, sp.sample_spacing, samples);
+      for (const Point3& p : samples) {
+        const double t = local_top.at(p.x, p.y);
+        if (!std::isnan(t) && p.z - t > sp.tolerance) bare.push_back({p.x, p.y});
       }
+      const double bare_area = piece * static_cast<double>(bare.size());
+      if (!(bare_area > params.support_cut_area)) continue;
+      std::vector<Point2> own;
+      for (std::uint32_t i : roof.points)
+        if (inside_polygon(poly, points[i].x, points[i].y)) own.push_back({points[i].x, points[i].y});
+      Point2 n;
+      double t = 0.0;
+      if (own.size() >= static_cast<std::size_t>(params.min_support_points) && separating_line(poly, own, bare, n, t))
+        add_chords(poly, n, t, cuts);
     }
   }
   return cuts;

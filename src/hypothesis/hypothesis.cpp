@@ -37,6 +37,7 @@ void HypothesisParams::validate() const {
   need(max_unsupported_area >= 0.0, "max_unsupported_area must be >= 0");
   need(support_cut_height >= 0.0, "support_cut_height must be >= 0");
   need(support_cut_rise >= 0.0, "support_cut_rise must be >= 0");
+  need(support_cut_area >= 0.0, "support_cut_area must be >= 0");
   need(large_cell_count >= 0, "large_cell_count must be >= 0");
   need(max_planes_per_large_cell >= 1, "max_planes_per_large_cell must be >= 1");
   try {
@@ -89,8 +90,8 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
   // are many, and each sample then costs a lookup (surface_support.hpp).
   Box2 region;
   for (const Point2& v : arr.vertices) region.add(v);
-  const LocalTopRaster local_top(LocalTop(points, params.surface_support.radius), region,
-                                 params.surface_support.sample_spacing);
+  const LocalTop tops(points, params.surface_support.radius);
+  const LocalTopRaster local_top(tops, region, params.surface_support.sample_spacing);
   std::vector<std::vector<std::size_t>> points_inside;
   std::vector<std::vector<int>> cell_planes = cell_roof_planes(points, roofs, arr, local_top, params, &points_inside);
   const std::vector<InputCurve> cuts = support_cuts(points, roofs, arr, cell_planes, points_inside, local_top, params);

@@ -154,6 +154,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("hypothesis.max_unsupported_area", p.hypothesis.max_unsupported_area);
   put("hypothesis.support_cut_height", p.hypothesis.support_cut_height);
   put("hypothesis.support_cut_rise", p.hypothesis.support_cut_rise);
+  put("hypothesis.support_cut_area", p.hypothesis.support_cut_area);
   put("hypothesis.surface_support.sample_spacing", p.hypothesis.surface_support.sample_spacing);
   put("hypothesis.surface_support.radius", p.hypothesis.surface_support.radius);
   put("hypothesis.surface_support.tolerance", p.hypothesis.surface_support.tolerance);
@@ -692,6 +693,11 @@ struct Explained {
   double unfaithful(double points_per_m2) const {
     return static_cast<double>(far) + support.unsupported_area * points_per_m2;
   }
+  /// The sum of the squared distances, both ways: each square metre of unsupported surface counted as
+  /// the points of a square metre lying kUnexplainedDistance off it.
+  double squares_both_ways(double points_per_m2) const {
+    return squares + support.unsupported_area * points_per_m2 * kUnexplainedDistance * kUnexplainedDistance;
+  }
 };
 
 // From the points to the model only.
@@ -751,9 +757,13 @@ constexpr std::size_t kMaxRebuildFaces = 3000;
 //    explains (a flat roof modelled at ground level over a third of the building);
 //  - half the complexity weight: a roof part of few points costs more edges than its points weigh;
 //  - both.
+// A model rebuilt only for its unsupported surface is selected over each hypothesis without those
+// variants of the selection.
 // A variant replaces the model only if it is more faithful both ways (Explained::unfaithful: fewer
-// points left out plus less unsupported surface at the point density) and fits the points better
-// (smaller sum of squared distances). The report says which variant was kept, or that none helped.
+// points left out plus less unsupported surface at the point density) and fits better both ways
+// (Explained::squares_both_ways: a smaller sum of squared distances, with a square metre of unsupported
+// surface counted as the points of a square metre 1 m off; without unsupported surface, the sum of the
+// points' squared distances). The report says which variant was kept, or that none helped.
 // `before_hypothesis` and `before_selection` are the report as it was before the rung's hypothesis
 // and before its selection; debug files are written for the rung's own hypothesis only. Returns how
 // well the model it leaves explains the points (measured once: the report's figures reuse it).
@@ -867,6 +877,10 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
     for (const SelectionVariant& v : selections) {
       if ((stopped = out_of_time())) break;
       if (own && !v.without_prior && !v.half_complexity) continue;  // the rung's own model
+      // Surface no point supports, with the points explained, is a matter of the hypothesis (a part
+      // too small for a plane, a roof level missing): the selections that explain more points (without
+      // the face prior, half the complexity weight) are not tried for it.
+      if (!too_many_left_out && (v.without_prior || v.half_complexity)) continue;
       if (v.without_prior && prior_dropped) continue;
       ReconstructionParams p = hp;
       if (v.without_prior) p.selection.use_face_prior = false;
@@ -879,7 +893,8 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
                                         trial);
         if (!v.without_prior && !v.half_complexity) prior_dropped = dropped;
         Explained e = explained(m, input.points, local_top, support_params);
-        if (e.unfaithful(density) < best.unfaithful(density) && e.squares < best.squares) {
+        if (e.unfaithful(density) < best.unfaithful(density) &&
+            e.squares_both_ways(density) < best.squares_both_ways(density)) {
           best = std::move(e);
           model = std::move(m);
           kept = name(h, v);
