@@ -46,10 +46,12 @@ cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j "$jobs"
 
 if [ "$mode" = run ]; then
-  # The main job: every footprint of the sample block (two tiles) reconstructed into city3d_out/.
+  # The main job: every footprint of the sample block (two AHN3 tiles, NAP heights) reconstructed into
+  # city3d_out/, with the GeoPackage and 3D Tiles a 3DBAG user loads.
   set -x
   ./build/city3d reconstruct data/delft_sample_1.las data/delft_sample_2.las \
-    --footprints data/delft_sample_footprints.gpkg --id-field gml_id -j "$jobs" --output city3d_out
+    --footprints data/delft_sample_footprints.gpkg --id-field gml_id --crs EPSG:7415 --gpkg --3dtiles \
+    -j "$jobs" --output city3d_out
   head -n 5 city3d_out/report.csv
 else
   if [ ! -x build/tools/node_modules/.bin/ajv ] || [ ! -f build/tools/node_modules/gltf-validator/package.json ]; then
