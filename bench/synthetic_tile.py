@@ -6,6 +6,10 @@ itself, under GNU time. Prints what the issue asks: points, footprints, wall and
 memory, seconds per million points of both, and their ratio.
 
     python3 bench/synthetic_tile.py --city3d build/city3d [--grid 6x5] [--jobs 2] [--runs 1] [--work build/synthetic_tile]
+    python3 bench/synthetic_tile.py --outputs "--gpkg --3dtiles"   # issue 25: what these outputs add
+
+With --outputs, each run also reconstructs the tile with those options (side by side, in alternation with
+the run without them) and the summary gives the peak memory and time they add.
 
 The generated tile (about 0.7 GB of LAS) goes to --work (build/ by default), never into git. Needs
 python3 and ogr2ogr (gdal-bin) only.
@@ -123,6 +127,8 @@ def main():
     p.add_argument("--runs", type=int, default=1, help="runs of each, medians reported")
     p.add_argument("--work", default=os.path.join(HERE, "..", "build", "synthetic_tile"))
     p.add_argument("--keep", action="store_true", help="keep the generated tile and outputs")
+    p.add_argument("--outputs", default="", help="options of more outputs (\"--gpkg --3dtiles\"): the tile is also "
+                   "reconstructed with them, and what they add to peak memory and time is printed")
     a = p.parse_args()
     nx, ny = (int(v) for v in a.grid.lower().split("x"))
     os.makedirs(a.work, exist_ok=True)
@@ -131,9 +137,12 @@ def main():
           f"{os.path.getsize(las) / 2**20:.0f} MB LAS")
     delft_points = sum(read_las(t)["count"] for t in TILES)
     jobs = ["--id-field", "gml_id", "-j", str(a.jobs), "--no-progress", "-q", "--no-resume"]
-    results = {"tile": [], "delft": []}
+    results = {"tile": [], "delft": [], "tile+": []}
+    runs = [("delft", TILES + ["-f", FOOTPRINTS]), ("tile", [las, "-f", gpkg])]
+    if a.outputs:
+        runs.append(("tile+", [las, "-f", gpkg] + a.outputs.split()))
     for run in range(a.runs):
-        for name, cmd in (("delft", TILES + ["-f", FOOTPRINTS]), ("tile", [las, "-f", gpkg])):
+        for name, cmd in runs:
             out = os.path.join(a.work, "out_" + name)
             shutil.rmtree(out, ignore_errors=True)
             r = timed([a.city3d, "reconstruct"] + cmd + jobs + ["-o", out])
@@ -150,6 +159,13 @@ def main():
               f"{cpu / fp * 1000:.0f} ms CPU per footprint")
     ratio = (median([r[0] for r in results["tile"]]) / points) / (median([r[0] for r in results["delft"]]) / delft_points)
     print(f"tile / Delft block, wall time per M points: {ratio:.2f}")
+    if a.outputs:
+        plain, more = results["tile"], results["tile+"]
+        print(f"tile with {a.outputs}: wall {median([r[0] for r in more]):.1f} s, CPU {median([r[1] for r in more]):.1f} s, "
+              f"peak RSS {median([r[2] for r in more]):.0f} MB; they add "
+              f"{median([m[0] - t[0] for t, m in zip(plain, more)]):+.1f} s wall, "
+              f"{median([m[1] - t[1] for t, m in zip(plain, more)]):+.1f} s CPU, peak RSS x"
+              f"{median([m[2] / t[2] for t, m in zip(plain, more)]):.3f} (medians of the runs' differences)")
     if not a.keep:
         shutil.rmtree(a.work, ignore_errors=True)
 

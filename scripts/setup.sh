@@ -16,7 +16,7 @@ packages=(
   libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libboost-dev
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   libglpk-dev coinor-libcbc-dev
-  libtomlplusplus-dev nlohmann-json3-dev
+  libtomlplusplus-dev nlohmann-json3-dev libproj-dev
   libgtest-dev
 )
 
@@ -46,15 +46,28 @@ cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j "$jobs"
 
 if [ "$mode" = run ]; then
-  # The main job: every footprint of the sample block (two tiles) reconstructed into city3d_out/.
+  # The main job: every footprint of the sample block (two AHN3 tiles, NAP heights) reconstructed into
+  # city3d_out/, with the GeoPackage and 3D Tiles a 3DBAG user loads.
   set -x
   ./build/city3d reconstruct data/delft_sample_1.las data/delft_sample_2.las \
-    --footprints data/delft_sample_footprints.gpkg --id-field gml_id -j "$jobs" --output city3d_out
+    --footprints data/delft_sample_footprints.gpkg --id-field gml_id --crs EPSG:7415 --gpkg --3dtiles \
+    -j "$jobs" --output city3d_out
   head -n 5 city3d_out/report.csv
 else
-  if [ ! -x build/tools/node_modules/.bin/ajv ]; then
-    echo "setup: installing ajv-cli (CityJSON schema validation in the tests) into build/tools"
-    npm install --prefix build/tools --no-audit --no-fund --silent ajv-cli@5.0.0 ajv-formats@2.1.1
+  if [ ! -x build/tools/node_modules/.bin/ajv ] || [ ! -f build/tools/node_modules/gltf-validator/package.json ]; then
+    echo "setup: installing ajv-cli (CityJSON schemas) and gltf-validator (the 3D Tiles' glTF) into build/tools"
+    npm install --prefix build/tools --no-audit --no-fund --silent ajv-cli@5.0.0 ajv-formats@2.1.1 \
+      gltf-validator@2.0.0-dev.3.10
+  fi
+  # CesiumJS draws the tileset in the tests: only its prebuilt Build/Cesium, from the package's
+  # tarball (npm pack: no dependencies, no install scripts), unpacked into build/tools/cesium.
+  if [ ! -f build/tools/cesium/Cesium.js ]; then
+    echo "setup: unpacking CesiumJS (npm cesium 1.145.0, 23 MB) into build/tools/cesium"
+    tmp="$(mktemp -d)"
+    (cd "$tmp" && npm pack --silent cesium@1.145.0 > /dev/null)
+    mkdir -p build/tools/cesium
+    tar -xzf "$tmp"/cesium-1.145.0.tgz -C build/tools/cesium --strip-components=3 package/Build/Cesium
+    rm -rf "$tmp"
   fi
   ctest --test-dir build --output-on-failure -j "$jobs"
   # A short run of every fuzz harness (fuzz/README.md; bench/fuzz.sh runs them for an hour).

@@ -1,6 +1,8 @@
 // End-to-end tests of the `city3d` executable: options, help, exit codes and the info command on
 // real data. Also pins the defaults of the option table so that a change is deliberate.
 #include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -81,6 +83,32 @@ TEST(CommandLine, defaults_are_pinned) {
   EXPECT_FALSE(o.strict);
   EXPECT_DOUBLE_EQ(o.batch.min_coverage, 0.95);  // issue 24: partial below 95% of a footprint's area in the tiles
   EXPECT_EQ(o.verbosity, 1);
+  EXPECT_TRUE(o.batch.crs.empty());  // issue 25: the point clouds' CRS, else the footprints' (with a warning)
+  EXPECT_FALSE(o.batch.gpkg);
+  EXPECT_FALSE(o.batch.tiles3d);
+}
+
+// Issue 25: the parameters the outputs' metadata records are typed as --print-config types them, and
+// leave out what does not change the outputs and the inputs (recorded apart).
+TEST(CommandLine, run_parameters_are_typed_and_leave_out_what_does_not_change_the_outputs) {
+  const char* argv[] = {"city3d", "reconstruct", "x.las", "-j", "4", "-o", "elsewhere", "--lambda-data", "0.5",
+                        "--gpkg", "--crs", "EPSG:28992+5709", "--id-field", "gml_id", "--block-size", "100"};
+  const city3d::RunOptions o = city3d::parse_command_line(16, argv);
+  const nlohmann::json p = nlohmann::json::parse(city3d::run_parameters_json(o));
+  EXPECT_EQ(p["lambda-data"], 0.5);
+  EXPECT_EQ(p["min-points"], 20);
+  EXPECT_EQ(p["gpkg"], true);
+  EXPECT_EQ(p["3dtiles"], false);
+  EXPECT_EQ(p["crs"], "EPSG:28992+5709");
+  EXPECT_EQ(p["lod"], nlohmann::json({"1.2", "1.3", "2.2"}));
+  EXPECT_EQ(p["building-classes"], nlohmann::json({6}));
+  EXPECT_TRUE(p["where"].is_null());
+  for (const char* left_out : {"jobs", "output", "block-size", "group-area", "shard", "id-field", "footprints", "layer",
+                               "debug", "verbose", "quiet", "progress", "no-progress", "strict", "residuals", "config"})
+    EXPECT_FALSE(p.contains(left_out)) << left_out;
+  // The same parameters whatever -j, -o and the block size.
+  const char* other[] = {"city3d", "reconstruct", "x.las", "--lambda-data", "0.5", "--gpkg", "--crs", "EPSG:28992+5709"};
+  EXPECT_EQ(city3d::run_parameters_json(city3d::parse_command_line(8, other)), city3d::run_parameters_json(o));
 }
 
 TEST(CommandLine, collects_every_problem_in_one_error) {
@@ -115,7 +143,7 @@ TEST(Executable, help_lists_every_option_with_its_default_and_the_exit_codes) {
         "--ground-class", "--ignore-classes", "--ground-buffer", "--ground-percentile", "--ground-z",
         "--roof-percentile", "--output", "--format", "--no-model-files", "--merged", "--no-cityjson", "--cityjsonseq",
         "--timings", "--local-coordinates", "--jobs", "--strict", "--progress", "--no-progress", "--verbose",
-        "--quiet", "--help", "--version", "--config", "--print-config"})
+        "--quiet", "--help", "--version", "--config", "--print-config", "--crs", "--gpkg", "--3dtiles"})
     EXPECT_TRUE(contains(r.output, flag)) << flag;
   EXPECT_TRUE(contains(r.output, "[default: city3d_out]"));
   EXPECT_TRUE(contains(r.output, "[default: obj]"));

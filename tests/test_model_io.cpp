@@ -304,8 +304,8 @@ TEST_F(ModelWriter, cityjsonseq_writes_header_then_one_feature_per_line) {
   ASSERT_EQ(lines.size(), 3u);
   EXPECT_EQ(lines[0],
             "{\"type\":\"CityJSON\",\"version\":\"2.0\",\"transform\":{\"scale\":[0.001,0.001,0.001],\"translate\":["
-            "84000,447000,0]},\"metadata\":{\"referenceSystem\":\"https://www.opengis.net/def/crs/EPSG/0/28992\"},"
-            "\"CityObjects\":{},\"vertices\":[]}");
+            "84000,447000,0]},\"metadata\":{\"referenceSystem\":\"https://www.opengis.net/def/crs/EPSG/0/28992\","
+            "\"geographicalExtent\":[84001,447002,1,84012,447003,4]},\"CityObjects\":{},\"vertices\":[]}");
   EXPECT_EQ(lines[1].rfind("{\"type\":\"CityJSONFeature\",\"id\":\"a\",\"CityObjects\":{\"a\":{", 0), 0u);
   // Building a's first vertex: (84001 - 84000, 447002 - 447000, 1 - 0) m in millimetres.
   EXPECT_NE(lines[1].find("\"vertices\":[[1000,2000,1000],"), std::string::npos) << lines[1];

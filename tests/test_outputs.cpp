@@ -1,10 +1,15 @@
 // End-to-end tests of the run-level outputs on the sample block: CityJSON with three levels of
-// detail per building (ids, one transform in both files, attribute types and precision), the
-// GeoPackage (opened with ogrinfo, one feature per input footprint), and report.html (rendered by
-// headless Chromium: a screenshot, no console errors).
+// detail per building (ids, one transform in both files, attribute types and precision, metadata:
+// CRS, extent, version, parameters), the GeoPackage (opened with ogrinfo: one feature per input
+// footprint, each level's roof parts and MultiPolygonZ models), OBJ groups per semantic surface,
+// run.json, and report.html (rendered by headless Chromium: a screenshot, no console errors, the
+// map's hover and scale bar, inputs and parameters, the outlines inferred for single-building clouds).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
+#include <map>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -16,6 +21,8 @@
 #include <vector>
 
 #include <unistd.h>
+
+#include <nlohmann/json.hpp>
 
 namespace {
 
@@ -243,3 +250,468 @@ TEST(OutputsDelft, millimetre_rounding_204_is_found_on_the_rounded_coordinates_a
 }
 
 }  // namespace
+
+// --- issue 25: delivered as 3DBAG delivers ------------------------------------------------------
+
+namespace {
+
+using json = nlohmann::json;
+
+json read_json(const fs::path& p) { return json::parse(read_file(p)); }
+
+// A layer of a GeoPackage as GeoJSON (ogr2ogr), coordinates as stored.
+json layer_geojson(const fs::path& gpkg, const std::string& layer, const fs::path& scratch) {
+  const fs::path out = scratch / (layer + ".geojson");
+  fs::remove(out);
+  const Result r = run_shell("ogr2ogr -f GeoJSON " + out.string() + " " + gpkg.string() + " " + layer);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return fs::exists(out) ? read_json(out) : json::object();
+}
+
+// The faces (boundary rings) and semantic types of one building's Solid of a level in a CityJSON
+// file, BuildingParts included, with the file's vertices in metres.
+struct CityJsonLevel {
+  std::vector<std::vector<std::array<double, 3>>> faces;
+  std::vector<std::string> types;
+};
+
+CityJsonLevel cityjson_level(const json& city, const std::string& id, const std::string& lod) {
+  CityJsonLevel level;
+  const json& t = city["transform"];
+  const auto add = [&](const json& object) {
+    for (const json& g : object.value("geometry", json::array())) {
+      if (g["lod"] != lod) continue;
+      const json& surfaces = g["semantics"]["surfaces"];
+      const json& values = g["semantics"]["values"][0];
+      for (std::size_t f = 0; f < g["boundaries"][0].size(); ++f) {
+        std::vector<std::array<double, 3>> ring;
+        for (const json& v : g["boundaries"][0][f][0]) {
+          const json& q = city["vertices"][v.get<std::size_t>()];
+          ring.push_back({q[0].get<double>() * t["scale"][0].get<double>() + t["translate"][0].get<double>(),
+                          q[1].get<double>() * t["scale"][1].get<double>() + t["translate"][1].get<double>(),
+                          q[2].get<double>() * t["scale"][2].get<double>() + t["translate"][2].get<double>()});
+        }
+        level.faces.push_back(ring);
+        level.types.push_back(surfaces[values[f].get<std::size_t>()]["type"]);
+      }
+    }
+  };
+  const json& building = city["CityObjects"][id];
+  add(building);
+  for (const json& child : building.value("children", json::array())) add(city["CityObjects"][child.get<std::string>()]);
+  return level;
+}
+
+std::vector<std::string> building_ids(const json& city) {
+  std::vector<std::string> ids;
+  for (const auto& [id, object] : city["CityObjects"].items())
+    if (object["type"] == "Building") ids.push_back(id);
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
+}  // namespace
+
+TEST_F(Outputs, geopackage_has_a_2d_and_a_3d_layer_per_level_as_3dbag_with_the_cityjson_faces_and_types) {
+  ASSERT_EQ(run_.exit_code, 0) << run_.output;
+  if (!have("ogrinfo") || !have("ogr2ogr")) GTEST_SKIP() << "ogrinfo / ogr2ogr (gdal-bin) not installed";
+  const fs::path gpkg = dir_ / "out" / "buildings.gpkg";
+  const Result layers = run_shell("ogrinfo -ro -q " + gpkg.string());
+  for (const char* layer : {"buildings (Multi Polygon)", "lod12_2d (Polygon)", "lod12_3d (3D Multi Polygon)",
+                            "lod13_2d (Polygon)", "lod13_3d (3D Multi Polygon)", "lod22_2d (Polygon)",
+                            "lod22_3d (3D Multi Polygon)", "roof_parts (Polygon)"})
+    EXPECT_NE(layers.output.find(layer), std::string::npos) << layer << "\n" << layers.output;
+  const json city = read_json(dir_ / "out" / "buildings.city.json");
+  const std::vector<std::string> ids = building_ids(city);
+  ASSERT_EQ(ids.size(), 15u);
+  for (const std::string lod : {"1.2", "1.3", "2.2"}) {
+    SCOPED_TRACE("LoD" + lod);
+    const std::string name = std::string("lod") + lod[0] + lod[2];
+    // _3d: one MultiPolygonZ per building, its polygons the CityJSON Solid's faces, in the order
+    // ground, walls, roofs, each named in `surfaces`.
+    const json solids = layer_geojson(gpkg, name + "_3d", dir_);
+    ASSERT_EQ(solids["features"].size(), 15u);
+    std::vector<std::string> seen;
+    std::size_t roof_faces = 0;
+    for (const json& f : solids["features"]) {
+      const std::string id = f["properties"]["id"];
+      seen.push_back(id);
+      const CityJsonLevel level = cityjson_level(city, id, lod);
+      ASSERT_EQ(f["geometry"]["type"], "MultiPolygon") << id;
+      const json& polygons = f["geometry"]["coordinates"];
+      // A JSON field: ogr2ogr writes its value into GeoJSON as the JSON it holds.
+      const json surfaces = f["properties"]["surfaces"];
+      ASSERT_EQ(polygons.size(), level.faces.size()) << id;
+      ASSERT_EQ(surfaces.size(), polygons.size()) << id;
+      std::vector<std::string> sorted = level.types;
+      const auto rank = [](const std::string& t) { return t == "GroundSurface" ? 0 : t == "WallSurface" ? 1 : 2; };
+      std::stable_sort(sorted.begin(), sorted.end(), [&](const auto& a, const auto& b) { return rank(a) < rank(b); });
+      EXPECT_EQ(surfaces.get<std::vector<std::string>>(), sorted) << id;
+      const double ground = f["properties"]["b3_h_maaiveld"];
+      double top = -1e9;
+      for (std::size_t k = 0; k < polygons.size(); ++k) {
+        for (const json& p : polygons[k][0]) {
+          ASSERT_EQ(p.size(), 3u) << id;  // x, y, z
+          top = std::max(top, p[2].get<double>());
+          if (surfaces[k] == "GroundSurface") EXPECT_NEAR(p[2].get<double>(), ground, 0.0011) << id;
+        }
+        roof_faces += surfaces[k] == "RoofSurface";
+      }
+      EXPECT_NEAR(f["properties"]["h_max"].get<double>(), top, 0.0006) << id;
+      EXPECT_EQ(f["properties"]["val3dity"], json::array()) << id;
+      EXPECT_GT(f["properties"]["volume"].get<double>(), 0.0) << id;
+    }
+    std::sort(seen.begin(), seen.end());
+    EXPECT_EQ(seen, ids);  // the CityJSON ids, each once
+    // _2d: one feature per roof face, in plan, with its heights.
+    const json parts = layer_geojson(gpkg, name + "_2d", dir_);
+    EXPECT_EQ(parts["features"].size(), roof_faces);
+    for (const json& f : parts["features"]) {
+      const json& p = f["properties"];
+      EXPECT_EQ(f["geometry"]["type"], "Polygon");
+      EXPECT_EQ(f["geometry"]["coordinates"][0][0].size(), 2u);
+      EXPECT_LE(p["h_min"].get<double>(), p["h_mean"].get<double>() + 1e-9);
+      EXPECT_LE(p["h_mean"].get<double>(), p["h_max"].get<double>() + 1e-9);
+      EXPECT_GT(p["h_min"].get<double>(), p["b3_h_maaiveld"].get<double>());
+      if (lod != "2.2") {
+        EXPECT_EQ(p["slope"].get<double>(), 0.0);  // a block's top is flat
+        EXPECT_EQ(p["h_min"], p["h_max"]);
+      }
+    }
+  }
+}
+
+TEST_F(Outputs, roof_parts_is_lod22_2d_under_its_earlier_name_with_its_earlier_columns) {
+  ASSERT_EQ(run_.exit_code, 0) << run_.output;
+  if (!have("ogrinfo") || !have("ogr2ogr")) GTEST_SKIP() << "ogrinfo / ogr2ogr (gdal-bin) not installed";
+  const fs::path gpkg = dir_ / "out" / "buildings.gpkg";
+  const json view = layer_geojson(gpkg, "roof_parts", dir_);
+  const json table = layer_geojson(gpkg, "lod22_2d", dir_);
+  ASSERT_EQ(view["features"].size(), table["features"].size());
+  ASSERT_GE(view["features"].size(), 15u);
+  for (std::size_t k = 0; k < view["features"].size(); ++k) {
+    json expected = table["features"][k]["properties"];
+    expected.erase("b3_h_maaiveld");
+    EXPECT_EQ(view["features"][k]["properties"], expected);
+    EXPECT_EQ(view["features"][k]["geometry"], table["features"][k]["geometry"]);
+  }
+}
+
+TEST_F(Outputs, a_crs_taken_from_the_footprints_is_named_in_a_warning_and_stated_as_recorded) {
+  ASSERT_EQ(run_.exit_code, 0) << run_.output;
+  // The sample's LAS tiles record no CRS; its footprints are in RD New (2D).
+  EXPECT_NE(run_.output.find("warning: input: the point clouds record no CRS: the run takes EPSG:28992 (Amersfoort / "
+                             "RD New) from the footprints"),
+            std::string::npos)
+      << run_.output;
+  EXPECT_NE(run_.output.find("give --crs EPSG:7415"), std::string::npos) << run_.output;
+  const json city = read_json(dir_ / "out" / "buildings.city.json");
+  EXPECT_EQ(city["metadata"]["referenceSystem"], "https://www.opengis.net/def/crs/EPSG/0/28992");
+  EXPECT_EQ(city["metadata"]["city3d"]["crs_source"], "footprints");
+  EXPECT_EQ(read_json(dir_ / "out" / "run.json")["crs_source"], "footprints");
+}
+
+TEST_F(Outputs, crs_option_states_the_heights_datum_in_every_output_without_a_warning) {
+  const std::string d = CITY3D_SAMPLE_DATA;
+  const fs::path out = dir_ / "crs";
+  const Result r = run_shell(std::string(CITY3D_EXE) + " reconstruct " + d + "/delft_sample_1.las " + d +
+                             "/delft_sample_2.las -f " + d + "/delft_sample_footprints.gpkg --id-field gml_id --gpkg "
+                             "--cityjsonseq --no-html --no-progress --crs EPSG:28992+5709 -o " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("warning"), std::string::npos) << r.output;
+  // EPSG:28992+5709 is known by a code of its own: EPSG:7415, RD New + NAP height (3DBAG's).
+  const json city = read_json(out / "buildings.city.json");
+  EXPECT_EQ(city["metadata"]["referenceSystem"], "https://www.opengis.net/def/crs/EPSG/0/7415");
+  EXPECT_EQ(city["metadata"]["city3d"]["crs_source"], "--crs");
+  EXPECT_EQ(json::parse(lines_of(read_file(out / "buildings.city.jsonl")).front())["metadata"]["referenceSystem"],
+            "https://www.opengis.net/def/crs/EPSG/0/7415");
+  EXPECT_EQ(read_json(out / "run.json")["crs"], "EPSG:7415");
+  if (!have("ogrinfo")) return;
+  for (const char* layer : {"buildings", "lod22_3d", "lod12_2d"}) {
+    const Result info = run_shell("ogrinfo -ro -so " + (out / "buildings.gpkg").string() + " " + layer);
+    EXPECT_NE(info.output.find("COMPOUNDCRS[\"Amersfoort / RD New + NAP height\""), std::string::npos)
+        << layer << "\n" << info.output.substr(0, 600);
+  }
+}
+
+TEST(OutputsCrs, crs_option_that_disagrees_with_the_tiles_record_is_an_error_naming_both) {
+  const fs::path dir = fs::temp_directory_path() / ("city3d_crs_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const std::string las = std::string(CITY3D_TEST_DATA) + "/las/las14_pf7_extrabytes_geokeys.las";  // EPSG:28992
+  const Result r = run_shell(std::string(CITY3D_EXE) + " reconstruct " + las + " --crs EPSG:32631 --no-progress -o " +
+                             (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("--crs EPSG:32631 is EPSG:32631 (WGS 84 / UTM zone 31N) but the point clouds record EPSG:28992"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  const Result degrees = run_shell(std::string(CITY3D_EXE) + " reconstruct " + las + " --crs EPSG:4326 -o " + (dir / "out").string());
+  EXPECT_EQ(degrees.exit_code, 2) << degrees.output;
+  EXPECT_NE(degrees.output.find("option --crs: 'EPSG:4326' is geographic (degrees)"), std::string::npos) << degrees.output;
+  const Result nonsense = run_shell(std::string(CITY3D_EXE) + " reconstruct " + las + " --crs EPSG:123456789 -o " + (dir / "out").string());
+  EXPECT_EQ(nonsense.exit_code, 2) << nonsense.output;
+  EXPECT_NE(nonsense.output.find("option --crs: 'EPSG:123456789' is no CRS"), std::string::npos) << nonsense.output;
+  // A tileset needs a place on the globe: single-building clouds in a frame of their own have none.
+  const Result tiles = run_shell(std::string(CITY3D_EXE) + " reconstruct " + std::string(CITY3D_TEST_DATA) +
+                                 "/ply/little_endian_scalar_fields.ply --3dtiles -o " + (dir / "out").string());
+  EXPECT_EQ(tiles.exit_code, 1) << tiles.output;
+  EXPECT_NE(tiles.output.find("3dtiles: the run has no CRS (the point clouds record none)"), std::string::npos) << tiles.output;
+  fs::remove_all(dir);
+}
+
+TEST_F(Outputs, cityjson_metadata_has_the_extent_of_its_vertices_the_version_and_the_run_parameters) {
+  ASSERT_EQ(run_.exit_code, 0) << run_.output;
+  const json city = read_json(dir_ / "out" / "buildings.city.json");
+  const json& t = city["transform"];
+  double lo[3] = {1e18, 1e18, 1e18}, hi[3] = {-1e18, -1e18, -1e18};
+  for (const json& v : city["vertices"])
+    for (int k = 0; k < 3; ++k) {
+      const double w = v[k].get<double>() * t["scale"][k].get<double>() + t["translate"][k].get<double>();
+      lo[k] = std::min(lo[k], w), hi[k] = std::max(hi[k], w);
+    }
+  const json& extent = city["metadata"]["geographicalExtent"];
+  ASSERT_EQ(extent.size(), 6u);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(extent[k].get<double>(), lo[k], 1e-9);
+    EXPECT_NEAR(extent[k + 3].get<double>(), hi[k], 1e-9);
+  }
+  // CityJSONSeq's header has the same metadata, the extent of its features' vertices.
+  const json seq = json::parse(lines_of(read_file(dir_ / "out" / "buildings.city.jsonl")).front());
+  EXPECT_EQ(seq["metadata"], city["metadata"]);
+  const json& meta = city["metadata"]["city3d"];
+  EXPECT_EQ(meta["version"], CITY3D_VERSION);
+  const json& p = meta["parameters"];
+  EXPECT_EQ(p["lambda-data"], 0.34);
+  EXPECT_EQ(p["min-points"], 20);
+  EXPECT_EQ(p["lod"], json({"1.2", "1.3", "2.2"}));
+  EXPECT_EQ(p["building-classes"], json({6}));
+  EXPECT_EQ(p["gpkg"], true);
+  EXPECT_TRUE(p["where"].is_null());
+  // What does not change the outputs is not a parameter of them.
+  for (const char* left_out : {"jobs", "output", "shard", "block-size", "group-area", "footprints", "id-field", "progress"})
+    EXPECT_FALSE(p.contains(left_out)) << left_out;
+}
+
+TEST_F(Outputs, val3dity_codes_are_lists_in_cityjson_and_json_text_in_the_geopackage) {
+  ASSERT_EQ(run_.exit_code, 0) << run_.output;
+  const json city = read_json(dir_ / "out" / "buildings.city.json");
+  std::size_t buildings = 0;
+  for (const auto& [id, object] : city["CityObjects"].items()) {
+    if (object["type"] != "Building") continue;
+    ++buildings;
+    for (const char* lod : {"b3_val3dity_lod12", "b3_val3dity_lod13", "b3_val3dity_lod22"}) {
+      EXPECT_TRUE(object["attributes"][lod].is_array()) << id << " " << lod;  // not the string "[]"
+      EXPECT_TRUE(object["attributes"][lod].empty()) << id << " " << lod;
+    }
+  }
+  EXPECT_EQ(buildings, 15u);
+  if (!have("ogrinfo")) return;
+  const Result info = run_shell("ogrinfo -ro -so " + (dir_ / "out" / "buildings.gpkg").string() + " buildings");
+  EXPECT_NE(info.output.find("b3_val3dity_lod22: String(JSON)"), std::string::npos) << info.output;
+}
+
+TEST_F(Outputs, obj_models_group_their_faces_by_semantic_surface_with_a_material_library) {
+  ASSERT_EQ(run_.exit_code, 0) << run_.output;
+  const json city = read_json(dir_ / "out" / "buildings.city.json");
+  const std::string materials = read_file(dir_ / "out" / "models" / "city3d.mtl");
+  for (const char* m : {"newmtl GroundSurface\nKd ", "newmtl WallSurface\nKd ", "newmtl RoofSurface\nKd "})
+    EXPECT_NE(materials.find(m), std::string::npos) << materials;
+  std::size_t models = 0;
+  for (const std::string& id : building_ids(city)) {
+    const std::vector<std::string> lines = lines_of(read_file(dir_ / "out" / "models" / (id + ".obj")));
+    ASSERT_FALSE(lines.empty()) << id;
+    ++models;
+    EXPECT_NE(std::find(lines.begin(), lines.end(), "mtllib city3d.mtl"), lines.end()) << id;
+    // The faces under each group: the CityJSON LoD2.2 faces of that type, grounds, walls, roofs.
+    std::map<std::string, std::size_t> faces;
+    std::vector<std::string> groups;
+    std::string group;
+    for (const std::string& line : lines) {
+      if (line.rfind("g ", 0) == 0) groups.push_back(group = line.substr(2));
+      if (line.rfind("usemtl ", 0) == 0) EXPECT_EQ(line.substr(7), group) << id;
+      if (line.rfind("f ", 0) == 0) ++faces[group];
+    }
+    EXPECT_EQ(groups, std::vector<std::string>({"GroundSurface", "WallSurface", "RoofSurface"})) << id;
+    std::map<std::string, std::size_t> expected;
+    for (const std::string& type : cityjson_level(city, id, "2.2").types) ++expected[type];
+    EXPECT_EQ(faces, expected) << id;
+  }
+  EXPECT_EQ(models, 15u);
+}
+
+TEST_F(Outputs, run_json_records_the_version_crs_inputs_and_parameters) {
+  ASSERT_EQ(run_.exit_code, 0) << run_.output;
+  const json run = read_json(dir_ / "out" / "run.json");
+  EXPECT_EQ(run["city3d"], CITY3D_VERSION);
+  EXPECT_EQ(run["crs"], "EPSG:28992");
+  ASSERT_EQ(run["inputs"]["point_clouds"].size(), 2u);
+  EXPECT_EQ(fs::path(run["inputs"]["point_clouds"][0].get<std::string>()).filename(), "delft_sample_1.las");
+  EXPECT_TRUE(fs::path(run["inputs"]["point_clouds"][0].get<std::string>()).is_absolute());
+  EXPECT_EQ(fs::path(run["inputs"]["footprints"].get<std::string>()).filename(), "footprints.geojson");
+  EXPECT_EQ(run["inputs"]["id_field"], "gml_id");
+  EXPECT_EQ(run["parameters"], read_json(dir_ / "out" / "buildings.city.json")["metadata"]["city3d"]["parameters"]);
+}
+
+namespace {
+
+// report.html opened in headless Chromium with "#check" (the page then points at its first outline
+// and logs what the hover shows and its scale bar); the console lines it logged.
+std::vector<std::string> checked_page(const fs::path& html, const fs::path& scratch) {
+  std::string browser;
+  for (const char* b : {"chromium", "chromium-browser"})
+    if (have(b)) browser = b;
+  if (browser.empty()) return {};
+  const Result r = run_shell("timeout 120 " + browser +
+                             " --headless --no-sandbox --disable-gpu --disable-background-networking"
+                             " --disable-component-update --disable-sync --no-first-run --user-data-dir=" +
+                             (scratch / "chromium-check").string() + " --enable-logging=stderr --v=0 --window-size=1400,1600"
+                             " --virtual-time-budget=5000 --screenshot=" + (scratch / "check.png").string() + " 'file://" +
+                             html.string() + "#check'");
+  std::vector<std::string> console;
+  for (const std::string& line : lines_of(r.output)) {
+    const auto at = line.find("\"city3d report");
+    if (line.find(":CONSOLE") != std::string::npos && at != std::string::npos)
+      console.push_back(line.substr(at + 1, line.find('"', at + 1) - at - 1));
+    else if (line.find(":CONSOLE") != std::string::npos || line.find("Uncaught") != std::string::npos)
+      console.push_back("unexpected: " + line);
+  }
+  return console;
+}
+
+// The logged map line: outlines, scale bar metres and pixels, map pixels and viewBox metres.
+struct MapCheck {
+  int outlines = 0;
+  double metres = 0, pixels = 0, width = 0, height = 0, box_width = 0, box_height = 0;
+};
+
+MapCheck map_check(const std::vector<std::string>& console) {
+  MapCheck m;
+  for (const std::string& line : console) {
+    std::smatch s;
+    if (std::regex_search(line, s, std::regex("city3d report map: ([0-9]+) outlines; scale bar ([0-9.]+) m = ([0-9]+) px; "
+                                              "map ([0-9.]+) x ([0-9.]+) px, ([0-9.]+) x ([0-9.]+) m")))
+      m = {std::stoi(s[1]), std::stod(s[2]), std::stod(s[3]), std::stod(s[4]), std::stod(s[5]), std::stod(s[6]), std::stod(s[7])};
+  }
+  return m;
+}
+
+void expect_true_scale_bar(const MapCheck& m) {
+  // A round length: 1, 2 or 5 times a power of ten metres ...
+  const double power = std::pow(10.0, std::floor(std::log10(m.metres)));
+  const double f = m.metres / power;
+  EXPECT_TRUE(std::fabs(f - 1) < 1e-9 || std::fabs(f - 2) < 1e-9 || std::fabs(f - 5) < 1e-9) << m.metres;
+  // ... drawn at the map's scale (the viewBox fitted into the map, aspect kept) ...
+  const double per_metre = std::min(m.width / m.box_width, m.height / m.box_height);
+  EXPECT_NEAR(m.pixels, m.metres * per_metre, 1.0);
+  // ... of about a fifth of its width.
+  EXPECT_GT(m.pixels, m.width / 12);
+  EXPECT_LE(m.pixels, m.width / 5 + 1);
+}
+
+}  // namespace
+
+TEST_F(Outputs, report_html_map_has_hover_a_true_scale_bar_and_the_inputs_and_parameters) {
+  ASSERT_EQ(run_.exit_code, 0) << run_.output;
+  const std::string page = read_file(dir_ / "out" / "report.html");
+  EXPECT_NE(page.find("Inputs and parameters"), std::string::npos);
+  // The page's data: the inputs and the parameters of the run, as run.json has them.
+  const auto at = page.find("\"inputs\":");
+  ASSERT_NE(at, std::string::npos);
+  const json run = read_json(dir_ / "out" / "run.json");
+  EXPECT_NE(page.find("\"inputs\":" + run["inputs"].dump()), std::string::npos);
+  EXPECT_NE(page.find("\"parameters\":" + run["parameters"].dump()), std::string::npos);
+  EXPECT_NE(page.find("\"crs_source\":\"footprints\""), std::string::npos);
+  const std::vector<std::string> console = checked_page(dir_ / "out" / "report.html", dir_);
+  if (console.empty()) GTEST_SKIP() << "chromium not installed (scripts/setup.sh test installs it)";
+  for (const std::string& line : console) EXPECT_EQ(line.rfind("unexpected", 0), std::string::npos) << line;
+  // Pointing at the first footprint shows its building's id, status, level and figures.
+  const auto hover = std::find_if(console.begin(), console.end(), [](const std::string& l) { return l.rfind("city3d report hover: ", 0) == 0; });
+  ASSERT_NE(hover, console.end());
+  EXPECT_TRUE(std::regex_search(*hover, std::regex("hover: b[0-9a-f-]+ · ok · LoD2\\.2 · roof [0-9.]+ m · RMSE 0\\.[0-9]{3} m · [0-9]+ faces"))) << *hover;
+  const MapCheck m = map_check(console);
+  EXPECT_EQ(m.outlines, 15);  // the empty footprint has no outline
+  expect_true_scale_bar(m);
+  // The viewBox is the footprints' extent with 3% of its larger side around it (ogrinfo's extent).
+  if (!have("ogrinfo")) return;
+  const Result info = run_shell("ogrinfo -ro -so " + (dir_ / "out" / "buildings.gpkg").string() + " buildings");
+  std::smatch e;
+  ASSERT_TRUE(std::regex_search(info.output, e, std::regex("Extent: \\(([0-9.]+), ([0-9.]+)\\) - \\(([0-9.]+), ([0-9.]+)\\)"))) << info.output;
+  const double w = std::stod(e[3]) - std::stod(e[1]), h = std::stod(e[4]) - std::stod(e[2]);
+  EXPECT_NEAR(m.box_width, w + 0.06 * std::max(w, h), 0.02);
+  EXPECT_NEAR(m.box_height, h + 0.06 * std::max(w, h), 0.02);
+}
+
+namespace {
+
+// A single-building cloud as ASCII PLY: a flat roof of w x d metres at height h on a 0.3 m grid, and
+// its walls down to z = 0 on a 0.5 m grid (so that its floor is at 0), turned by `angle` degrees, at
+// (x0, y0) in a frame of its own.
+void write_box_cloud(const fs::path& path, double w, double d, double h, double angle, double x0, double y0) {
+  std::vector<std::array<double, 3>> points;
+  for (double x = 0; x <= w + 1e-9; x += 0.3)
+    for (double y = 0; y <= d + 1e-9; y += 0.3) points.push_back({x, y, h + 0.01 * std::sin(7 * x + 3 * y)});
+  for (double z = 0; z < h; z += 0.5) {
+    for (double x = 0; x <= w + 1e-9; x += 0.5) points.push_back({x, 0, z}), points.push_back({x, d, z});
+    for (double y = 0; y <= d + 1e-9; y += 0.5) points.push_back({0, y, z}), points.push_back({w, y, z});
+  }
+  const double a = angle * 3.14159265358979 / 180, c = std::cos(a), s = std::sin(a);
+  std::ofstream out(path);
+  out << "ply\nformat ascii 1.0\nelement vertex " << points.size() << "\nproperty float x\nproperty float y\n"
+      << "property float z\nend_header\n";
+  for (const auto& p : points) out << x0 + c * p[0] - s * p[1] << " " << y0 + s * p[0] + c * p[1] << " " << p[2] << "\n";
+}
+
+}  // namespace
+
+TEST(OutputsClouds, report_html_of_single_building_clouds_draws_the_outlines_inferred_from_their_points) {
+  const fs::path dir = fs::temp_directory_path() / ("city3d_clouds_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  // Three buildings, each in a frame of its own (all near the origin: drawn where they are, they would
+  // lie on one another): 12 x 8, 6 x 6 turned by 30 degrees, 20 x 5.
+  write_box_cloud(dir / "a.ply", 12, 8, 6, 0, 0, 0);
+  write_box_cloud(dir / "b.ply", 6, 6, 4, 30, 1, 1);
+  write_box_cloud(dir / "c.ply", 20, 5, 9, 0, -2, 0);
+  const Result r = run_shell(std::string(CITY3D_EXE) + " reconstruct " + (dir / "a.ply").string() + " " +
+                             (dir / "b.ply").string() + " " + (dir / "c.ply").string() + " --no-progress -o " +
+                             (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string page = read_file(dir / "out" / "report.html");
+  EXPECT_NE(page.find("\"inferred\":true"), std::string::npos);
+  // Each building's outline, laid out in a cell of its own: no two outlines' boxes meet, and each is
+  // the size of its building's ground (12 x 8, 6 x 6 turned, 20 x 5 m, to within 0.5 m).
+  std::vector<std::array<double, 4>> boxes;
+  const std::regex row("\\{\"id\":\"([abc])\"[^\\n]*\"fp\":\\[(.*)\\]\\}");
+  for (const std::string& line : lines_of(page)) {
+    std::smatch m;
+    if (!std::regex_search(line, m, row)) continue;
+    std::array<double, 4> box{1e9, 1e9, -1e9, -1e9};
+    const std::string rings = m[2];
+    const std::regex point("\\[(-?[0-9.]+),(-?[0-9.]+)\\]");
+    for (auto it = std::sregex_iterator(rings.begin(), rings.end(), point); it != std::sregex_iterator(); ++it) {
+      const double x = std::stod((*it)[1]), y = std::stod((*it)[2]);
+      box = {std::min(box[0], x), std::min(box[1], y), std::max(box[2], x), std::max(box[3], y)};
+    }
+    ASSERT_LT(box[0], box[2]) << "no outline for " << m[1];
+    const double bw = box[2] - box[0], bh = box[3] - box[1];
+    const std::string id = m[1];
+    const double turned = 6 * (std::cos(0.5236) + std::sin(0.5236));
+    const double want_w = id == "a" ? 12 : id == "b" ? turned : 20, want_h = id == "a" ? 8 : id == "b" ? turned : 5;
+    EXPECT_NEAR(bw, want_w, 0.5) << id;
+    EXPECT_NEAR(bh, want_h, 0.5) << id;
+    boxes.push_back(box);
+  }
+  ASSERT_EQ(boxes.size(), 3u);
+  for (std::size_t i = 0; i < boxes.size(); ++i)
+    for (std::size_t j = i + 1; j < boxes.size(); ++j)
+      EXPECT_TRUE(boxes[i][2] < boxes[j][0] || boxes[j][2] < boxes[i][0] || boxes[i][3] < boxes[j][1] || boxes[j][3] < boxes[i][1])
+          << i << " and " << j << " overlap";
+  const std::vector<std::string> console = checked_page(dir / "out" / "report.html", dir);
+  if (console.empty()) GTEST_SKIP() << "chromium not installed (scripts/setup.sh test installs it)";
+  for (const std::string& line : console) EXPECT_EQ(line.rfind("unexpected", 0), std::string::npos) << line;
+  const MapCheck m = map_check(console);
+  EXPECT_EQ(m.outlines, 3);
+  expect_true_scale_bar(m);
+  EXPECT_NE(page.find("Outlines inferred from the points"), std::string::npos);
+  fs::remove_all(dir);
+}

@@ -101,6 +101,8 @@ std::string gpkg_dump(const fs::path& gpkg) {
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(contains(r.output, "Layer name: buildings")) << r.output.substr(0, 400);
   EXPECT_TRUE(contains(r.output, "Layer name: roof_parts")) << r.output.substr(0, 400);
+  EXPECT_TRUE(contains(r.output, "Layer name: lod22_3d")) << r.output.substr(0, 400);
+  EXPECT_TRUE(contains(r.output, "MULTIPOLYGON Z (((")) << r.output.substr(0, 400);
   EXPECT_TRUE(contains(r.output, "POLYGON ((")) << r.output.substr(0, 400);  // MULTIPOLYGON too
   return r.output;
 }
@@ -114,11 +116,13 @@ std::set<std::string> files_in(const fs::path& dir) {
   return names;
 }
 
-// Every output of two folders equal: CityJSON, CityJSONSeq, models.obj and every model byte for
-// byte; the GeoPackage as ogrinfo reads it (and byte for byte: its timestamp is fixed); the reports
-// (report.html too) up to their timings.
+// Every output of two folders equal: CityJSON, CityJSONSeq, models.obj, the OBJ materials and every
+// model byte for byte; the GeoPackage as ogrinfo reads it (and byte for byte: its timestamp is
+// fixed); the tileset (tileset.json and every tile) byte for byte; the reports (report.html too) up
+// to their timings.
 void expect_same_outputs(const fs::path& a, const fs::path& b) {
-  for (const char* f : {"buildings.city.json", "buildings.city.jsonl", "models.obj", "buildings.gpkg"}) {
+  for (const char* f : {"buildings.city.json", "buildings.city.jsonl", "models.obj", "buildings.gpkg", "city3d.mtl",
+                        "models/city3d.mtl", "3dtiles/tileset.json"}) {
     ASSERT_TRUE(fs::exists(a / f)) << a / f;
     ASSERT_TRUE(fs::exists(b / f)) << b / f;
     EXPECT_EQ(read_file(a / f), read_file(b / f)) << f;
@@ -132,6 +136,10 @@ void expect_same_outputs(const fs::path& a, const fs::path& b) {
   const std::string ha = read_file(a / "report.html"), hb = read_file(b / "report.html");
   EXPECT_TRUE(contains(ha, "city3d report ready")) << a / "report.html";
   EXPECT_EQ(html_without_timings(ha), html_without_timings(hb)) << "report.html";
+  EXPECT_EQ(files_in(a / "3dtiles" / "tiles"), files_in(b / "3dtiles" / "tiles"));
+  EXPECT_FALSE(files_in(a / "3dtiles" / "tiles").empty());
+  for (const std::string& name : files_in(a / "3dtiles" / "tiles"))
+    EXPECT_EQ(read_file(a / "3dtiles" / "tiles" / name), read_file(b / "3dtiles" / "tiles" / name)) << name;
   EXPECT_EQ(files_in(a / "models"), files_in(b / "models"));
   for (const std::string& name : files_in(a / "models"))
     EXPECT_EQ(read_file(a / "models" / name), read_file(b / "models" / name)) << name;
@@ -155,8 +163,9 @@ pid_t spawn(const std::vector<std::string>& arguments, const fs::path& log) {
 }
 
 // A shard folder holding `copies` copies of the records of `from` (a finished shard 1/1), each under a
-// new index and id and without a model file, and whether the run asked for the overview outputs: a run
-// of copies x its buildings, to measure a merge with.
+// new index and id and without a model file, copy c moved 300 m east times c (its footprint and its
+// models), and whether the run asked for the overview outputs (buildings.gpkg, report.html and the
+// tileset): a run of copies x its buildings, to measure a merge with.
 void replicate_shard(const fs::path& from, const fs::path& to, int copies, bool overview) {
   using nlohmann::json;
   const auto line_of = [](const json& j) {
@@ -171,6 +180,7 @@ void replicate_shard(const fs::path& from, const fs::path& to, int copies, bool 
   header["layout"]["merged_file"] = false;
   header["layout"]["gpkg"] = overview;
   header["layout"]["html"] = overview;
+  header["layout"]["tiles3d"] = overview;
   fs::create_directories(to);
   std::ofstream out(to / "resume.journal", std::ios::binary);
   out << line_of(header);
@@ -182,6 +192,20 @@ void replicate_shard(const fs::path& from, const fs::path& to, int copies, bool 
       record["id"] = record["id"].get<std::string>() + "_" + std::to_string(c);
       record["model"] = "";
       record["model_hash"] = "";
+      if (c > 0) {
+        // 300 m east: the feature's quantised vertices (x in units of the layout's scale) and the footprint.
+        const double scale = header["layout"]["scale"];
+        const std::int64_t shift = std::llround(300.0 * c / scale);
+        if (!record["feature"].get<std::string>().empty()) {
+          json feature = json::parse(record["feature"].get<std::string>());
+          for (json& v : feature["vertices"]) v[0] = v[0].get<std::int64_t>() + shift;
+          record["feature"] = feature.dump();
+        }
+        if (record.contains("footprint"))
+          for (json& polygon : record["footprint"]["polygons"])
+            for (json& ring : polygon)
+              for (json& p : ring) p[0] = p[0].get<double>() + 300.0 * c;
+      }
       out << line_of(record);
     }
   json manifest = json::parse(read_file(from / "run.json"));
@@ -204,7 +228,7 @@ class Shards : public ::testing::Test {
   std::vector<std::string> sample(const fs::path& out) const {
     const std::string d = CITY3D_SAMPLE_DATA;
     return {"reconstruct", d + "/delft_sample_1.las", d + "/delft_sample_2.las", "-f", d + "/delft_sample_footprints.gpkg",
-            "--id-field", "gml_id", "--cityjsonseq", "--merged", "--gpkg", "--block-size", "10", "--no-progress",
+            "--id-field", "gml_id", "--cityjsonseq", "--merged", "--gpkg", "--3dtiles", "--block-size", "10", "--no-progress",
             "-o", out.string()};
   }
   static std::string join(const std::vector<std::string>& args) {
@@ -246,9 +270,10 @@ TEST_F(Shards, merge_of_1_2_4_and_7_shards_is_byte_identical_to_one_process) {
   expect_same_outputs(dir_ / "single", dir_ / "merged4");
 }
 
-TEST_F(Shards, merge_writes_buildings_gpkg_and_report_html_only_when_the_run_asked_for_them) {
+TEST_F(Shards, merge_writes_buildings_gpkg_the_tileset_and_report_html_only_when_the_run_asked_for_them) {
   std::vector<std::string> args = sample(dir_ / "unused");
   args.erase(std::find(args.begin(), args.end(), "--gpkg"));
+  args.erase(std::find(args.begin(), args.end(), "--3dtiles"));
   args.resize(args.size() - 2);  // without "-o DIR"
   std::string folders;
   for (int k = 1; k <= 2; ++k) {
@@ -263,6 +288,7 @@ TEST_F(Shards, merge_writes_buildings_gpkg_and_report_html_only_when_the_run_ask
   ASSERT_EQ(m.exit_code, 0) << m.output;
   EXPECT_TRUE(fs::exists(dir_ / "merged" / "report.csv"));
   EXPECT_FALSE(fs::exists(dir_ / "merged" / "buildings.gpkg"));
+  EXPECT_FALSE(fs::exists(dir_ / "merged" / "3dtiles"));
   EXPECT_FALSE(fs::exists(dir_ / "merged" / "report.html"));
 }
 
@@ -292,9 +318,11 @@ TEST_F(Shards, merge_memory_grows_by_little_more_than_a_reference_per_record) {
   EXPECT_EQ(lines_of(read_file(dir_ / "merged_big" / "resume.journal")).size(), 6001u);
   EXPECT_TRUE(fs::exists(dir_ / "merged_big_overview" / "buildings.gpkg"));
   EXPECT_TRUE(fs::exists(dir_ / "merged_big_overview" / "report.html"));
+  EXPECT_TRUE(fs::exists(dir_ / "merged_big_overview" / "3dtiles" / "tileset.json"));
   // Per record: a reference to it (and no copy of its line) ...
   EXPECT_LT((big - small) * 1024.0 / 5850.0, 1024.0) << small << " KB for 150 records, " << big << " KB for 6,000";
-  // ... and with the overview outputs, its row of report.html (about 0.5 KB) too, not its models.
+  // ... and with the overview outputs, its row of report.html (about 0.5 KB) and what the tileset's
+  // quadtree keeps of it (about 60 bytes) too, not its models.
   EXPECT_LT((big_overview - small_overview) * 1024.0 / 5850.0, 2048.0)
       << small_overview << " KB for 150 records, " << big_overview << " KB for 6,000, with the overview outputs";
 }
@@ -418,7 +446,7 @@ TEST_F(Shards, temporary_files_of_a_killed_run_are_removed_when_the_rerun_succee
 TEST_F(Shards, rerun_with_fewer_buildings_removes_the_models_and_files_the_earlier_run_wrote) {
   const fs::path out = dir_ / "out";
   ASSERT_EQ(reconstruct(out).exit_code, 0);
-  ASSERT_EQ(files_in(out / "models").size(), 15u);
+  ASSERT_EQ(files_in(out / "models").size(), 16u);  // 15 models and their materials, city3d.mtl
   write_file(out / "models" / "my_own.obj", "# not city3d's\n");
   write_file(out / "notes.txt", "mine");
   // The same folder, the footprints of a smaller box, and no CityJSONSeq or merged file this time.
@@ -430,13 +458,15 @@ TEST_F(Shards, rerun_with_fewer_buildings_removes_the_models_and_files_the_earli
   const std::vector<std::string> rows = lines_of(read_file(out / "report.csv"));
   ASSERT_GT(rows.size(), 2u);
   ASSERT_LT(rows.size(), 16u);
-  std::set<std::string> expected = {"my_own.obj"};
+  std::set<std::string> expected = {"my_own.obj", "city3d.mtl"};
   for (std::size_t i = 1; i < rows.size(); ++i) expected.insert(rows[i].substr(0, rows[i].find(',')) + ".obj");
   EXPECT_EQ(files_in(out / "models"), expected);
   EXPECT_TRUE(fs::exists(out / "notes.txt"));
   EXPECT_FALSE(fs::exists(out / "buildings.city.jsonl"));
   EXPECT_FALSE(fs::exists(out / "models.obj"));
   EXPECT_FALSE(fs::exists(out / "buildings.gpkg"));
+  EXPECT_FALSE(fs::exists(out / "3dtiles"));  // the earlier run's tileset, folder and all
+  EXPECT_TRUE(contains(r.output, "3dtiles/ (the tileset)")) << r.output;
   EXPECT_TRUE(fs::exists(out / "buildings.city.json"));
 }
 
@@ -685,7 +715,8 @@ TEST_F(Shards, outputs_are_the_same_for_any_jobs_and_on_a_loaded_core) {
   if (clouds.empty()) GTEST_SKIP() << "no ../shared/data/city3d_smoke or city3d_dev";
   std::string inputs;
   for (const std::string& c : clouds) inputs += " " + c;
-  const std::string options = " --cityjsonseq --merged --gpkg --no-progress -q -o ";
+  // The clouds are in local frames: --crs places them somewhere, so that the tileset is made too.
+  const std::string options = " --cityjsonseq --merged --gpkg --3dtiles --crs EPSG:28992 --no-progress -q -o ";
   const auto job = [&](const std::string& name, const std::string& jobs) {
     const fs::path out = dir_ / name;
     const Result r = run_shell(std::string(CITY3D_EXE) + " reconstruct" + inputs + " -j " + jobs + options + out.string());

@@ -173,7 +173,7 @@ TEST_F(Mistakes, clouds_of_the_same_name_get_ids_from_their_paths_and_files_of_t
   for (const auto& [id, row] : rows) EXPECT_TRUE(contains(row.at("note").get<std::string>(), "id: the path below")) << id;
   EXPECT_NE(rows.at("Dales3d/00011").at("points"), rows.at("Vaihingen/00011").at("points"));
   std::size_t models = 0;
-  for (const auto& entry : fs::directory_iterator(dir_ / "out" / "models")) models += entry.is_regular_file();
+  for (const auto& entry : fs::directory_iterator(dir_ / "out" / "models")) models += entry.path().extension() == ".obj";
   EXPECT_EQ(models, 2u);
   const json city = json::parse(read_file(dir_ / "out" / "buildings.city.json"));
   EXPECT_TRUE(city.at("CityObjects").contains("Dales3d/00011"));

@@ -107,6 +107,7 @@ int finish(const city3d::RunOptions& options, const city3d::BatchSummary& s, con
 int run_reconstruct(const city3d::RunOptions& options) {
   city3d::BatchOptions batch = options.batch;
   batch.point_clouds = options.inputs;
+  batch.parameters = city3d::run_parameters_json(options);
   batch.progress = options.progress == 1 || (options.progress == -1 && options.verbosity > 0 && isatty(2));
   catch_interrupts("the buildings finished so far are kept in " + batch.output_dir +
                    "/resume.journal: the same command resumes where this one stopped");

@@ -22,6 +22,16 @@ struct BatchOptions {
   CropParams crop;
   ReconstructionParams reconstruction;
   std::optional<double> ground_z;         ///< single-building mode: floor height (world z)
+  /// The CRS of the point clouds' coordinates and heights as the user states it (--crs): "EPSG:7415"
+  /// (RD New + NAP height), "EPSG:28992+5709", WKT. Empty: the point clouds' CRS when they record
+  /// one, else the footprints' (with a warning naming it). A CRS the point clouds record must agree
+  /// with it in plan; footprints in another CRS are reprojected into its horizontal part.
+  std::string crs;
+  /// The options that describe the run's outputs, as a JSON object of option names (without "--")
+  /// and values ({"lambda-data": 0.34, "lod": ["1.2", "1.3", "2.2"], ...}), written into the
+  /// CityJSON metadata, run.json and report.html; empty: none. The command line fills it
+  /// (run_parameters_json()): it leaves out what does not change the outputs (-j, -o, --shard, ...).
+  std::string parameters;
   /// A building whose footprint has less of its area than this inside the tiles' extents
   /// (FootprintCoverage::area) is not ok but `partial`: the tiles given leave part of it out (a tile
   /// forgotten at a seam). Less of its cells with points (FootprintCoverage::cells) gives a note.
@@ -36,7 +46,10 @@ struct BatchOptions {
   bool merged_file = false;         ///< models.<ext> with every building
   bool cityjson = true;             ///< buildings.city.json
   bool cityjson_seq = false;        ///< buildings.city.jsonl
-  bool gpkg = false;                ///< buildings.gpkg (footprints with the report, LoD2.2 roof parts)
+  bool gpkg = false;                ///< buildings.gpkg (footprints with the report; each level's roof parts and solids)
+  /// 3dtiles/: a 3D Tiles 1.1 tileset (tileset.json, binary glTF content with EXT_mesh_features and
+  /// EXT_structural_metadata), LoD1.2 far and LoD2.2 near, placed on the globe from the run's CRS.
+  bool tiles3d = false;
   bool html = true;                 ///< report.html, the run overview
   bool timings_in_cityjson = false; ///< add "seconds" to CityJSON attributes (breaks byte-identity)
   int threads = 1;

@@ -35,7 +35,17 @@ std::string mesh_extension(MeshFormat format);
 /// distinct ids never share a file name ("a b" and "a_b").
 std::string model_file_name(const BuildingId& id, MeshFormat format);
 
-/// Writes one building to `path`. Throws IoError naming the path when it cannot be written.
+/// The material library every OBJ model names (`mtllib`), in the folder of the OBJ files: one
+/// material per semantic surface (GroundSurface, WallSurface, RoofSurface), which write_surface_materials() writes.
+constexpr const char* kSurfaceMaterialFile = "city3d.mtl";
+
+/// Writes the material library of the OBJ models (kSurfaceMaterialFile) to `path`: grey ground,
+/// off-white walls, red roofs. Throws IoError naming the path.
+void write_surface_materials(const std::string& path);
+
+/// Writes one building to `path` (OBJ: its faces grouped by semantic surface, `g` and `usemtl`
+/// GroundSurface, WallSurface, RoofSurface, with `mtllib city3d.mtl`). Throws IoError naming the path
+/// when it cannot be written.
 void write_model(const std::string& path, const BuildingModel& model, const ModelWriteOptions& options);
 
 /// Writes many buildings into one file: OBJ with one `o <id>` group per building; PLY with a
@@ -66,9 +76,14 @@ struct CityObject {
 /// The scale and metadata of a CityJSON file (the translation is given with each call: one run
 /// writes buildings.city.json and buildings.city.jsonl with the same transform).
 struct CityJsonOptions {
-  std::string crs;             ///< "EPSG:28992" (written as an OGC CRS URL), or empty when unknown
+  /// "EPSG:7415" or "EPSG:28992" (written as an OGC CRS URL; "EPSG:h+v", a compound without a code
+  /// of its own, as OGC's crs-compound URL of its two parts), or empty when unknown
+  std::string crs;
   double scale = 0.0001;       ///< transform scale in metres: 0.0001 keeps 0.1 mm, 0.001 millimetres
   std::string reference_date;  ///< metadata referenceDate (YYYY-MM-DD), or empty
+  /// The metadata member "city3d", a JSON object as text ({"version": "0.1.0", "parameters": {...}}),
+  /// written as given; empty: none.
+  std::string city3d;
 };
 
 /// Classifies the faces of a model (its `surfaces` when given, else by normal: down-facing ground,
@@ -80,7 +95,9 @@ std::vector<SurfaceType> surface_types(const BuildingModel& model);
 /// has several edge-connected parts gives one child `BuildingPart` "<id>-<lod>-<k>" per part
 /// (CityJSON's Building has no MultiSolid, and a Solid has one exterior shell). The translation is
 /// the minimum corner of all vertices, in whole metres. Vertices are quantised with the
-/// given transform and shared per building. Atomic write; throws IoError naming the path.
+/// given transform and shared per building. The metadata holds the CRS, the geographicalExtent of
+/// the vertices as written (none without vertices) and `options.city3d`. Atomic write; throws
+/// IoError naming the path.
 void write_cityjson(const std::string& path, const std::vector<CityObject>& objects, const CityJsonOptions& options);
 
 /// The same with the transform's translation given (a whole number of metres keeps the grid exact).
@@ -88,8 +105,10 @@ void write_cityjson(const std::string& path, const std::vector<CityObject>& obje
                     const Point3& translate);
 
 /// Streams CityJSONSeq (CityJSON Text Sequences): a first line with the CityJSON header and
-/// transform, then one CityJSONFeature line per building, written in the order add() is called.
-/// The file appears under its final name only after close() (atomic).
+/// transform (its metadata's geographicalExtent that of every feature's vertices), then one
+/// CityJSONFeature line per building, written in the order add() is called. The features are
+/// spooled to a temporary file until close() knows the extent. The file appears under its final name
+/// only after close() (atomic).
 class CityJsonSeqWriter {
  public:
   /// `translate` is the transform's translation for the whole file (e.g. the footprints' minimum corner).
@@ -109,15 +128,37 @@ class CityJsonSeqWriter {
 /// vertices quantised with `options.scale` and `translate`. Throws IoError when the scale is invalid.
 std::string cityjson_feature(const CityObject& object, const CityJsonOptions& options, const Point3& translate);
 
-/// The first line of a CityJSONSeq file (without its newline): the CityJSON header with the transform.
-std::string cityjson_seq_header(const CityJsonOptions& options, const Point3& translate);
+/// The first line of a CityJSONSeq file (without its newline): the CityJSON header with the
+/// transform, and the geographicalExtent of `extent` (quantised vertices, as features hold them)
+/// when given.
+std::string cityjson_seq_header(const CityJsonOptions& options, const Point3& translate,
+                                const Box3* extent = nullptr);
+
+/// CityJSONSeq from CityJSONFeature texts (as cityjson_feature() makes them, with the same options
+/// and translate), in the order add() is called: the header line, then each feature as given. The
+/// features are spooled to a temporary file until close(), which writes the header with their
+/// geographicalExtent. The file appears under its final name only after close() (atomic). Throws
+/// IoError naming the feature's position when a text is not a CityJSONFeature.
+class CityJsonSeqAssembler {
+ public:
+  CityJsonSeqAssembler(const std::string& path, const CityJsonOptions& options, const Point3& translate);
+  ~CityJsonSeqAssembler();
+  CityJsonSeqAssembler(const CityJsonSeqAssembler&) = delete;
+  CityJsonSeqAssembler& operator=(const CityJsonSeqAssembler&) = delete;
+  void add(const std::string& feature);
+  void close();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 /// Builds one CityJSON file from CityJSONFeature texts (as cityjson_feature() makes them, with the
 /// same options and translate), in the order add() is called: every feature's CityObjects members
 /// are copied byte for byte, its vertices appended to the file's vertex list and its vertex indices
 /// moved accordingly. The result equals write_cityjson() of the same objects with that transform,
-/// and holds whatever the features hold. Memory stays small (vertices are spooled to a temporary
-/// file). The file appears under its final name only after close() (atomic). Throws IoError naming
+/// and holds whatever the features hold. Memory stays small (objects and vertices are spooled to
+/// temporary files until close() writes the header with their geographicalExtent). The file appears under its final name only after close() (atomic). Throws IoError naming
 /// the path, or the feature's position when a text is not a CityJSONFeature.
 class CityJsonAssembler {
  public:

@@ -48,6 +48,14 @@ RunOptions parse_command_line(int argc, const char* const* argv);
 /// options without a value are commented out. --config reads it back to the same options.
 std::string config_text(const RunOptions& options);
 
+/// The options that describe a run's outputs as a JSON object of option names (without "--") and
+/// values, typed as --print-config types them ({"lambda-data": 0.34, "gpkg": true, "lod": ["1.2",
+/// "1.3", "2.2"], "where": null, ...}): every option of the configuration file but those that do
+/// not change the outputs (-o, -j, --shard, --block-size, --group-area, --strict, --debug, the
+/// messages and progress) and the inputs, which the outputs record apart (--footprints, --layer,
+/// --id-field). For BatchOptions::parameters.
+std::string run_parameters_json(const RunOptions& options);
+
 /// The --help text: usage, commands, every option with its default, exit codes.
 std::string help_text();
 

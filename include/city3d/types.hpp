@@ -73,8 +73,15 @@ struct Polygon2 {
   std::vector<Ring2> holes;
 };
 
-/// One attribute value: null, boolean, integer (64-bit), number or text.
-using AttributeValue = std::variant<std::monostate, bool, std::int64_t, double, std::string>;
+/// A list attribute value as the text of its JSON array ("[]", "[203,104]", "[\"a\",\"b\"]"):
+/// CityJSON writes it as that array, the GeoPackage as JSON text (GeoPackage has no list type).
+struct AttributeList {
+  std::string json = "[]";
+  bool operator==(const AttributeList& o) const { return json == o.json; }
+};
+
+/// One attribute value: null, boolean, integer (64-bit), number, text or a list.
+using AttributeValue = std::variant<std::monostate, bool, std::int64_t, double, std::string, AttributeList>;
 
 /// Named attribute values, in the source's order.
 using Attributes = std::vector<std::pair<std::string, AttributeValue>>;

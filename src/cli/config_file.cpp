@@ -3,6 +3,8 @@
 // Parsed with toml++, which gives every key and value its line for the messages.
 #include <toml++/toml.h>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -161,7 +163,7 @@ std::vector<ConfigEntry> read_table(const toml::table& table, const std::string&
 }
 
 /// A TOML basic string: quotes, backslashes and control characters escaped.
-std::string quoted(const std::string& s) {
+std::string toml_quoted(const std::string& s) {
   std::string out = "\"";
   for (const char c : s) {
     switch (c) {
@@ -192,16 +194,16 @@ std::string toml_value(const OptionSpec& spec, const std::string& text) {
       std::string part;
       bool first = true;
       while (std::getline(parts, part, ',')) {
-        out += (first ? "" : ", ") + (is_number_text(part) ? part : quoted(part));
+        out += (first ? "" : ", ") + (is_number_text(part) ? part : toml_quoted(part));
         first = false;
       }
       return out + "]";
     }
-    case ValueType::number: return is_number_text(text) ? text : quoted(text);
-    case ValueType::number_or_string: return is_number_text(text) ? text : quoted(text);
-    case ValueType::string: return quoted(text);
+    case ValueType::number: return is_number_text(text) ? text : toml_quoted(text);
+    case ValueType::number_or_string: return is_number_text(text) ? text : toml_quoted(text);
+    case ValueType::string: return toml_quoted(text);
   }
-  return quoted(text);
+  return toml_quoted(text);
 }
 
 /// What a commented-out key without a value shows: the value's name in the value's TOML shape.
@@ -258,6 +260,42 @@ std::vector<ConfigEntry> read_config_file(const std::string& path) {
 }
 
 }  // namespace detail
+
+std::string run_parameters_json(const RunOptions& options) {
+  // What does not change the outputs (where they go, how fast, what is said), and the inputs, which
+  // the outputs record apart (the footprint source, its layer and id field).
+  static const char* const kLeftOut[] = {"footprints", "layer",  "id-field",  "output",      "jobs",
+                                         "no-resume",  "block-size", "group-area", "shard",   "strict",
+                                         "residuals",  "progress",   "no-progress", "verbose", "quiet",
+                                         "debug"};
+  nlohmann::ordered_json parameters = nlohmann::ordered_json::object();
+  for (const detail::OptionSpec& spec : detail::option_table()) {
+    if (!detail::in_config_file(spec)) continue;
+    const std::string key = spec.flag + 2;
+    if (std::find(std::begin(kLeftOut), std::end(kLeftOut), key) != std::end(kLeftOut)) continue;
+    const std::string value = spec.show ? spec.show(options) : std::string();
+    // Typed as the configuration file types it: a switch is a boolean, a list an array, a number a
+    // number; an option without a value is null.
+    const auto scalar = [](const std::string& text, bool numbers) {
+      if (numbers && detail::is_number_text(text)) return nlohmann::ordered_json::parse(text);
+      return nlohmann::ordered_json(text);
+    };
+    switch (detail::value_type(spec)) {
+      case detail::ValueType::boolean: parameters[key] = value == "true"; break;
+      case detail::ValueType::array: {
+        nlohmann::ordered_json items = nlohmann::ordered_json::array();
+        std::stringstream list(value);
+        // --lod's levels stay text ("1.2"): they are names, not numbers.
+        for (std::string item; std::getline(list, item, ',');) items.push_back(scalar(item, key != "lod"));
+        parameters[key] = value.empty() ? nlohmann::ordered_json(nullptr) : items;
+        break;
+      }
+      case detail::ValueType::number: parameters[key] = scalar(value, true); break;
+      default: parameters[key] = value.empty() ? nlohmann::ordered_json(nullptr) : scalar(value, false);
+    }
+  }
+  return parameters.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
 
 std::string config_text(const RunOptions& options) {
   std::ostringstream out;

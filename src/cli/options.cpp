@@ -12,6 +12,7 @@
 
 #include "city3d/error.hpp"
 #include "cli/option_table.hpp"
+#include "io/input_check.hpp"
 
 namespace city3d {
 namespace detail {
@@ -156,6 +157,22 @@ const std::vector<OptionSpec>& option_table() {
          const double share = parse_double("--min-coverage", v);
          if (!(share >= 0 && share <= 1)) throw ConfigError("option --min-coverage: '" + v + "' is not a share (0-1)");
          o.batch.min_coverage = share;
+       }},
+      {"--crs", nullptr, "CRS",
+       "the CRS of the point clouds' coordinates and heights, e.g. EPSG:7415 (RD New + NAP height: AHN) or "
+       "EPSG:28992+5709; default: what the point clouds record, else the footprints' (with a warning)",
+       [](const O& o) { return o.batch.crs; },
+       [](O& o, V v) {
+         detail::CrsFacts facts;
+         try {
+           facts = detail::crs_facts(v);
+         } catch (const ConfigError& e) {
+           throw ConfigError("option --crs: " + std::string(e.what()).substr(std::string("crs: ").size()));
+         }
+         if (facts.geographic)
+           throw ConfigError("option --crs: '" + v + "' is geographic (degrees); city3d needs projected coordinates "
+                             "in metres");
+         o.batch.crs = v;
        }},
       {"--roof-percentile", nullptr, "P", "LoD1 roof height: percentile (0-100) of the building points' z",
        [](const O& o) { return number_text(o.batch.reconstruction.lod1.roof_percentile); },
@@ -321,8 +338,13 @@ const std::vector<OptionSpec>& option_table() {
       {"--cityjsonseq", nullptr, nullptr, "also write buildings.city.jsonl (CityJSONSeq, one building per line)",
        [](const O& o) { return yes_no(o.batch.cityjson_seq); }, [](O& o, V) { o.batch.cityjson_seq = true; }},
       {"--gpkg", nullptr, nullptr,
-       "also write buildings.gpkg: the footprints with every report attribute, and the LoD2.2 roof parts",
+       "also write buildings.gpkg: the footprints with every report attribute, and each level's roof parts "
+       "(lod12_2d, ...) and 3D models (lod12_3d, ...) as 3DBAG's",
        [](const O& o) { return yes_no(o.batch.gpkg); }, [](O& o, V) { o.batch.gpkg = true; }},
+      {"--3dtiles", nullptr, nullptr,
+       "also write 3dtiles/: a 3D Tiles 1.1 tileset (LoD1.2 far, LoD2.2 near, ids and attributes as "
+       "EXT_structural_metadata) for CesiumJS and other web viewers",
+       [](const O& o) { return yes_no(o.batch.tiles3d); }, [](O& o, V) { o.batch.tiles3d = true; }},
       {"--no-html", nullptr, nullptr, "do not write report.html (the run overview)",
        [](const O& o) { return yes_no(!o.batch.html); }, [](O& o, V) { o.batch.html = false; }},
       {"--timings", nullptr, nullptr, "add each building's seconds to its CityJSON attributes (output then differs "

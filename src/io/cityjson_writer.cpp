@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <memory>
 #include <map>
@@ -57,13 +58,39 @@ void append_value(std::string& out, const AttributeValue& v) {
   else if (const bool* b = std::get_if<bool>(&v)) out += *b ? "true" : "false";
   else if (const std::int64_t* i = std::get_if<std::int64_t>(&v)) out += std::to_string(*i);
   else if (const double* d = std::get_if<double>(&v)) append_number(out, *d);
+  else if (const AttributeList* l = std::get_if<AttributeList>(&v)) out += l->json;
   else append_json_string(out, std::get<std::string>(v));
 }
 
+// "EPSG:7415" -> the OGC URL CityJSON 2.0 expects; "EPSG:28992+5709" (a compound without a code of
+// its own) -> OGC's URL of a compound of the two; anything else is not written.
 std::string crs_url(const std::string& crs) {
-  // "EPSG:28992" -> the OGC URL CityJSON 2.0 expects; anything else is passed through.
-  if (crs.rfind("EPSG:", 0) == 0) return "https://www.opengis.net/def/crs/EPSG/0/" + crs.substr(5);
-  return crs;
+  if (crs.rfind("EPSG:", 0) != 0) return {};
+  const std::string code = crs.substr(5);
+  const std::size_t plus = code.find('+');
+  if (plus == std::string::npos) return "https://www.opengis.net/def/crs/EPSG/0/" + code;
+  return "https://www.opengis.net/def/crs-compound?1=https://www.opengis.net/def/crs/EPSG/0/" + code.substr(0, plus) +
+         "&2=https://www.opengis.net/def/crs/EPSG/0/" + code.substr(plus + 1);
+}
+
+// Digits after the decimal point of a transform scale (0.0001 -> 4): world coordinates made from
+// quantised ones are printed with these, without binary noise (84123.4567, not 84123.456699999995).
+int scale_decimals(double scale) {
+  int decimals = 0;
+  for (double s = scale; s < 0.999999 && decimals < 12; s *= 10) ++decimals;
+  return decimals;
+}
+
+void append_world(std::string& out, double quantised, double scale, double translate) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%.*f", scale_decimals(scale), translate + quantised * scale);
+  std::string s = buf;
+  if (s.find('.') != std::string::npos) {
+    while (s.back() == '0') s.pop_back();
+    if (s.back() == '.') s.pop_back();
+  }
+  if (s == "-0") s = "0";
+  out += s;
 }
 
 const char* surface_name(SurfaceType t) {
@@ -226,7 +253,9 @@ void append_vertices(std::string& out, const std::vector<Quantised>& vertices) {
   out += ']';
 }
 
-void append_header_fields(std::string& out, const CityJsonOptions& options, const Point3& translate) {
+// `extent` is of quantised vertices (integers held as doubles); nullptr or empty: no extent.
+void append_header_fields(std::string& out, const CityJsonOptions& options, const Point3& translate,
+                          const Box3* extent) {
   out += "\"type\":\"CityJSON\",\"version\":\"2.0\",\"transform\":{\"scale\":[";
   for (int i = 0; i < 3; ++i) {
     if (i) out += ',';
@@ -242,17 +271,41 @@ void append_header_fields(std::string& out, const CityJsonOptions& options, cons
   append_number(out, translate.z);
   out += "]},\"metadata\":{";
   bool any = false;
-  if (!options.crs.empty()) {
+  if (const std::string url = crs_url(options.crs); !url.empty()) {
     out += "\"referenceSystem\":";
-    append_json_string(out, crs_url(options.crs));
+    append_json_string(out, url);
     any = true;
   }
   if (!options.reference_date.empty()) {
     if (any) out += ',';
     out += "\"referenceDate\":";
     append_json_string(out, options.reference_date);
+    any = true;
+  }
+  if (extent && !extent->empty()) {
+    if (any) out += ',';
+    out += "\"geographicalExtent\":[";
+    const double corners[6] = {extent->min.x, extent->min.y, extent->min.z, extent->max.x, extent->max.y, extent->max.z};
+    const double origin[3] = {translate.x, translate.y, translate.z};
+    for (int k = 0; k < 6; ++k) {
+      if (k) out += ',';
+      append_world(out, corners[k], options.scale, origin[k % 3]);
+    }
+    out += ']';
+    any = true;
+  }
+  if (!options.city3d.empty()) {
+    if (any) out += ',';
+    out += "\"city3d\":";
+    out += options.city3d;
   }
   out += '}';
+}
+
+void add_to_extent(Box3& extent, const std::vector<Quantised>& vertices) {
+  for (const Quantised& q : vertices)
+    extent.add({static_cast<double>(std::get<0>(q)), static_cast<double>(std::get<1>(q)),
+                static_cast<double>(std::get<2>(q))});
 }
 
 void check_options(const CityJsonOptions& options, const std::string& path) {
@@ -303,17 +356,20 @@ void write_cityjson(const std::string& path, const std::vector<CityObject>& obje
 void write_cityjson(const std::string& path, const std::vector<CityObject>& objects, const CityJsonOptions& options,
                     const Point3& translate) {
   check_options(options, path);
-  std::string out = "{";
-  append_header_fields(out, options, translate);
-  out += ",\"CityObjects\":{";
+  std::string body = ",\"CityObjects\":{";
   std::vector<Quantised> vertices;
   for (std::size_t i = 0; i < objects.size(); ++i) {
-    if (i) out += ',';
-    append_city_object(out, objects[i], translate, options.scale, vertices);
+    if (i) body += ',';
+    append_city_object(body, objects[i], translate, options.scale, vertices);
   }
-  out += "},";
-  append_vertices(out, vertices);
-  out += "}\n";
+  body += "},";
+  append_vertices(body, vertices);
+  body += "}\n";
+  Box3 extent;
+  add_to_extent(extent, vertices);
+  std::string out = "{";
+  append_header_fields(out, options, translate, &extent);
+  out += body;
   detail::AtomicFile file(path);
   write_all(file.file(), out);
   file.commit();
@@ -323,28 +379,27 @@ struct CityJsonSeqWriter::Impl {
   std::string path;
   CityJsonOptions options;
   Point3 translate;
-  std::unique_ptr<detail::AtomicFile> file;
+  std::unique_ptr<CityJsonSeqAssembler> assembler;
 };
 
 CityJsonSeqWriter::CityJsonSeqWriter(const std::string& path, const CityJsonOptions& options,
                                      const Point3& translate)
     : impl_(new Impl{path, options, translate, nullptr}) {
   check_options(options, path);
-  impl_->file = std::make_unique<detail::AtomicFile>(path);
-  write_all(impl_->file->file(), cityjson_seq_header(options, translate) + "\n");
+  impl_->assembler = std::make_unique<CityJsonSeqAssembler>(path, options, translate);
 }
 
 CityJsonSeqWriter::~CityJsonSeqWriter() = default;
 
 void CityJsonSeqWriter::add(const CityObject& object) {
-  if (!impl_->file) throw IoError("cityjson: " + impl_->path + " is already closed");
-  write_all(impl_->file->file(), cityjson_feature(object, impl_->options, impl_->translate) + "\n");
+  if (!impl_->assembler) throw IoError("cityjson: " + impl_->path + " is already closed");
+  impl_->assembler->add(cityjson_feature(object, impl_->options, impl_->translate));
 }
 
 void CityJsonSeqWriter::close() {
-  if (!impl_->file) return;
-  impl_->file->commit();
-  impl_->file.reset();
+  if (!impl_->assembler) return;
+  impl_->assembler->close();
+  impl_->assembler.reset();
 }
 
 std::string cityjson_feature(const CityObject& object, const CityJsonOptions& options, const Point3& translate) {
@@ -360,9 +415,9 @@ std::string cityjson_feature(const CityObject& object, const CityJsonOptions& op
   return line;
 }
 
-std::string cityjson_seq_header(const CityJsonOptions& options, const Point3& translate) {
+std::string cityjson_seq_header(const CityJsonOptions& options, const Point3& translate, const Box3* extent) {
   std::string header = "{";
-  append_header_fields(header, options, translate);
+  append_header_fields(header, options, translate, extent);
   header += ",\"CityObjects\":{},\"vertices\":[]}";
   return header;
 }
@@ -380,8 +435,9 @@ class FeatureSplicer {
       : s_(text), feature_(feature_number), offset_(offset) {}
 
   /// Appends the feature's CityObjects members to `objects` and its vertices to `vertices` (both
-  /// without brackets; empty when there are none); returns the number of vertices.
-  std::uint64_t split(std::string& objects, std::string& vertices) {
+  /// without brackets; empty when there are none), and adds the vertices (quantised) to `extent`;
+  /// returns the number of vertices.
+  std::uint64_t split(std::string& objects, std::string& vertices, Box3& extent) {
     std::uint64_t count = 0;
     bool seen_objects = false, seen_vertices = false;
     skip_ws();
@@ -408,7 +464,7 @@ class FeatureSplicer {
           for (;;) {
             skip_ws();
             const std::size_t begin = p_;
-            skip_value(0);
+            extent.add(read_vertex());
             vertices.append(s_, begin, p_ - begin);
             ++count;
             skip_ws();
@@ -464,6 +520,24 @@ class FeatureSplicer {
     return raw;
   }
   std::string read_key() { return read_string_raw(); }
+  // One vertex "[x,y,z]" of integers.
+  Point3 read_vertex() {
+    double q[3];
+    expect('[');
+    for (int k = 0; k < 3; ++k) {
+      skip_ws();
+      const std::size_t begin = p_;
+      skip_number();
+      std::int64_t v = 0;
+      const auto r = std::from_chars(s_.data() + begin, s_.data() + p_, v);
+      if (r.ec != std::errc() || r.ptr != s_.data() + p_) fail("a vertex coordinate that is not an integer");
+      q[k] = static_cast<double>(v);
+      skip_ws();
+      if (k < 2) expect(',');
+    }
+    expect(']');
+    return {q[0], q[1], q[2]};
+  }
   void skip_number() {
     const std::size_t begin = p_;
     while (p_ < s_.size() && std::strchr("+-0123456789.eE", s_[p_]) != nullptr) ++p_;
@@ -583,16 +657,36 @@ class FeatureSplicer {
   std::size_t p_ = 0;
 };
 
+// Copies a spooled temporary file to `out` from its start.
+void copy_spool(std::FILE* spool, std::FILE* out, const std::string& path) {
+  if (std::fflush(spool) != 0 || std::fseek(spool, 0, SEEK_SET) != 0)
+    throw IoError("cityjson: cannot read back what was spooled for " + path);
+  char buffer[1 << 16];
+  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, spool)) > 0;) std::fwrite(buffer, 1, n, out);
+  if (std::ferror(spool)) throw IoError("cityjson: cannot read back what was spooled for " + path);
+}
+
+std::FILE* open_spool(const std::string& what, const std::string& path) {
+  std::FILE* f = std::tmpfile();
+  if (!f) throw IoError("cityjson: cannot create a temporary file for the " + what + " of " + path);
+  return f;
+}
+
 }  // namespace
 
 struct CityJsonAssembler::Impl {
   std::string path;
+  CityJsonOptions options;
+  Point3 translate;
   std::unique_ptr<detail::AtomicFile> file;
-  std::FILE* vertices = nullptr;  // the vertex list, spooled to an anonymous temporary file
+  std::FILE* objects = nullptr;   // the CityObjects members, spooled to an anonymous temporary file
+  std::FILE* vertices = nullptr;  // the vertex list, likewise
   std::uint64_t vertex_count = 0;
   std::size_t features = 0;
   bool any_object = false;
+  Box3 extent;                    // of the quantised vertices
   ~Impl() {
+    if (objects) std::fclose(objects);
     if (vertices) std::fclose(vertices);
   }
 };
@@ -602,13 +696,11 @@ CityJsonAssembler::CityJsonAssembler(const std::string& path, const CityJsonOpti
     : impl_(new Impl) {
   check_options(options, path);
   impl_->path = path;
+  impl_->options = options;
+  impl_->translate = translate;
   impl_->file = std::make_unique<detail::AtomicFile>(path);
-  impl_->vertices = std::tmpfile();
-  if (!impl_->vertices) throw IoError("cityjson: cannot create a temporary file for the vertices of " + path);
-  std::string header = "{";
-  append_header_fields(header, options, translate);
-  header += ",\"CityObjects\":{";
-  write_all(impl_->file->file(), header);
+  impl_->objects = open_spool("city objects", path);
+  impl_->vertices = open_spool("vertices", path);
 }
 
 CityJsonAssembler::~CityJsonAssembler() = default;
@@ -617,11 +709,11 @@ void CityJsonAssembler::add(const std::string& feature) {
   if (!impl_->file) throw IoError("cityjson: " + impl_->path + " is already closed");
   std::string objects, vertices;
   FeatureSplicer splicer(feature, ++impl_->features, impl_->vertex_count);
-  const std::uint64_t n = splicer.split(objects, vertices);
+  const std::uint64_t n = splicer.split(objects, vertices, impl_->extent);
   if (!objects.empty()) {
     if (impl_->any_object) objects.insert(objects.begin(), ',');
     impl_->any_object = true;
-    write_all(impl_->file->file(), objects);
+    write_all(impl_->objects, objects);
   }
   if (n > 0) {
     if (impl_->vertex_count > 0) vertices.insert(vertices.begin(), ',');
@@ -633,13 +725,58 @@ void CityJsonAssembler::add(const std::string& feature) {
 void CityJsonAssembler::close() {
   if (!impl_->file) return;
   std::FILE* out = impl_->file->file();
+  std::string header = "{";
+  append_header_fields(header, impl_->options, impl_->translate, &impl_->extent);
+  header += ",\"CityObjects\":{";
+  write_all(out, header);
+  copy_spool(impl_->objects, out, impl_->path);
   write_all(out, "},\"vertices\":[");
-  if (std::fflush(impl_->vertices) != 0 || std::fseek(impl_->vertices, 0, SEEK_SET) != 0)
-    throw IoError("cityjson: cannot read back the vertices spooled for " + impl_->path);
-  char buffer[1 << 16];
-  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, impl_->vertices)) > 0;) std::fwrite(buffer, 1, n, out);
-  if (std::ferror(impl_->vertices)) throw IoError("cityjson: cannot read back the vertices spooled for " + impl_->path);
+  copy_spool(impl_->vertices, out, impl_->path);
   write_all(out, "]}\n");
+  impl_->file->commit();
+  impl_->file.reset();
+}
+
+struct CityJsonSeqAssembler::Impl {
+  std::string path;
+  CityJsonOptions options;
+  Point3 translate;
+  std::unique_ptr<detail::AtomicFile> file;
+  std::FILE* features = nullptr;  // the feature lines, spooled until the extent is known
+  std::size_t count = 0;
+  Box3 extent;
+  ~Impl() {
+    if (features) std::fclose(features);
+  }
+};
+
+CityJsonSeqAssembler::CityJsonSeqAssembler(const std::string& path, const CityJsonOptions& options,
+                                           const Point3& translate)
+    : impl_(new Impl) {
+  check_options(options, path);
+  impl_->path = path;
+  impl_->options = options;
+  impl_->translate = translate;
+  impl_->file = std::make_unique<detail::AtomicFile>(path);
+  impl_->features = open_spool("features", path);
+}
+
+CityJsonSeqAssembler::~CityJsonSeqAssembler() = default;
+
+void CityJsonSeqAssembler::add(const std::string& feature) {
+  if (!impl_->file) throw IoError("cityjson: " + impl_->path + " is already closed");
+  // Only the extent is taken from the feature; the line is written as it is.
+  std::string objects, vertices;
+  FeatureSplicer(feature, ++impl_->count, 0).split(objects, vertices, impl_->extent);
+  write_all(impl_->features, feature);
+  std::fputc('\n', impl_->features);
+}
+
+void CityJsonSeqAssembler::close() {
+  if (!impl_->file) return;
+  std::FILE* out = impl_->file->file();
+  write_all(out, cityjson_seq_header(impl_->options, impl_->translate, &impl_->extent) + "\n");
+  copy_spool(impl_->features, out, impl_->path);
   impl_->file->commit();
   impl_->file.reset();
 }

@@ -1,5 +1,8 @@
-// GeoPackage output through OGR: the footprints with every report attribute (layer `buildings`) and
-// the LoD2.2 roof parts in plan view with heights, slope and azimuth (layer `roof_parts`).
+// GeoPackage output through OGR, laid out as 3DBAG's: the footprints with every report attribute
+// (layer `buildings`, 3DBAG's `pand`), and for each level of detail its roof parts in plan view with
+// heights, slope and azimuth (`lod12_2d`, `lod13_2d`, `lod22_2d`) and its models as MultiPolygonZ
+// (`lod12_3d`, `lod13_3d`, `lod22_3d`); `roof_parts` (earlier versions' LoD2.2 roof parts) is a view
+// of `lod22_2d`.
 #include <cpl_conv.h>
 #include <gdal_priv.h>
 #include <ogrsf_frmts.h>
@@ -24,13 +27,14 @@ constexpr double kPi = 3.14159265358979323846;
 
 // The field type that holds every value a name takes: integers stay 64-bit integers, integers
 // mixed with numbers become reals, anything mixed with text becomes text.
-enum class Kind { none, boolean, integer, real, text };
+enum class Kind { none, boolean, integer, real, text, list };
 
 Kind kind_of(const AttributeValue& v) {
   if (std::holds_alternative<bool>(v)) return Kind::boolean;
   if (std::holds_alternative<std::int64_t>(v)) return Kind::integer;
   if (std::holds_alternative<double>(v)) return Kind::real;
   if (std::holds_alternative<std::string>(v)) return Kind::text;
+  if (std::holds_alternative<AttributeList>(v)) return Kind::list;
   return Kind::none;
 }
 
@@ -51,6 +55,7 @@ std::string as_text(const AttributeValue& v) {
     return buf;
   }
   if (const std::string* s = std::get_if<std::string>(&v)) return *s;
+  if (const AttributeList* l = std::get_if<AttributeList>(&v)) return l->json;
   return "";
 }
 
@@ -85,6 +90,57 @@ OGRMultiPolygon footprint_geometry(const std::vector<Polygon2>& polygons) {
     multi.addGeometry(&polygon);
   }
   return multi;
+}
+
+const char* surface_type_name(SurfaceType t) {
+  switch (t) {
+    case SurfaceType::ground: return "GroundSurface";
+    case SurfaceType::wall: return "WallSurface";
+    case SurfaceType::roof: return "RoofSurface";
+  }
+  return "RoofSurface";
+}
+
+// A number rounded to 1/`per` (heights to the millimetre: 1000), or null when not finite.
+void set_rounded(OGRFeature& feature, int index, double v, double per) {
+  if (std::isfinite(v)) feature.SetField(index, std::round(v * per) / per);
+  else feature.SetFieldNull(index);
+}
+
+// One roof face in plan view: its polygon, lowest / highest / mean vertex height (world z), slope
+// and azimuth (degrees; azimuth clockwise from north towards the downhill side) and plan area.
+struct RoofPart {
+  bool valid = false;
+  OGRPolygon plan;
+  double lowest = INFINITY, highest = -INFINITY, mean = 0, slope = 0, azimuth = 0, area = 0;
+};
+
+RoofPart roof_part(const BuildingModel& m, const std::vector<std::uint32_t>& face) {
+  RoofPart p;
+  double nx = 0, ny = 0, nz = 0, sum = 0;
+  OGRLinearRing ring;
+  for (std::size_t k = 0; k < face.size(); ++k) {
+    const Point3& a = m.mesh.vertices[face[k]];
+    const Point3& b = m.mesh.vertices[face[(k + 1) % face.size()]];
+    nx += (a.y - b.y) * (a.z + b.z);
+    ny += (a.z - b.z) * (a.x + b.x);
+    nz += (a.x - b.x) * (a.y + b.y);
+    const double z = a.z + m.origin.z;
+    p.lowest = std::min(p.lowest, z), p.highest = std::max(p.highest, z), sum += z;
+    ring.addPoint(a.x + m.origin.x, a.y + m.origin.y);
+  }
+  ring.closeRings();
+  const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+  if (!(len > 0)) return p;
+  p.valid = true;
+  p.plan.addRing(&ring);
+  p.mean = sum / face.size();
+  p.slope = std::acos(std::min(1.0, std::fabs(nz) / len)) * 180.0 / kPi;
+  // The horizontal part of the normal points downhill; azimuth clockwise from north (+y).
+  p.azimuth = std::atan2(nx, ny) * 180.0 / kPi;
+  if (p.azimuth < 0) p.azimuth += 360.0;
+  p.area = std::fabs(nz) / 2;
+  return p;
 }
 
 // RAII for the dataset and the config options that make the file deterministic.
@@ -147,6 +203,7 @@ void write_gpkg(const std::string& path, const OverviewSource& records, const st
                                      : k == Kind::boolean ? OFTInteger
                                                           : OFTString);
     if (k == Kind::boolean) field.SetSubType(OFSTBoolean);
+    if (k == Kind::list) field.SetSubType(OFSTJSON);  // GeoPackage has no list type: its JSON text
     if (buildings->CreateField(&field) != OGRERR_NONE) fail("cannot create field " + name);
   }
   for (int i = 0; i < buildings->GetLayerDefn()->GetFieldCount(); ++i)
@@ -166,64 +223,125 @@ void write_gpkg(const std::string& path, const OverviewSource& records, const st
   }
   if (ds->CommitTransaction() != OGRERR_NONE) fail("cannot commit the buildings");
 
-  // Layer `roof_parts`: each LoD2.2 roof face in plan view.
-  OGRLayer* roofs = ds->CreateLayer("roof_parts", srs_ptr, wkbPolygon, nullptr);
-  if (!roofs) fail("cannot create layer roof_parts");
-  const std::pair<const char*, OGRFieldType> roof_fields[] = {
-      {"building_id", OFTString}, {"part", OFTInteger}, {"h_min", OFTReal},   {"h_max", OFTReal},
-      {"h_mean", OFTReal},        {"slope", OFTReal},   {"azimuth", OFTReal}, {"area", OFTReal}};
-  for (const auto& [name, type] : roof_fields) {
-    OGRFieldDefn field(name, type);
-    if (roofs->CreateField(&field) != OGRERR_NONE) fail(std::string("cannot create field ") + name);
+  // The levels of detail: for each, `lodXX_2d`, its roof faces in plan view, and `lodXX_3d`, each
+  // building's model as one MultiPolygonZ, both from one more pass over the records (every level of
+  // one record at a time), all six layers filled in one transaction.
+  struct LevelLayers {
+    const char* lod;
+    OGRLayer* plan = nullptr;
+    OGRLayer* solid = nullptr;
+  };
+  LevelLayers levels[] = {{"1.2"}, {"1.3"}, {"2.2"}};
+  const std::pair<const char*, OGRFieldType> plan_fields[] = {
+      {"building_id", OFTString}, {"part", OFTInteger},   {"b3_h_maaiveld", OFTReal}, {"h_min", OFTReal},
+      {"h_max", OFTReal},         {"h_mean", OFTReal},    {"slope", OFTReal},         {"azimuth", OFTReal},
+      {"area", OFTReal}};
+  const std::pair<const char*, OGRFieldType> solid_fields[] = {
+      {"id", OFTString},     {"status", OFTString}, {"b3_h_maaiveld", OFTReal}, {"h_max", OFTReal},
+      {"volume", OFTReal},   {"rmse", OFTReal},     {"val3dity", OFTString},    {"surfaces", OFTString}};
+  for (LevelLayers& level : levels) {
+    std::string name = std::string("lod") + level.lod[0] + level.lod[2];
+    level.plan = ds->CreateLayer((name + "_2d").c_str(), srs_ptr, wkbPolygon, nullptr);
+    level.solid = ds->CreateLayer((name + "_3d").c_str(), srs_ptr, wkbMultiPolygon25D, nullptr);
+    if (!level.plan || !level.solid) fail("cannot create the layers of LoD" + std::string(level.lod));
+    for (const auto& [field_name, type] : plan_fields) {
+      OGRFieldDefn field(field_name, type);
+      if (level.plan->CreateField(&field) != OGRERR_NONE) fail(std::string("cannot create field ") + field_name);
+    }
+    for (const auto& [field_name, type] : solid_fields) {
+      OGRFieldDefn field(field_name, type);
+      if (std::strcmp(field_name, "val3dity") == 0 || std::strcmp(field_name, "surfaces") == 0)
+        field.SetSubType(OFSTJSON);
+      if (level.solid->CreateField(&field) != OGRERR_NONE) fail(std::string("cannot create field ") + field_name);
+    }
   }
   if (ds->StartTransaction() != OGRERR_NONE) fail("cannot start a transaction");
   for (std::size_t k = 0; k < records.size(); ++k) {
     const OverviewRecord r = records.at(k, true);
+    const double ground = r.report.ground_z;
     for (const CityGeometry& g : r.lods) {
-      if (g.lod != "2.2") continue;
+      const LevelLayers* level = nullptr;
+      for (const LevelLayers& l : levels)
+        if (g.lod == l.lod) level = &l;
+      if (!level) continue;
       const BuildingModel& m = g.model;
       const std::vector<SurfaceType> types = surface_types(m);
+      // Roof parts in plan.
       int part = 0;
       for (std::size_t f = 0; f < m.mesh.faces.size(); ++f) {
         if (types[f] != SurfaceType::roof) continue;
-        const auto& face = m.mesh.faces[f];
-        double nx = 0, ny = 0, nz = 0, lo = INFINITY, hi = -INFINITY, sum = 0;
-        OGRLinearRing ring;
-        for (std::size_t k = 0; k < face.size(); ++k) {
-          const Point3& a = m.mesh.vertices[face[k]];
-          const Point3& b = m.mesh.vertices[face[(k + 1) % face.size()]];
-          nx += (a.y - b.y) * (a.z + b.z);
-          ny += (a.z - b.z) * (a.x + b.x);
-          nz += (a.x - b.x) * (a.y + b.y);
-          const double z = a.z + m.origin.z;
-          lo = std::min(lo, z), hi = std::max(hi, z), sum += z;
-          ring.addPoint(a.x + m.origin.x, a.y + m.origin.y);
-        }
-        ring.closeRings();
-        const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
-        if (!(len > 0)) continue;
-        OGRPolygon polygon;
-        polygon.addRing(&ring);
-        OGRFeature feature(roofs->GetLayerDefn());
+        const RoofPart p = roof_part(m, m.mesh.faces[f]);
+        if (!p.valid) continue;
+        OGRFeature feature(level->plan->GetLayerDefn());
         feature.SetField(0, r.report.id.c_str());
         feature.SetField(1, part++);
-        feature.SetField(2, std::round(lo * 1000) / 1000);
-        feature.SetField(3, std::round(hi * 1000) / 1000);
-        feature.SetField(4, std::round(sum / face.size() * 1000) / 1000);
-        const double slope = std::acos(std::min(1.0, std::fabs(nz) / len)) * 180.0 / kPi;
-        feature.SetField(5, std::round(slope * 100) / 100);
-        // The horizontal part of the normal points downhill; azimuth clockwise from north (+y).
-        double azimuth = std::atan2(nx, ny) * 180.0 / kPi;
-        if (azimuth < 0) azimuth += 360.0;
-        if (slope < 0.01) feature.SetFieldNull(6);
-        else feature.SetField(6, std::round(azimuth * 100) / 100);
-        feature.SetField(7, std::round(std::fabs(nz) / 2 * 100) / 100);
-        feature.SetGeometry(&polygon);
-        if (roofs->CreateFeature(&feature) != OGRERR_NONE) fail("cannot write a roof part of " + r.report.id);
+        set_rounded(feature, 2, ground, 1000);
+        feature.SetField(3, std::round(p.lowest * 1000) / 1000);
+        feature.SetField(4, std::round(p.highest * 1000) / 1000);
+        feature.SetField(5, std::round(p.mean * 1000) / 1000);
+        feature.SetField(6, std::round(p.slope * 100) / 100);
+        if (p.slope < 0.01) feature.SetFieldNull(7);
+        else feature.SetField(7, std::round(p.azimuth * 100) / 100);
+        feature.SetField(8, std::round(p.area * 100) / 100);
+        feature.SetGeometry(&p.plan);
+        if (level->plan->CreateFeature(&feature) != OGRERR_NONE)
+          fail("cannot write a roof part of " + r.report.id + " (LoD" + g.lod + ")");
       }
+      // The model: one polygon per face, grounds first, then walls, then roofs, each polygon's
+      // semantic type in `surfaces` (a MultiPolygonZ cannot carry them itself).
+      OGRMultiPolygon solid;
+      std::string surfaces = "[";
+      double top = -INFINITY;
+      for (const SurfaceType wanted : {SurfaceType::ground, SurfaceType::wall, SurfaceType::roof}) {
+        for (std::size_t f = 0; f < m.mesh.faces.size(); ++f) {
+          if (types[f] != wanted) continue;
+          OGRLinearRing ring;
+          for (std::uint32_t v : m.mesh.faces[f]) {
+            const Point3& a = m.mesh.vertices[v];
+            ring.addPoint(a.x + m.origin.x, a.y + m.origin.y, a.z + m.origin.z);
+            top = std::max(top, a.z + m.origin.z);
+          }
+          ring.closeRings();
+          OGRPolygon polygon;
+          polygon.addRing(&ring);
+          solid.addGeometry(&polygon);
+          surfaces += std::string(surfaces.size() > 1 ? "," : "") + "\"" + surface_type_name(wanted) + "\"";
+        }
+      }
+      surfaces += "]";
+      OGRFeature feature(level->solid->GetLayerDefn());
+      feature.SetField(0, r.report.id.c_str());
+      feature.SetField(1, to_string(r.report.status));
+      set_rounded(feature, 2, ground, 1000);
+      set_rounded(feature, 3, top, 1000);
+      const bool lod12 = g.lod == "1.2", lod13 = g.lod == "1.3";
+      set_rounded(feature, 4, lod12 ? r.report.volume_lod12 : lod13 ? r.report.volume_lod13 : r.report.volume_lod22, 100);
+      set_rounded(feature, 5, lod12 ? r.report.rmse_lod12 : lod13 ? r.report.rmse_lod13 : r.report.rmse_lod22, 10000);
+      feature.SetField(6, "[]");  // the level as written is valid (an invalid model is never written)
+      feature.SetField(7, surfaces.c_str());
+      feature.SetGeometry(&solid);
+      if (level->solid->CreateFeature(&feature) != OGRERR_NONE)
+        fail("cannot write the LoD" + g.lod + " model of " + r.report.id);
     }
   }
-  if (ds->CommitTransaction() != OGRERR_NONE) fail("cannot commit the roof parts");
+  if (ds->CommitTransaction() != OGRERR_NONE) fail("cannot commit the levels of detail");
+
+  // `roof_parts`, as earlier versions wrote it: a view of lod22_2d with its columns, registered as a
+  // feature layer (GDAL and QGIS open it as one), so that no roof face is stored twice.
+  ds->FlushCache();
+  for (const char* sql :
+       {"CREATE VIEW roof_parts AS SELECT fid, geom, building_id, part, h_min, h_max, h_mean, slope, azimuth, area "
+        "FROM lod22_2d",
+        "INSERT INTO gpkg_contents (table_name, data_type, identifier, description, last_change, min_x, min_y, max_x, "
+        "max_y, srs_id) SELECT 'roof_parts', data_type, 'roof_parts', 'the LoD2.2 roof parts (a view of lod22_2d)', "
+        "last_change, min_x, min_y, max_x, max_y, srs_id FROM gpkg_contents WHERE table_name = 'lod22_2d'",
+        "INSERT INTO gpkg_geometry_columns (table_name, column_name, geometry_type_name, srs_id, z, m) SELECT "
+        "'roof_parts', column_name, geometry_type_name, srs_id, z, m FROM gpkg_geometry_columns WHERE table_name = "
+        "'lod22_2d'"}) {
+    CPLErrorReset();
+    ds->ExecuteSQL(sql, nullptr, nullptr);
+    if (CPLGetLastErrorType() >= CE_Failure) fail("cannot create the view roof_parts");
+  }
   ds.reset();
   if (std::rename(temp.c_str(), path.c_str()) != 0) {
     const std::string why = std::strerror(errno);

@@ -51,6 +51,20 @@ void json_number(std::string& out, double v, int decimals) {
   out += s;
 }
 
+// The outline a model stands on, in plan (world coordinates): its ground faces' rings. For a
+// single-building cloud, the outline city3d inferred from its points.
+std::vector<Ring2> ground_rings(const BuildingModel& m) {
+  std::vector<Ring2> rings;
+  const std::vector<SurfaceType> types = surface_types(m);
+  for (std::size_t f = 0; f < m.mesh.faces.size(); ++f) {
+    if (types[f] != SurfaceType::ground) continue;
+    Ring2 ring;
+    for (std::uint32_t v : m.mesh.faces[f]) ring.push_back({m.mesh.vertices[v].x + m.origin.x, m.mesh.vertices[v].y + m.origin.y});
+    rings.push_back(std::move(ring));
+  }
+  return rings;
+}
+
 // Vertex coordinates of models embedded for the 3D view, at most (keeps a 10,000-building page light).
 constexpr std::size_t kModelVertexBudget = 150000;
 
@@ -84,7 +98,16 @@ main { display: grid; grid-template-columns: minmax(0, 1.35fr) minmax(0, 1fr); g
 button.tab { border: 1px solid var(--line); background: #f7f9fb; border-radius: 7px; padding: 4px 10px; font: inherit;
              font-size: 13px; cursor: pointer; color: var(--ink); }
 button.tab.on { background: var(--accent); border-color: var(--accent); color: #fff; }
+.mapbox { position: relative; }
 #map { width: 100%; height: 460px; display: block; background: #fbfcfd; border-radius: 8px; border: 1px solid var(--line); }
+#scalebar { position: absolute; left: 12px; bottom: 10px; font-size: 11px; color: var(--ink); pointer-events: none; }
+#scalebar .bar { height: 6px; border: 1.5px solid var(--ink); border-top: none; margin-bottom: 2px; }
+table.params { border-collapse: collapse; font-size: 12.5px; width: 100%; }
+table.params td { padding: 2px 10px 2px 0; vertical-align: top; border-bottom: 1px solid #f0f2f5; }
+table.params td:first-child { color: var(--muted); white-space: nowrap; width: 1%; }
+.runinfo { font-size: 13px; }
+.runinfo .warn { color: #9a5b00; }
+details summary { cursor: pointer; color: var(--accent); margin: 8px 0 4px; }
 #map path { stroke: #ffffff; stroke-width: 0.6; vector-effect: non-scaling-stroke; cursor: pointer; }
 #map path:hover { stroke: var(--ink); stroke-width: 1.5; }
 #map path.sel { stroke: #111; stroke-width: 2.5; }
@@ -121,9 +144,9 @@ footer { color: var(--muted); font-size: 12px; padding: 0 28px 24px; }
 <div class="cards" id="cards"></div>
 <main>
   <section class="panel">
-    <div class="toolbar"><h2>Footprints</h2>
+    <div class="toolbar"><h2 id="map-title">Footprints</h2>
       <button class="tab on" id="by-status">Status</button><button class="tab" id="by-rmse">RMSE</button></div>
-    <svg id="map" role="img" aria-label="map of the footprints"></svg>
+    <div class="mapbox"><svg id="map" role="img" aria-label="map of the footprints"></svg><div id="scalebar"></div></div>
     <div class="legend" id="legend"></div>
   </section>
   <section class="panel">
@@ -133,8 +156,9 @@ footer { color: var(--muted); font-size: 12px; padding: 0 28px 24px; }
   </section>
   <section class="panel wide"><h2>Distributions</h2><div class="hists" id="hists"></div></section>
   <section class="panel wide"><h2>Worst buildings</h2><div id="worst"></div></section>
+  <section class="panel wide"><h2>Inputs and parameters</h2><div id="run" class="runinfo"></div></section>
 </main>
-<footer>Written by city3d. Drag the 3D view to turn the model; click a footprint or a table row to choose a building.</footer>
+<footer>Written by city3d. Drag the 3D view to turn the model; point at a footprint for its figures, click it or a table row to choose a building.</footer>
 <div id="tip"></div>
 <script id="data" type="application/json">)HTML";
 
@@ -167,6 +191,35 @@ const rmses = B.filter((b) => b.rmse !== null).map((b) => b.rmse);
 const faces = B.filter((b) => b.f > 0).map((b) => b.f);
 const secs = B.map((b) => b.t);
 $("subtitle").textContent = B.length + " buildings" + (D.crs ? " · " + D.crs : "") + " · city3d " + D.version;
+
+// Inputs, CRS and parameters: what made these outputs.
+(function drawRun() {
+  const box = $("run"), I = D.inputs || {}, P = D.parameters || {};
+  const line = (label, text, cls) => {
+    const p = el("div", cls ? { class: cls } : {}, box);
+    el("b", {}, p).textContent = label + ": ";
+    p.appendChild(document.createTextNode(text));
+  };
+  const clouds = I.point_clouds || [];
+  const name = (path) => String(path).split("/").pop();
+  line("point clouds", clouds.length + (clouds.length === 1 ? " file: " : " files: ") +
+       clouds.slice(0, 12).map(name).join(", ") + (clouds.length > 12 ? ", ..." : ""));
+  if (I.footprints) line("footprints", I.footprints + " (layer " + I.layer + ", id field " + (I.id_field || "the feature id") + ")");
+  else line("footprints", "none: every point cloud is one building, its outline inferred from its points");
+  const source = { "--crs": "given with --crs", "point clouds": "as the point clouds record it",
+                   "footprints": "taken from the footprints: the point clouds record none" }[D.crs_source] || "";
+  line("CRS", D.crs ? D.crs + (source ? " (" + source + ")" : "") : "none recorded (give --crs)",
+       D.crs_source === "footprints" || !D.crs ? "warn" : "");
+  const details = el("details", {}, box);
+  el("summary", {}, details).textContent = Object.keys(P).length + " parameters";
+  const table = el("table", { class: "params" }, details);
+  Object.keys(P).forEach((k) => {
+    const tr = el("tr", {}, table);
+    el("td", {}, tr).textContent = "--" + k;
+    const v = P[k];
+    el("td", {}, tr).textContent = v === null ? "–" : Array.isArray(v) ? v.join(",") : String(v);
+  });
+})();
 [["buildings", B.length, ""], ["ok", counts.ok, "ok"], ["fallback", counts.fallback, "fallback"],
  ["partial", counts.partial, "partial"], ["skipped", counts.skipped, "skipped"], ["failed", counts.failed, "failed"],
  ["median RMSE (m)", fmt(median(rmses), 3), ""], ["faces", faces.reduce((a, b) => a + b, 0), ""],
@@ -194,9 +247,13 @@ const paths = [];
   B.forEach((b) => (b.fp || []).forEach((ring) => ring.forEach(([x, y]) => {
     minx = Math.min(minx, x); maxx = Math.max(maxx, x); miny = Math.min(miny, y); maxy = Math.max(maxy, y);
   })));
+  if (D.inferred) {
+    $("map-title").textContent = "Outlines inferred from the points";
+    map.setAttribute("aria-label", "outlines inferred from the points, one single-building cloud per cell, at one scale");
+  }
   if (!isFinite(minx)) {
     const t = el("text", { x: "50%", y: "50%", "text-anchor": "middle", fill: "#5f6b78" }, map);
-    t.textContent = "no footprints in this run (single-building clouds)";
+    t.textContent = "no footprint and no model in this run";
     return;
   }
   const pad = 0.03 * Math.max(maxx - minx, maxy - miny, 1);
@@ -210,13 +267,53 @@ const paths = [];
       tip.style.display = "block";
       tip.style.left = e.clientX + 12 + "px";
       tip.style.top = e.clientY + 12 + "px";
-      tip.textContent = b.id + " · " + b.s + (b.rmse !== null ? " · RMSE " + fmt(b.rmse, 3) + " m" : "") + (b.r ? " · " + b.r : "");
+      tip.textContent = hoverText(b);
     });
     p.addEventListener("mouseleave", () => { tip.style.display = "none"; });
     p.addEventListener("click", () => select(i));
     paths[i] = p;
   });
+  // Inferred outlines are side by side in cells of their own: each named under it (up to a hundred).
+  const named = paths.filter((p) => p);
+  if (D.inferred && named.length <= 100) {
+    const size = Math.max(maxx - minx, maxy - miny) / Math.max(8, 4 * Math.sqrt(named.length));
+    paths.forEach((p, i) => {
+      if (!p) return;
+      const box = p.getBBox();
+      const t = el("text", { x: box.x + box.width / 2, y: box.y + box.height + size * 0.9, "text-anchor": "middle",
+                             "font-size": size * 0.55, fill: "#5f6b78" }, map);
+      t.textContent = B[i].id;
+    });
+  }
 })();
+// What pointing at a footprint shows: the building's id, status, level and main figures.
+function hoverText(b) {
+  return b.id + " · " + b.s + " · " + b.l + (b.h !== null ? " · roof " + fmt(b.h, 1) + " m" : "") +
+         (b.rmse !== null ? " · RMSE " + fmt(b.rmse, 3) + " m" : "") + (b.f ? " · " + b.f + " faces" : "") +
+         (b.r ? " · " + b.r : "");
+}
+
+// A scale bar under the map: a round length (1, 2 or 5 times a power of ten metres) of about a
+// fifth of the map's width, redrawn when the page is resized.
+function drawScaleBar() {
+  const box = $("scalebar");
+  box.innerHTML = "";
+  const vb = map.viewBox && map.viewBox.baseVal;
+  if (!vb || !vb.width) return;
+  const r = map.getBoundingClientRect();
+  const perMetre = Math.min(r.width / vb.width, r.height / vb.height);  // preserveAspectRatio "meet"
+  if (!(perMetre > 0)) return;
+  const target = r.width / 5 / perMetre;
+  const power = Math.pow(10, Math.floor(Math.log10(target)));
+  const metres = [5, 2, 1].map((f) => f * power).find((m) => m <= target) || power;
+  const bar = el("div", { class: "bar" }, box);
+  bar.style.width = Math.round(metres * perMetre) + "px";
+  el("div", {}, box).textContent = (metres >= 1000 ? metres / 1000 + " km" : metres + " m");
+  box.dataset.metres = metres;
+  box.dataset.pixels = Math.round(metres * perMetre);
+}
+window.addEventListener("resize", drawScaleBar);
+
 function colourMap() {
   B.forEach((b, i) => {
     if (!paths[i]) return;
@@ -244,6 +341,7 @@ function colourMap() {
 $("by-status").addEventListener("click", () => { mode = "status"; $("by-status").classList.add("on"); $("by-rmse").classList.remove("on"); colourMap(); });
 $("by-rmse").addEventListener("click", () => { mode = "rmse"; $("by-rmse").classList.add("on"); $("by-status").classList.remove("on"); colourMap(); });
 colourMap();
+drawScaleBar();
 
 // Histograms.
 function histogram(title, values, unit, decimals) {
@@ -406,6 +504,21 @@ resize();
 const first = worst.find((i) => B[i].m >= 0);
 const start = first !== undefined ? first : B.findIndex((b) => b.m >= 0);
 if (start >= 0) select(start);
+// With "#check" in its address the page checks its own map as a person would use it (the tests do):
+// points at the first outline and logs what the hover shows, and logs the scale bar.
+if (location.hash === "#check") {
+  const first = paths.findIndex((p) => p);
+  if (first >= 0) {
+    const r = paths[first].getBoundingClientRect();
+    paths[first].dispatchEvent(new MouseEvent("mousemove", { clientX: r.left + r.width / 2, clientY: r.top + r.height / 2, bubbles: true }));
+    console.log("city3d report hover: " + (tip.style.display === "block" ? tip.textContent : "(nothing shown)"));
+  }
+  const sb = $("scalebar");
+  const r = map.getBoundingClientRect(), vb = map.viewBox.baseVal;
+  console.log("city3d report map: " + paths.filter((p) => p).length + " outlines; scale bar " + (sb.dataset.metres || "none") +
+              " m = " + (sb.dataset.pixels || 0) + " px; map " + r.width.toFixed(1) + " x " + r.height.toFixed(1) + " px, " +
+              (vb ? vb.width.toFixed(3) + " x " + vb.height.toFixed(3) : "0 x 0") + " m");
+}
 console.log("city3d report ready");
 </script>
 </body>
@@ -414,7 +527,8 @@ console.log("city3d report ready");
 
 }  // namespace
 
-void write_report_html(const std::string& path, const OverviewSource& records, const std::string& crs) {
+void write_report_html(const std::string& path, const OverviewSource& records, const RunDescription& run) {
+  const std::string& crs = run.crs;
   // A first pass over the records: the footprints' extent (the map is drawn relative to the run's
   // corner, in centimetres), what orders the models (status, faithfulness both ways, RMSE) and each highest level's size.
   struct Key {
@@ -426,10 +540,21 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
   };
   std::vector<Key> keys(records.size());
   Box2 extent;
+  double outline_size = 0;  // the widest inferred outline (single-building clouds)
+  std::size_t outlines = 0;
   for (std::size_t k = 0; k < records.size(); ++k) {
     const OverviewRecord r = records.at(k, true);
     for (const Polygon2& p : r.footprint)
       for (const Point2& v : p.outer) extent.add(v);
+    if (r.footprint.empty() && !r.lods.empty()) {
+      Box2 box;
+      for (const Ring2& ring : ground_rings(r.lods.back().model))
+        for (const Point2& v : ring) box.add(v);
+      if (!box.empty()) {
+        outline_size = std::max({outline_size, box.max.x - box.min.x, box.max.y - box.min.y});
+        ++outlines;
+      }
+    }
     const BuildingReport& b = r.report;
     const double unfaithful = (std::isfinite(b.unexplained_share) ? b.unexplained_share : 0.0) +
                               (std::isfinite(b.unsupported_area) && b.footprint_area > 0 ? b.unsupported_area / b.footprint_area : 0.0);
@@ -438,6 +563,13 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
   }
   const bool have_footprints = !extent.empty();
   const Point2 corner = have_footprints ? Point2{std::floor(extent.min.x), std::floor(extent.min.y)} : Point2{0, 0};
+  // Without footprints (single-building clouds, each in a frame of its own) the map shows the
+  // outlines inferred from the points side by side: each centred in a cell of a grid, all at one
+  // scale, in output order, row by row from the top.
+  const bool inferred = !have_footprints && outlines > 0;
+  const double cell = std::ceil(outline_size * 1.25 + 1.0);
+  const std::size_t columns = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(std::sqrt(double(outlines)))));
+  const std::size_t rows = (outlines + columns - 1) / std::max<std::size_t>(1, columns);
 
   std::string models = "[";
   std::size_t model_count = 0, vertex_budget = kModelVertexBudget;
@@ -494,12 +626,24 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
   std::fputs(kPage1, out);
   std::string data = "{\"crs\":";
   json_string(data, crs);
+  data += ",\"crs_source\":";
+  json_string(data, run.crs_source);
+  // The inputs and parameters are JSON objects already (made by nlohmann in the pipeline): only '<'
+  // must not reach the page as it is, so that no "</script>" can appear.
+  const auto safe = [](const std::string& json) {
+    std::string out;
+    for (char c : json) out += c == '<' ? std::string("\\u003c") : std::string(1, c);
+    return out.empty() ? std::string("{}") : out;
+  };
+  data += ",\"inputs\":" + safe(run.inputs) + ",\"parameters\":" + safe(run.parameters);
+  data += ",\"inferred\":" + std::string(inferred ? "true" : "false");
   data += ",\"version\":";
   json_string(data, CITY3D_VERSION);
   data += ",\"buildings\":[";
   std::fputs(data.c_str(), out);
+  std::size_t placed = 0;  // inferred outlines laid out so far
   for (std::size_t i = 0; i < records.size(); ++i) {
-    const OverviewRecord r = records.at(i, false);
+    const OverviewRecord r = records.at(i, inferred);
     const BuildingReport& b = r.report;
     data.clear();
     if (i) data += ',';
@@ -549,6 +693,23 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
     for (const Polygon2& p : r.footprint) {
       add_ring(p.outer);
       for (const Ring2& h : p.holes) add_ring(h);
+    }
+    if (inferred && !r.lods.empty()) {
+      std::vector<Ring2> rings = ground_rings(r.lods.back().model);
+      Box2 box;
+      for (const Ring2& ring : rings)
+        for (const Point2& v : ring) box.add(v);
+      if (!box.empty()) {
+        // The centre of its cell, the grid's top row first (y grows upwards on the map).
+        const double cx = (static_cast<double>(placed % columns) + 0.5) * cell;
+        const double cy = (static_cast<double>(rows - 1 - placed / columns) + 0.5) * cell;
+        const Point2 shift{cx - (box.min.x + box.max.x) / 2, cy - (box.min.y + box.max.y) / 2};
+        for (Ring2& ring : rings) {
+          for (Point2& v : ring) v = {v.x + shift.x, v.y + shift.y};
+          add_ring(ring);
+        }
+        ++placed;
+      }
     }
     data += "]}";
     std::fputs(data.c_str(), out);

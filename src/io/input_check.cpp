@@ -16,6 +16,7 @@
 
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
+#include <cpl_conv.h>
 #include "io/input_file.hpp"
 #include "io/las_reader.hpp"
 
@@ -176,6 +177,120 @@ std::string common_point_cloud_crs(const std::vector<std::string>& files, const 
     }
   }
   return crs;
+}
+
+CrsFacts crs_facts(const std::string& text) {
+  OGRSpatialReference srs;
+  if (text.empty() || srs.SetFromUserInput(text.c_str()) != OGRERR_NONE)
+    throw ConfigError("crs: '" + short_crs(text) + "' is no CRS OGR/PROJ understand (give e.g. EPSG:7415, "
+                      "EPSG:28992+5709 or WKT)");
+  CrsFacts facts;
+  facts.title = srs.GetName() ? srs.GetName() : "";
+  facts.vertical = srs.IsCompound() || srs.IsVertical();
+  facts.geographic = srs.IsGeographic();
+  // The code PROJ's database has for it: itself when given by one, else the best match (a compound
+  // of two codes that has one of its own, EPSG:28992+5709 -> EPSG:7415).
+  const auto code_of = [](const OGRSpatialReference& s) -> std::string {
+    const char* authority = s.GetAuthorityName(nullptr);
+    const char* code = s.GetAuthorityCode(nullptr);
+    if (authority && code && std::string(authority) == "EPSG") return std::string("EPSG:") + code;
+    return {};
+  };
+  facts.name = code_of(srs);
+  if (facts.name.empty()) {
+    int count = 0;
+    int* confidence = nullptr;
+    OGRSpatialReferenceH* matches = srs.FindMatches(nullptr, &count, &confidence);
+    for (int i = 0; i < count && facts.name.empty(); ++i)
+      if (confidence[i] == 100) facts.name = code_of(*OGRSpatialReference::FromHandle(matches[i]));
+    OSRFreeSRSArray(matches);
+    CPLFree(confidence);
+  }
+  OGRSpatialReference plan(srs);
+  if (plan.IsCompound()) plan.StripVertical();
+  facts.horizontal = code_of(plan);
+  if (facts.horizontal.empty()) {
+    OGRSpatialReference matched(plan);
+    if (matched.AutoIdentifyEPSG() == OGRERR_NONE) facts.horizontal = code_of(matched);
+  }
+  if (facts.horizontal.empty()) {
+    char* wkt = nullptr;
+    if (plan.exportToWkt(&wkt) == OGRERR_NONE && wkt) facts.horizontal = wkt;
+    CPLFree(wkt);
+  }
+  // A compound of two codes without one of its own keeps both.
+  if (facts.name.empty() && srs.IsCompound()) {
+    const OGR_SRSNode* vertical_node = srs.GetAttrNode("VERT_CS");
+    OGRSpatialReference height;
+    if (vertical_node) {
+      char* wkt = nullptr;
+      vertical_node->exportToWkt(&wkt);
+      if (wkt && height.importFromWkt(wkt) == OGRERR_NONE) {
+        const std::string v = code_of(height);
+        if (facts.horizontal.rfind("EPSG:", 0) == 0 && v.rfind("EPSG:", 0) == 0)
+          facts.name = facts.horizontal + "+" + v.substr(5);
+      }
+      CPLFree(wkt);
+    }
+  }
+  return facts;
+}
+
+RunCrs resolve_run_crs(const std::string& given, const std::string& points_crs, const std::string& footprints_srs,
+                       const std::string& footprints_path) {
+  const auto described = [](const CrsFacts& f) {
+    return (f.name.empty() ? std::string("a CRS without EPSG code") : f.name) +
+           (f.title.empty() ? std::string() : " (" + f.title + ")");
+  };
+  // How a user states the heights' datum, for the messages below: AHN is RD New with NAP heights.
+  const auto how_to_state = [](const CrsFacts& f) {
+    if (f.horizontal == "EPSG:28992") return std::string("AHN heights are NAP: give --crs EPSG:7415, RD New + NAP height");
+    return std::string("give --crs ") + (f.horizontal.rfind("EPSG:", 0) == 0 ? f.horizontal : "HORIZONTAL") +
+           "+VERTICAL, VERTICAL the EPSG code of the heights' datum";
+  };
+  RunCrs run;
+  if (!given.empty()) {
+    const CrsFacts facts = crs_facts(given);
+    if (facts.geographic)
+      throw ConfigError("crs: " + described(facts) + " is geographic (degrees); city3d needs projected coordinates in "
+                        "metres");
+    if (!points_crs.empty()) {
+      // The tiles' own record must agree in plan: --crs states the heights, or a CRS they lack.
+      OGRSpatialReference mine, theirs;
+      mine.SetFromUserInput(facts.horizontal.c_str());
+      theirs.SetFromUserInput(points_crs.c_str());
+      if (theirs.IsCompound()) theirs.StripVertical();
+      if (!mine.IsSame(&theirs))
+        throw IoError("input: --crs " + given + " is " + described(facts) + " but the point clouds record " +
+                      short_crs(points_crs) + ": give the CRS they are in, or none to take theirs");
+    }
+    run = {facts.name.empty() ? given : facts.name, "--crs"};
+    log_info("crs: " + described(facts) + ", from --crs" +
+             (facts.vertical ? "" : "; its heights have no stated vertical datum (" + how_to_state(facts) + ")"));
+    return run;
+  }
+  if (!points_crs.empty()) {
+    const CrsFacts facts = crs_facts(points_crs);
+    run = {facts.name.empty() ? points_crs : facts.name, "point clouds"};
+    log_info("crs: " + described(facts) + ", as the point clouds record it" +
+             (facts.vertical ? "" : "; its heights have no stated vertical datum (" + how_to_state(facts) + ")"));
+    return run;
+  }
+  if (!footprints_srs.empty()) {
+    const CrsFacts facts = crs_facts(footprints_srs);
+    run = {facts.name.empty() ? footprints_srs : facts.name, "footprints"};
+    log_warning("input: the point clouds record no CRS: the run takes " + described(facts) + " from the footprints " +
+                footprints_path +
+                (facts.vertical ? std::string(" (say so with --crs)")
+                                : "; the heights then have no stated vertical datum (" + how_to_state(facts) + ")"));
+    return run;
+  }
+  if (!footprints_path.empty())
+    log_warning("input: neither the point clouds nor the footprints " + footprints_path +
+                " record a CRS: the outputs carry none (give --crs)");
+  else
+    log_info("crs: the point clouds record none: the outputs carry none (give --crs when they are in one)");
+  return run;
 }
 
 void check_footprints_meet_points(const std::vector<Box2>& boxes, const FootprintSet& footprints,

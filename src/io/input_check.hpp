@@ -36,6 +36,36 @@ constexpr std::size_t kTwinRecords = 64;
 /// geographic (degrees, where city3d needs metres).
 std::string common_point_cloud_crs(const std::vector<std::string>& files, const std::vector<PointCloudInfo>& infos);
 
+/// What city3d needs to know of a coordinate reference system.
+struct CrsFacts {
+  /// "EPSG:7415" when PROJ's database knows it by a code (a compound given as "EPSG:28992+5709" is
+  /// EPSG:7415); "EPSG:28992+5709" for a compound of two codes with none of its own; empty when no
+  /// EPSG code identifies it.
+  std::string name;
+  std::string title;       ///< "Amersfoort / RD New + NAP height"
+  std::string horizontal;  ///< the horizontal part: "EPSG:28992", or WKT
+  bool vertical = false;   ///< it states the heights' vertical datum (a compound CRS)
+  bool geographic = false; ///< its horizontal part is in degrees
+};
+
+/// The facts of a CRS given as "EPSG:n", "EPSG:h+v", WKT or PROJ text. Throws ConfigError naming
+/// `text` when OGR/PROJ cannot understand it.
+CrsFacts crs_facts(const std::string& text);
+
+/// The run's CRS and where it came from.
+struct RunCrs {
+  std::string name;    ///< as CrsFacts::name ("EPSG:7415"), else the CRS as recorded (WKT); empty without one
+  std::string source;  ///< "--crs", "point clouds", "footprints", or empty
+};
+
+/// The run's CRS: `given` (--crs) when set, else the point clouds' (`points_crs`), else the
+/// footprints' (`footprints_srs`, of the source `footprints_path`), with a warning naming it, as the
+/// heights then have no stated reference. Says at -v which it is and whether its heights have a
+/// vertical datum. Throws IoError when `given` disagrees in plan with what the point clouds record,
+/// ConfigError when it is geographic.
+RunCrs resolve_run_crs(const std::string& given, const std::string& points_crs, const std::string& footprints_srs,
+                       const std::string& footprints_path);
+
 /// Throws IoError when none of the footprints' bounding boxes `boxes` (those `footprints` kept, in
 /// the points' CRS) meets any point cloud's header bounds (the usual sign of footprints and points
 /// in different CRSs), naming both extents and CRSs. Does nothing when there are no footprints or

@@ -45,22 +45,41 @@ void print_coordinate_triple(std::FILE* out, const char* prefix, const Point3& p
   std::fputc('\n', out);
 }
 
-// OBJ: one `o <id>` group per building; indices are global (1-based) across groups.
+const char* surface_name(SurfaceType t) {
+  switch (t) {
+    case SurfaceType::ground: return "GroundSurface";
+    case SurfaceType::wall: return "WallSurface";
+    case SurfaceType::roof: return "RoofSurface";
+  }
+  return "RoofSurface";
+}
+
+// OBJ: one `o <id>` object per building, its faces grouped by semantic surface (ground, walls,
+// roofs: `g` and `usemtl` RoofSurface, WallSurface, GroundSurface, materials of kSurfaceMaterials,
+// so that Blender or MeshLab tell them apart); indices are global (1-based) across objects.
 void write_obj(std::FILE* out, const std::vector<BuildingModel>& models, const ModelWriteOptions& options) {
   std::fprintf(out, "# city3d %s\n", CITY3D_VERSION);
   std::fputs(options.local_coordinates ? "# local coordinates: world = local + origin of each building\n"
                                        : "# world coordinates\n",
              out);
+  std::fprintf(out, "mtllib %s\n", kSurfaceMaterialFile);
   std::size_t base = 1;
   for (const BuildingModel& m : models) {
     if (options.local_coordinates) print_coordinate_triple(out, "# origin ", m.origin, false);
     std::fprintf(out, "o %s\n", m.id.c_str());
     for (const Point3& p : m.mesh.vertices)
       print_coordinate_triple(out, "v ", output_point(m, p, options.local_coordinates), options.local_coordinates);
-    for (const auto& face : m.mesh.faces) {
-      std::fputc('f', out);
-      for (std::uint32_t v : face) std::fprintf(out, " %zu", base + v);
-      std::fputc('\n', out);
+    const std::vector<SurfaceType> types = surface_types(m);
+    for (const SurfaceType type : {SurfaceType::ground, SurfaceType::wall, SurfaceType::roof}) {
+      bool started = false;
+      for (std::size_t f = 0; f < m.mesh.faces.size(); ++f) {
+        if (types[f] != type) continue;
+        if (!started) std::fprintf(out, "g %s\nusemtl %s\n", surface_name(type), surface_name(type));
+        started = true;
+        std::fputc('f', out);
+        for (std::uint32_t v : m.mesh.faces[f]) std::fprintf(out, " %zu", base + v);
+        std::fputc('\n', out);
+      }
     }
     base += m.mesh.vertices.size();
   }
@@ -196,6 +215,17 @@ void write_models(const std::string& path, const std::vector<BuildingModel>& mod
       write_ply(file.file(), models, options, true);
       break;
   }
+  file.commit();
+}
+
+void write_surface_materials(const std::string& path) {
+  detail::AtomicFile file(path);
+  std::fprintf(file.file(),
+               "# city3d %s: the materials of the OBJ models' semantic surfaces (CityJSON's types)\n"
+               "newmtl GroundSurface\nKd 0.45 0.45 0.45\n"
+               "newmtl WallSurface\nKd 0.92 0.91 0.87\n"
+               "newmtl RoofSurface\nKd 0.80 0.36 0.28\n",
+               CITY3D_VERSION);
   file.commit();
 }
 

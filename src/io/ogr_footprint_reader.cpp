@@ -21,6 +21,8 @@
 #include <utility>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "city3d/error.hpp"
 #include "city3d/footprint_io.hpp"
 #include "city3d/log.hpp"
@@ -302,6 +304,26 @@ std::unique_ptr<OGRCoordinateTransformation> reprojection(OGRLayer& layer, const
   return transform;
 }
 
+/// A list field's value as the JSON array a list attribute holds.
+AttributeList list_value(OGRFeature& feature, int i, OGRFieldType type) {
+  nlohmann::json list = nlohmann::json::array();
+  int count = 0;
+  if (type == OFTIntegerList) {
+    const int* v = feature.GetFieldAsIntegerList(i, &count);
+    for (int k = 0; k < count; ++k) list.push_back(v[k]);
+  } else if (type == OFTInteger64List) {
+    const GIntBig* v = feature.GetFieldAsInteger64List(i, &count);
+    for (int k = 0; k < count; ++k) list.push_back(static_cast<std::int64_t>(v[k]));
+  } else if (type == OFTRealList) {
+    const double* v = feature.GetFieldAsDoubleList(i, &count);
+    for (int k = 0; k < count; ++k) list.push_back(std::isfinite(v[k]) ? nlohmann::json(v[k]) : nlohmann::json(nullptr));
+  } else {
+    char** v = feature.GetFieldAsStringList(i);
+    for (; v && *v; ++v) list.push_back(std::string(*v));
+  }
+  return {list.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)};
+}
+
 bool intersects(const OGREnvelope& envelope, const Box2& box) {
   return !(envelope.MinX > box.max.x || envelope.MaxX < box.min.x || envelope.MinY > box.max.y ||
            envelope.MaxY < box.min.y);
@@ -553,6 +575,11 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
             break;
           case OFTInteger64: value = std::int64_t{feature->GetFieldAsInteger64(i)}; break;
           case OFTReal: value = feature->GetFieldAsDouble(i); break;
+          // Lists stay lists (a GeoJSON array), not OGR's text "(3:1,2,3)".
+          case OFTIntegerList:
+          case OFTInteger64List:
+          case OFTRealList:
+          case OFTStringList: value = list_value(*feature, i, field->GetType()); break;
           default: value = std::string(feature->GetFieldAsString(i)); break;
         }
       }

@@ -180,9 +180,6 @@ OverviewRecord overview_record(const std::string& report_json, const std::string
     throw IoError("overview: feature " + std::to_string(position) + " (" + r.report.id + ") is not a CityJSONFeature: " +
                   e.what());
   }
-  // Only the highest level is shown or written (report.html's 3D view, the GeoPackage's LoD2.2 roof
-  // parts): the others would only take memory.
-  if (r.lods.size() > 1) r.lods.erase(r.lods.begin(), r.lods.end() - 1);
   return r;
 }
 

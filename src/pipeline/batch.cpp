@@ -31,6 +31,8 @@
 #include <system_error>
 #include <thread>
 
+#include <nlohmann/json.hpp>
+
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
 #include "city3d/model_io.hpp"
@@ -262,7 +264,7 @@ detail::BuildingRecord make_record(std::uint64_t index, BuildingResult result, c
                     detail::output_attributes(result.report, footprint_attributes, o.timings_in_cityjson)};
   for (const LodModel& lod : result.lods) object.geometries.push_back({lod.lod, lod.model});
   if (object.geometries.empty()) object.geometries.push_back({cityjson_lod(result.report.level), *result.model});
-  record.feature = cityjson_feature(object, {layout.crs, layout.scale, ""}, layout.translate);
+  record.feature = cityjson_feature(object, {layout.crs, layout.scale, "", ""}, layout.translate);
   if (o.merged_file) record.mesh = std::move(*result.model);
   return record;
 }
@@ -494,7 +496,35 @@ detail::RunLayout layout_of(const BatchOptions& o) {
   l.scale = o.reconstruction.output_grid;  // the grid every model was rounded to and checked on
   l.gpkg = o.gpkg;
   l.html = o.html;
+  l.tiles3d = o.tiles3d;
+  // One text for the same parameters, whoever wrote them (nlohmann's compact form, keys sorted).
+  if (!o.parameters.empty()) {
+    const nlohmann::json parameters = nlohmann::json::parse(o.parameters, nullptr, false);
+    if (parameters.is_discarded() || !parameters.is_object())
+      throw ConfigError("batch: the run's parameters are not a JSON object: " + o.parameters.substr(0, 80));
+    l.parameters = parameters.dump();
+  }
   return l;
+}
+
+// The inputs of a run as its outputs' metadata records them: the point clouds (canonical paths, as
+// the journal's fingerprint knows them), the footprint source, its layer, id field and filters.
+std::string inputs_json(const BatchOptions& o, const std::vector<std::string>& files, const std::string& layer) {
+  nlohmann::json clouds = nlohmann::json::array();
+  for (const std::string& f : files) {
+    std::error_code ec;
+    const fs::path canonical = fs::weakly_canonical(f, ec);
+    clouds.push_back(ec ? f : canonical.string());
+  }
+  nlohmann::json inputs = {{"point_clouds", clouds}};
+  if (!o.footprints.empty()) {
+    std::error_code ec;
+    const fs::path canonical = fs::weakly_canonical(o.footprints, ec);
+    inputs["footprints"] = ec ? o.footprints : canonical.string();
+    inputs["layer"] = layer;
+    inputs["id_field"] = o.footprint.id_field.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.footprint.id_field);
+  }
+  return inputs.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 }  // namespace
@@ -530,10 +560,12 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   std::unique_ptr<FootprintSource> source;
   Box2 extent;
   if (!options.footprints.empty()) {
-    // Footprints in another CRS than the points are reprojected into theirs.
+    // Footprints in another CRS than the points are reprojected into theirs (or into the one --crs
+    // states, when the points record none).
     FootprintReadOptions read_options = options.footprint;
     const std::string points_crs = detail::common_point_cloud_crs(files, infos);
     read_options.target_srs = points_crs;
+    if (points_crs.empty() && !options.crs.empty()) read_options.target_srs = detail::crs_facts(options.crs).horizontal;
     source = std::make_unique<FootprintSource>(options.footprints, read_options);
     std::vector<double> areas;
     const FootprintSet set = source->scan([&](std::size_t, const Footprint& f) {
@@ -544,7 +576,10 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
     });
     check_selection(set, options);
     detail::check_footprints_meet_points(plan.boxes, set, infos, points_crs);
-    plan.layout.crs = set.srs.rfind("EPSG:", 0) == 0 ? set.srs : "";
+    const detail::RunCrs crs = detail::resolve_run_crs(options.crs, points_crs, set.srs, options.footprints);
+    plan.layout.crs = crs.name;
+    plan.layout.crs_source = crs.source;
+    plan.layout.inputs = inputs_json(options, files, set.layer);
     plan.skipped = set.skipped;
     plan.buildings = plan.boxes.size();
     make_blocks(plan, areas, options.block_size);
@@ -560,7 +595,18 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
     }
     const PointCloudInfo& info = infos.front();
     if (!info.bounds.empty()) extent.add({info.bounds.min.x, info.bounds.min.y});
+    const detail::RunCrs crs =
+        detail::resolve_run_crs(options.crs, detail::common_point_cloud_crs(files, infos), "", "");
+    plan.layout.crs = crs.name;
+    plan.layout.crs_source = crs.source;
+    plan.layout.inputs = inputs_json(options, files, "");
   }
+  // A tileset is placed on the globe: it needs to know where the coordinates are.
+  if (options.tiles3d && plan.layout.crs.empty())
+    throw IoError("3dtiles: the run has no CRS (" +
+                  std::string(options.footprints.empty() ? "the point clouds record none"
+                                                         : "neither the point clouds nor the footprints record one") +
+                  "), so its tileset cannot be placed on the globe: give --crs (AHN: --crs EPSG:7415)");
   // One transform for every building of the run, in the CityJSON file and the CityJSONSeq alike,
   // from what every shard knows: the footprints' corner (or the first cloud's), z = 0.
   if (!extent.empty()) plan.layout.translate = {std::floor(extent.min.x), std::floor(extent.min.y), 0.0};

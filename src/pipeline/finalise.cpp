@@ -32,6 +32,16 @@ namespace {
 
 constexpr const char* kManifest = "run.json";
 
+// A name run.json may list: a file in the folder, or under models/ or the tileset's folder (its
+// tiles), never outside it.
+bool run_level_name(const std::string& name) {
+  if (name.empty() || name.find("..") != std::string::npos || name[0] == '/') return false;
+  const std::size_t slash = name.find('/');
+  if (slash == std::string::npos) return true;
+  const std::string folder = name.substr(0, slash);
+  return folder == "models" || folder == kTilesetFolder;
+}
+
 // The names AtomicFile gives its temporary files ("<name>.tmp-<pid>-<n>"), and the journal's.
 bool temporary_name(const std::string& name, long& pid) {
   static const std::regex pattern(R"(.+\.tmp-([0-9]+)-[0-9]+)");
@@ -74,6 +84,25 @@ class JournalOverview : public OverviewSource {
   const std::vector<RecordSource>& records_;
   const RunLayout& layout_;
 };
+
+// A JSON object from its text; an empty object when the text is none.
+json json_object_of(const std::string& text) {
+  json j = json::parse(text, nullptr, false);
+  return j.is_object() ? j : json::object();
+}
+
+// The CityJSON metadata member "city3d": the version, where the CRS came from, the parameters.
+std::string city3d_metadata(const RunLayout& layout) {
+  json j = {{"version", CITY3D_VERSION}};
+  if (!layout.crs_source.empty()) j["crs_source"] = layout.crs_source;
+  j["parameters"] = json_object_of(layout.parameters);
+  return j.dump(-1, ' ', false, json::error_handler_t::replace);
+}
+
+// What report.html says of the run: its CRS and where it came from, its inputs and parameters.
+RunDescription run_description(const RunLayout& layout) {
+  return {layout.crs, layout.crs_source, layout.inputs, layout.parameters};
+}
 
 // What a row's problem is, whatever its numbers: "status: reason", the reason up to its first ';'
 // (a further reason), without parenthesised details, digits as '#' ("skipped: duplicated id",
@@ -139,6 +168,11 @@ std::vector<std::string> run_level_files(const RunLayout& layout, FinaliseScope 
   names.push_back("report.json");
   if (layout.gpkg) names.push_back("buildings.gpkg");
   if (layout.html) names.push_back("report.html");
+  // The OBJ models' materials, beside them.
+  if (layout.format == MeshFormat::obj && layout.merged_file) names.push_back(kSurfaceMaterialFile);
+  if (layout.format == MeshFormat::obj && layout.per_building_files)
+    names.push_back(std::string("models/") + kSurfaceMaterialFile);
+  if (layout.tiles3d) names.push_back(std::string(kTilesetFolder) + "/tileset.json");
   return names;
 }
 
@@ -169,15 +203,26 @@ OutputFolder::OutputFolder(std::string dir, const std::vector<std::string>& rewr
   RunManifest previous;
   if (read_manifest(dir_, previous)) {
     std::string gone;  // removed and not written again: the user should know
+    std::size_t tiles_gone = 0;
+    const std::string tileset = std::string(kTilesetFolder) + "/tileset.json";
+    const bool tiles_rewritten = std::find(rewritten.begin(), rewritten.end(), tileset) != rewritten.end();
     for (const auto& [name, stamp] : previous.outputs) {
       const fs::path file = fs::path(dir_) / name;
-      if (name.find('/') != std::string::npos || name.find("..") != std::string::npos) continue;
+      if (!run_level_name(name)) continue;
       if (!stamp.empty() && file_stamp_of(file.string()) == stamp && fs::remove(file, ec)) {
         log_debug("output: removed " + file.string() + " of the previous run");
-        if (std::find(rewritten.begin(), rewritten.end(), name) == rewritten.end())
+        const bool tile = name.rfind(std::string(kTilesetFolder) + "/", 0) == 0;
+        if (tile) {
+          // A tileset is many files: named once, as its folder.
+          tiles_gone += !tiles_rewritten;
+        } else if (std::find(rewritten.begin(), rewritten.end(), name) == rewritten.end()) {
           gone += (gone.empty() ? "" : ", ") + name;
+        }
       }
     }
+    if (tiles_gone > 0) gone += (gone.empty() ? "" : ", ") + std::string(kTilesetFolder) + "/ (the tileset)";
+    // Its folders, when nothing else is left in them.
+    for (const char* folder : {"3dtiles/tiles", "3dtiles"}) fs::remove(fs::path(dir_) / folder, ec);
     if (!gone.empty())
       log_warning("output: removed " + gone + " from " + dir_ + ": the earlier run there wrote " +
                   (gone.find(',') == std::string::npos ? "it" : "them") + ", this one does not");
@@ -205,7 +250,12 @@ void OutputFolder::remove_earlier_models(const std::vector<std::pair<std::string
 void OutputFolder::write_manifest(const RunManifest& m) {
   json outputs = json::object();
   for (const auto& [name, stamp] : m.outputs) outputs[name] = stamp;
+  const RunLayout& layout = m.header.layout;
   const json j = {{"city3d", CITY3D_VERSION},
+                  {"crs", layout.crs},
+                  {"crs_source", layout.crs_source},
+                  {"inputs", json_object_of(layout.inputs)},
+                  {"parameters", json_object_of(layout.parameters)},
                   {"fingerprint", m.header.fingerprint},
                   {"shard", m.header.shard},
                   {"shards", m.header.shards},
@@ -246,18 +296,16 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const
   summary.resumed = resumed;
   summary.report_path = (out / "report.csv").string();
 
-  const CityJsonOptions cityjson_options{layout.crs, layout.scale, ""};
+  const CityJsonOptions cityjson_options{layout.crs, layout.scale, "", city3d_metadata(layout)};
   std::unique_ptr<CityJsonAssembler> cityjson;
-  std::unique_ptr<AtomicFile> seq;
+  std::unique_ptr<CityJsonSeqAssembler> seq;
   std::vector<BuildingModel> merged;
   if (whole && layout.cityjson)
     cityjson = std::make_unique<CityJsonAssembler>((out / "buildings.city.json").string(), cityjson_options,
                                                    layout.translate);
-  if (whole && layout.cityjson_seq) {
-    seq = std::make_unique<AtomicFile>((out / "buildings.city.jsonl").string());
-    const std::string header = cityjson_seq_header(cityjson_options, layout.translate) + "\n";
-    std::fwrite(header.data(), 1, header.size(), seq->file());
-  }
+  if (whole && layout.cityjson_seq)
+    seq = std::make_unique<CityJsonSeqAssembler>((out / "buildings.city.jsonl").string(), cityjson_options,
+                                                 layout.translate);
   ReportWriter report((out / "report.csv").string(), (out / "report.json").string(), summary);
 
   std::map<std::string, std::pair<std::size_t, std::size_t>> problems;  // key -> rows, rows outside every tile
@@ -276,10 +324,7 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const
     }
     if (r.feature.empty()) continue;
     if (cityjson) cityjson->add(r.feature);
-    if (seq) {
-      std::fwrite(r.feature.data(), 1, r.feature.size(), seq->file());
-      std::fputc('\n', seq->file());
-    }
+    if (seq) seq->add(r.feature);
     if (whole && layout.merged_file) {
       if (!r.mesh) throw Error("finalise: record " + std::to_string(r.index) + " (" + r.id + ") holds no mesh");
       merged.push_back(std::move(*r.mesh));
@@ -300,7 +345,7 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const
     written.push_back("buildings.city.json");
   }
   if (seq) {
-    seq->commit();
+    seq->close();
     written.push_back("buildings.city.jsonl");
   }
   if (whole && layout.merged_file) {
@@ -308,19 +353,33 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const
     write_models((out / name).string(), merged, {layout.format, layout.local_coordinates});
     written.push_back(name);
   }
+  if (whole && layout.format == MeshFormat::obj && layout.merged_file) {
+    write_surface_materials((out / kSurfaceMaterialFile).string());
+    written.push_back(kSurfaceMaterialFile);
+  }
+  if (whole && layout.format == MeshFormat::obj && layout.per_building_files) {
+    const std::string name = std::string("models/") + kSurfaceMaterialFile;
+    fs::create_directories(out / "models");
+    write_surface_materials((out / name).string());
+    written.push_back(name);
+  }
   report.close();
   written.push_back("report.csv");
   written.push_back("report.json");
   // The overview outputs, reading the records again one at a time (a run's records are never all in
   // memory at once).
-  if (whole && (layout.gpkg || layout.html)) {
+  if (whole && (layout.gpkg || layout.html || layout.tiles3d)) {
     const JournalOverview overview(records, layout);
+    if (layout.tiles3d) {
+      for (const std::string& name : write_3dtiles((out / kTilesetFolder).string(), overview, layout.crs))
+        written.push_back(std::string(kTilesetFolder) + "/" + name);
+    }
     if (layout.gpkg) {
       write_gpkg((out / "buildings.gpkg").string(), overview, layout.crs);
       written.push_back("buildings.gpkg");
     }
     if (layout.html) {
-      write_report_html((out / "report.html").string(), overview, layout.crs);
+      write_report_html((out / "report.html").string(), overview, run_description(layout));
       written.push_back("report.html");
       summary.report_path = (out / "report.html").string();
     }

@@ -24,7 +24,9 @@ namespace {
 
 // 3: records carry their footprint for buildings.gpkg and report.html, the layout says whether to write them.
 // 4: report rows carry coverage and point_coverage; the status partial.
-constexpr int kJournalVersion = 4;
+// 5: the layout says where its CRS came from, whether to write 3D Tiles, and the run's parameters and
+//    inputs (for the outputs' metadata); features carry val3dity codes as lists.
+constexpr int kJournalVersion = 5;
 constexpr std::size_t kHashDigits = 16;
 
 std::string dump(const json& j) { return j.dump(-1, ' ', false, json::error_handler_t::replace); }
@@ -54,6 +56,7 @@ BuildingStatus parse_status(const std::string& s) {
 
 json layout_json(const RunLayout& l) {
   return {{"crs", l.crs},
+          {"crs_source", l.crs_source},
           {"translate", {l.translate.x, l.translate.y, l.translate.z}},
           {"scale", l.scale},
           {"records", l.records},
@@ -64,12 +67,16 @@ json layout_json(const RunLayout& l) {
           {"local_coordinates", l.local_coordinates},
           {"format", static_cast<int>(l.format)},
           {"gpkg", l.gpkg},
-          {"html", l.html}};
+          {"html", l.html},
+          {"tiles3d", l.tiles3d},
+          {"parameters", l.parameters},
+          {"inputs", l.inputs}};
 }
 
 RunLayout parse_layout(const json& j) {
   RunLayout l;
   l.crs = j.at("crs").get<std::string>();
+  l.crs_source = j.at("crs_source").get<std::string>();
   const json& t = j.at("translate");
   l.translate = {t.at(0).get<double>(), t.at(1).get<double>(), t.at(2).get<double>()};
   l.scale = j.at("scale").get<double>();
@@ -84,6 +91,9 @@ RunLayout parse_layout(const json& j) {
   l.format = static_cast<MeshFormat>(format);
   l.gpkg = j.at("gpkg").get<bool>();
   l.html = j.at("html").get<bool>();
+  l.tiles3d = j.at("tiles3d").get<bool>();
+  l.parameters = j.at("parameters").get<std::string>();
+  l.inputs = j.at("inputs").get<std::string>();
   return l;
 }
 
@@ -119,7 +129,8 @@ Ring2 parse_ring(const json& j) {
   return ring;
 }
 
-// An attribute as [name, type, value], the type one of "null", "bool", "int", "real", "text", so that
+// An attribute as [name, type, value], the type one of "null", "bool", "int", "real", "text", "list"
+// (its JSON array as text), so that
 // every value comes back with its type (a real that happens to be whole stays a real; 64-bit
 // integers stay exact). A real that is not finite, which JSON cannot hold, is written as text.
 json attribute_json(const std::string& name, const AttributeValue& v) {
@@ -130,6 +141,7 @@ json attribute_json(const std::string& name, const AttributeValue& v) {
     return {name, "real", std::isnan(*d) ? "nan" : *d > 0 ? "inf" : "-inf"};
   }
   if (const std::string* t = std::get_if<std::string>(&v)) return {name, "text", *t};
+  if (const AttributeList* l = std::get_if<AttributeList>(&v)) return {name, "list", l->json};
   return {name, "null", nullptr};
 }
 
@@ -141,6 +153,7 @@ std::pair<std::string, AttributeValue> parse_attribute(const json& j) {
   if (type == "bool") return {name, value.get<bool>()};
   if (type == "int") return {name, value.get<std::int64_t>()};
   if (type == "text") return {name, value.get<std::string>()};
+  if (type == "list") return {name, AttributeList{value.get<std::string>()}};
   if (type != "real") throw std::runtime_error("unknown attribute type " + type);
   if (!value.is_string()) return {name, value.get<double>()};
   const std::string special = value.get<std::string>();

@@ -40,7 +40,8 @@ struct BuildingRecord {
 
 /// What the run-level files of a run look like: the same for every shard of it.
 struct RunLayout {
-  std::string crs;               ///< "EPSG:28992" or empty
+  std::string crs;               ///< "EPSG:7415", "EPSG:28992" or empty (resolve_run_crs())
+  std::string crs_source;        ///< where the CRS came from: "--crs", "point clouds", "footprints"; empty without one
   Point3 translate{0, 0, 0};     ///< CityJSON transform translation (from the inputs' extent, z = 0)
   double scale = 0.001;          ///< CityJSON transform scale
   std::uint64_t records = 0;     ///< records of the whole run: buildings, then skipped footprints
@@ -52,6 +53,12 @@ struct RunLayout {
   MeshFormat format = MeshFormat::obj;
   bool gpkg = false;             ///< buildings.gpkg
   bool html = false;             ///< report.html
+  bool tiles3d = false;          ///< 3dtiles/tileset.json and its content
+  /// What the run was given, as JSON objects: the options that describe its outputs
+  /// (BatchOptions::parameters) and its inputs ({"point_clouds": [canonical paths], "footprints":
+  /// ..., "layer": ..., "id_field": ...}), for the metadata of CityJSON, run.json and report.html.
+  std::string parameters = "{}";
+  std::string inputs = "{}";
 };
 
 /// The first line of a journal: which run (and which shard of it) the records belong to.

@@ -39,9 +39,14 @@ std::string json_string(const std::string& s) {
   return out + "\"";
 }
 
+// Rounded as the building attributes round (rounded() below: half away from zero on v x 10^d),
+// then printed: printf alone rounds the exact binary value, and 6.5215 (a median between two
+// millimetres) became 6.521 here but 6.522 in CityJSON (20 of 1,280 values of the Delft block).
 std::string fixed(double v, int decimals) {
   char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  const double scale = std::pow(10.0, decimals);
+  const double r = std::isfinite(v) && std::fabs(v) < 1e15 ? std::round(v * scale) / scale : v;
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, r == 0 ? 0.0 : r);
   return buf;
 }
 
@@ -174,8 +179,9 @@ Attributes building_attributes(const BuildingReport& r, bool timings) {
   const auto count = [](std::size_t n) { return AttributeValue{static_cast<std::int64_t>(n)}; };
   const bool written = !r.lods.empty();
   const auto val3dity = [&](const char* lod) {
-    // The levels written are valid by construction (an invalid model is never written).
-    return written && r.lods.find(lod) != std::string::npos ? AttributeValue{std::string("[]")} : AttributeValue{};
+    // The val3dity codes of the level as written: none, since an invalid model is never written (a
+    // list, as 3DBAG's; null for a level not written).
+    return written && r.lods.find(lod) != std::string::npos ? AttributeValue{AttributeList{"[]"}} : AttributeValue{};
   };
   Attributes a = {
       {"status", std::string(to_string(r.status))},
