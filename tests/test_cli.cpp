@@ -368,6 +368,34 @@ TEST_F(Reconstruct, sample_block_gives_every_footprint_a_valid_model_and_a_repor
   }
 }
 
+// Issue 27: --profile gives each stage's CPU over the run, and the stages add up to the buildings' CPU
+// the report gives (the same clocks, a building's time in no stage counted as "other").
+TEST_F(Reconstruct, profile_gives_the_cpu_of_each_stage_adding_up_to_the_buildings_cpu) {
+  const Result r = run("reconstruct " + sample_args() + " -j 2 --profile -q -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  double all = -1.0;
+  std::size_t stages = 0;
+  for (const std::string& line : lines_of(r.output)) {
+    std::istringstream in(line);
+    std::string tag, name;
+    double first = 0.0, rebuilds = 0.0, total = 0.0;
+    if (!(in >> tag >> name >> first >> rebuilds >> total) || tag != "profile:") continue;
+    EXPECT_NEAR(first + rebuilds, total, 0.002) << line;
+    if (name == "all") all = total;
+    else ++stages;
+  }
+  EXPECT_EQ(stages, 16u) << r.output;  // every stage, even those that took no time
+  double report = 0.0;
+  const auto rows = lines_of(read_file(dir_ / "out" / "report.csv"));
+  ASSERT_EQ(rows.size(), 16u);
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    const std::string before_seconds = rows[i].substr(0, rows[i].rfind(','));
+    report += std::stod(before_seconds.substr(before_seconds.rfind(',') + 1));
+  }
+  ASSERT_GT(report, 0.0);
+  EXPECT_NEAR(all, report, 0.02 * report + 0.01) << r.output;
+}
+
 TEST_F(Reconstruct, cityjson_and_cityjsonseq_validate_against_the_official_schemas) {
   if (!fs::exists(CITY3D_SCHEMAS)) GTEST_SKIP() << "../shared/spec is not beside the repository";
   ASSERT_TRUE(fs::exists(CITY3D_AJV)) << "ajv-cli missing: run scripts/setup.sh test";

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -11,6 +12,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <tuple>
 
 #include "city3d/batch.hpp"
@@ -20,6 +22,7 @@
 #include "city3d/mesh_check.hpp"
 #include "city3d/pipeline.hpp"
 #include "city3d/point_cloud_io.hpp"
+#include "city3d/stage_profile.hpp"
 #include "pipeline/left_out.hpp"
 
 namespace fs = std::filesystem;
@@ -34,6 +37,50 @@ void require_delft() {
 }
 
 }  // namespace
+
+// Burns the calling thread's CPU for `seconds` (its own clock, so the machine's load does not matter).
+void burn_cpu(double seconds) {
+  const auto now = [] {
+    timespec t{};
+    ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+  };
+  const double end = now() + seconds;
+  volatile double sink = 0.0;
+  while (now() < end) sink = sink + 1.0;
+}
+
+// Issue 27: a stage's CPU is its own, a nested stage's taken out of it, a rebuild's apart; the time
+// outside every stage is no stage's; threads add up.
+TEST(StageProfile, nested_stages_count_exclusive_and_rebuilds_apart) {
+  reset_stage_profile();
+  std::thread worker([] {
+    burn_cpu(0.03);  // before any stage: counted nowhere
+    const StageTimer building(Stage::other);
+    burn_cpu(0.02);
+    {
+      const StageTimer planes(Stage::planes);
+      burn_cpu(0.04);
+      {
+        const StageTimer measure(Stage::measure);
+        burn_cpu(0.03);
+      }
+    }
+    const RebuildScope rebuilding;
+    const StageTimer planes(Stage::planes);
+    burn_cpu(0.05);
+  });
+  worker.join();
+  const StageProfile p = stage_profile();
+  const auto at = [](const std::array<double, kStageCount>& a, Stage s) { return a[static_cast<std::size_t>(s)]; };
+  EXPECT_NEAR(at(p.first, Stage::other), 0.02, 0.01);
+  EXPECT_NEAR(at(p.first, Stage::planes), 0.04, 0.01);
+  EXPECT_NEAR(at(p.first, Stage::measure), 0.03, 0.01);
+  EXPECT_NEAR(at(p.rebuild, Stage::planes), 0.05, 0.01);
+  EXPECT_EQ(at(p.rebuild, Stage::measure), 0.0);
+  EXPECT_NEAR(p.total(), 0.14, 0.02);  // not the 0.03 before the first stage
+  EXPECT_STREQ(stage_name(Stage::hypothesis), "hypothesis");
+}
 
 TEST(Batch, footprints_across_the_tile_seam_get_points_from_both_tiles) {
   require_delft();

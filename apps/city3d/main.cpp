@@ -20,6 +20,7 @@
 #include "city3d/options.hpp"
 #include "city3d/batch.hpp"
 #include "city3d/pipeline.hpp"
+#include "city3d/stage_profile.hpp"
 
 namespace {
 
@@ -78,6 +79,26 @@ int run_info(const city3d::RunOptions& options) {
   return city3d::kExitOk;
 }
 
+// --profile: the CPU of each stage over the buildings this run reconstructed (resumed ones took none),
+// on stderr whatever the verbosity (it was asked for). A line per stage, `profile: NAME FIRST REBUILDS
+// TOTAL SHARE`, for bench/stage_profile.py.
+void print_profile(const city3d::BatchSummary& s) {
+  const city3d::StageProfile p = city3d::stage_profile();
+  const double total = p.total();
+  std::fprintf(stderr, "profile: CPU seconds per stage, %zu buildings reconstructed (their threads and solver "
+                       "processes; a rung's first model, its rebuilds)\n",
+               s.buildings - s.resumed);
+  std::fprintf(stderr, "profile: %-11s %9s %9s %9s %7s\n", "stage", "first", "rebuilds", "total", "share");
+  double first = 0.0, rebuild = 0.0;
+  for (std::size_t i = 0; i < city3d::kStageCount; ++i) {
+    const double both = p.first[i] + p.rebuild[i];
+    first += p.first[i], rebuild += p.rebuild[i];
+    std::fprintf(stderr, "profile: %-11s %9.3f %9.3f %9.3f %6.1f%%\n", city3d::stage_name(static_cast<city3d::Stage>(i)),
+                 p.first[i], p.rebuild[i], both, total > 0.0 ? 100.0 * both / total : 0.0);
+  }
+  std::fprintf(stderr, "profile: %-11s %9.3f %9.3f %9.3f %6.1f%%\n", "all", first, rebuild, total, total > 0.0 ? 100.0 : 0.0);
+}
+
 // The end of a run or a merge: its summary line, the problem most buildings share with its likely
 // fix, and the exit code (README, "Exit codes").
 int finish(const city3d::RunOptions& options, const city3d::BatchSummary& s, const std::string& what) {
@@ -111,7 +132,9 @@ int run_reconstruct(const city3d::RunOptions& options) {
   batch.progress = options.progress == 1 || (options.progress == -1 && options.verbosity > 0 && isatty(2));
   catch_interrupts("the buildings finished so far are kept in " + batch.output_dir +
                    "/resume.journal: the same command resumes where this one stopped");
-  return finish(options, city3d::run_batch(batch), "");
+  const city3d::BatchSummary summary = city3d::run_batch(batch);
+  if (options.profile) print_profile(summary);
+  return finish(options, summary, "");
 }
 
 int run_merge(const city3d::RunOptions& options) {

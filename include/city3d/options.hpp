@@ -35,6 +35,7 @@ struct RunOptions {
   std::string residuals;             ///< evaluate: CSV of each point's distance to the model, or empty
   std::string config_path;           ///< --config: the TOML file the options were read from, or empty
   bool print_config = false;         ///< --print-config: print the effective options as TOML and exit
+  bool profile = false;              ///< --profile: the CPU of each stage, summed over the run, on stderr at its end
 };
 
 /// Parses argv. With `--config FILE.toml`, the file's options are applied first and those given on

@@ -267,7 +267,7 @@ std::string run_parameters_json(const RunOptions& options) {
   static const char* const kLeftOut[] = {"footprints", "layer",  "id-field",  "output",      "jobs",
                                          "no-resume",  "block-size", "group-area", "shard",   "strict",
                                          "residuals",  "progress",   "no-progress", "verbose", "quiet",
-                                         "debug"};
+                                         "debug",      "profile"};
   nlohmann::ordered_json parameters = nlohmann::ordered_json::object();
   for (const detail::OptionSpec& spec : detail::option_table()) {
     if (!detail::in_config_file(spec)) continue;

@@ -389,6 +389,10 @@ const std::vector<OptionSpec>& option_table() {
        [](O& o, V) { o.progress = 1; }},
       {"--no-progress", nullptr, nullptr, "no progress line", [](const O& o) { return yes_no(o.progress == 0); },
        [](O& o, V) { o.progress = 0; }},
+      {"--profile", nullptr, nullptr,
+       "at the end of a run, the CPU seconds of each reconstruction stage summed over the buildings it "
+       "reconstructed, on stderr (bench/stage_profile.py sums runs)",
+       [](const O& o) { return yes_no(o.profile); }, [](O& o, V) { o.profile = true; }},
       {"--verbose", "-v", nullptr, "more messages on stderr (repeat for debug)",
        [](const O& o) { return yes_no(o.verbosity >= 2); },
        [](O& o, V) { o.verbosity = std::min(o.verbosity + 1, 3); }},

@@ -21,6 +21,7 @@
 #include "city3d/log.hpp"
 #include "city3d/mesh_check.hpp"
 #include "city3d/model_io.hpp"
+#include "city3d/stage_profile.hpp"
 #include "city3d/surface_support.hpp"
 #include "pipeline/left_out.hpp"
 
@@ -205,6 +206,7 @@ double thread_cpu_seconds() {
 
 // The LoD1 rung: always possible when the building has points and a usable footprint.
 BuildingModel lod1_rung(const BuildingInput& input, const ReconstructionParams& params, BuildingReport& report) {
+  const StageTimer stage(Stage::lod1);
   const Lod1Heights heights = lod1_heights(input, params.lod1);
   report.roof_z = heights.roof_z + input.origin.z;
   BuildingModel model = make_lod1_block(input, params.lod1);
@@ -407,6 +409,7 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
   const auto& points = input.points;
 
   // Roof planes (and wall planes, if the cloud sees walls).
+  std::optional<StageTimer> stage(Stage::planes);
   std::vector<PlanarSegment> segments = detect_planes(points, params.planes);
   const auto has_roof = [](const std::vector<PlanarSegment>& found) {
     return std::any_of(found.begin(), found.end(),
@@ -453,7 +456,9 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
   check_time(deadline, "planes");
 
   // Heightmap, edges, polylines, regular lines: the inferred vertical planes (paper section 3.2).
+  stage.emplace(Stage::heightmap);
   const Heightmap heightmap = rasterise_tin(points, params.heightmap);
+  stage.emplace(Stage::outline);
   std::vector<Polygon2> outline = input.footprint.polygons;
   if (!input.footprint_given) {
     outline.clear();
@@ -483,12 +488,16 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
   }
   RegularisationResult lines;
   if (!footprint_walls_only) {
+    stage.emplace(Stage::edges);
     const std::vector<Point2> edges = detect_edges(heightmap, params.heightmap);
+    stage.emplace(Stage::polylines);
     std::vector<Polyline2> polylines = extract_polylines(edges, params.polylines);
+    stage.emplace(Stage::step_lines);
     // Step lines between roof planes join the heightmap's lines (the same regularisation and walls).
     const std::vector<Polyline2> steps = detect_step_lines(points, roofs, point_spacing(outline, points.size()), params.step_lines);
     if (debug) write_polylines_obj(debug_path(params.debug_dir, input.id, "step_lines.obj"), steps, input.ground_z);
     polylines.insert(polylines.end(), steps.begin(), steps.end());
+    stage.emplace(Stage::regularise);
     lines = regularise(polylines, &outline, params.regularise);
     if (unexplained) {
       // Their cells, after the regularisation, which would merge a narrow part's lines into the wall
@@ -522,6 +531,7 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
     const std::vector<Polygon2>& part = problems[k];
     const std::string suffix = problems.size() > 1 ? "_part" + std::to_string(k) : "";
     try {
+      stage.emplace(Stage::walls);
       const std::vector<VerticalPlane> walls =
           infer_walls(lines, &part, footprint_walls_only ? std::vector<std::pair<Point2, Point2>>{} : detected_walls,
                       wall_params);
@@ -538,6 +548,7 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
       if (part_roofs.empty())
         throw ReconstructionError("planes: none of the " + std::to_string(roofs.size()) +
                                   " roof planes lies inside the inferred outline");
+      stage.emplace(Stage::hypothesis);
       CandidateFaces candidates =
           generate_candidates(points, part_roofs, walls, part, input.ground_z, input.ground_measured, params.hypothesis,
                               params.selection);
@@ -575,6 +586,7 @@ BuildingModel lod2_model(const BuildingInput& input, const Lod2Hypothesis& hypot
         const double own = selection_params.time_limit > 0 ? selection_params.time_limit : left;
         selection_params.time_limit = std::max(0.1, std::min(own, left));
       }
+      std::optional<StageTimer> stage(Stage::selection);
       SelectionResult selection = solve_selection(candidates.problem, selection_params);
       if (selection.status == SelectionStatus::infeasible && selection_params.use_face_prior) {
         // The face prior is a preference of the paper's, not a necessity: retry without it.
@@ -600,6 +612,7 @@ BuildingModel lod2_model(const BuildingInput& input, const Lod2Hypothesis& hypot
         write_selection_csv(debug_path(params.debug_dir, input.id, "selection" + suffix + ".csv"), candidates,
                             selection.selected, selection_params);
       }
+      stage.emplace(Stage::assemble);
       std::vector<SurfaceType> surfaces;
       const PolygonMesh mesh = assemble_model(candidates, selection.selected, params.assemble, &surfaces);
       const auto offset = static_cast<std::uint32_t>(model.mesh.vertices.size());
@@ -655,6 +668,7 @@ bool same_hypothesis(const Lod2Hypothesis& a, const Lod2Hypothesis& b) {
 // ladder moves on: an invalid model is never written.
 BuildingModel checked_model(const BuildingInput& input, const ReconstructionParams& params, ModelLevel level,
                             bool footprint_walls_only, BuildingModel model, BuildingReport& r) {
+  const StageTimer stage(Stage::validity);
   const WrittenValidity validity = validate_as_written(model, params.output_grid, params.validity);
   if (!validity.found.empty()) {
     const std::string found = std::string(to_string(level)) + ": " + validity_codes(validity.found);
@@ -703,6 +717,7 @@ struct Explained {
 // From the points to the model only.
 Explained explained_points(const PolygonMesh& mesh, const std::vector<Point3>& points,
                            std::vector<double>* distances_out = nullptr) {
+  const StageTimer stage(Stage::measure);
   Explained e;
   const std::vector<double> distances = point_distances(mesh, points);
   for (const double d : distances) {
@@ -717,6 +732,7 @@ Explained explained_points(const PolygonMesh& mesh, const std::vector<Point3>& p
 Explained explained(const BuildingModel& model, const std::vector<Point3>& points, const LocalTop& local_top,
                     const SurfaceSupportParams& support_params, std::vector<double>* distances_out = nullptr) {
   Explained e = explained_points(model.mesh, points, distances_out);
+  const StageTimer stage(Stage::measure);
   e.support = surface_support(model.mesh, surface_types(model), local_top, support_params);
   return e;
 }
@@ -774,7 +790,9 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
   const std::size_t n = input.points.size();
   if (n == 0) return {};
   const SurfaceSupportParams& support_params = params.hypothesis.surface_support;
+  std::optional<StageTimer> measuring(Stage::measure);
   const LocalTop local_top(input.points, support_params.radius);
+  measuring.reset();
   std::vector<double> distances;
   Explained best = explained(model, input.points, local_top, support_params, &distances);
   const bool too_many_left_out = static_cast<double>(best.far) > params.retry_unexplained_share * static_cast<double>(n);
@@ -801,6 +819,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
     return faces;
   };
   const std::size_t faces = candidate_faces(hypothesis);
+  const RebuildScope rebuilding;  // from here on, the stages count as the rebuild's
   if (faces > kMaxRebuildFaces) {
     add_note(r, what(best) + ": not rebuilt (" + std::to_string(faces) + " candidate faces, more than " +
                     std::to_string(kMaxRebuildFaces) + ")");
@@ -1144,6 +1163,7 @@ BuildingInput building_from_cloud(const BuildingId& id, const std::vector<Point3
 }
 
 BuildingResult reconstruct_building(const BuildingInput& given, const ReconstructionParams& params) {
+  const StageTimer building(Stage::other);
   const auto start = Clock::now();
   const double cpu_start = thread_cpu_seconds() + solver_process_cpu_seconds();
   // A footprint of very many vertices is simplified first (a work limit: walls, arrangement and
@@ -1176,12 +1196,15 @@ BuildingResult reconstruct_building(const BuildingInput& given, const Reconstruc
   r.ground_method = input.ground_method;
   r.note = input.footprint.note;
   if (!simplify_note.empty()) add_note(r, simplify_note);
-  describe_points(input, params, r);
-  if (!input.points.empty()) {
-    try {
-      r.roof_z = lod1_heights(input, params.lod1).roof_z + input.origin.z;
-    } catch (const Error&) {
-      // Reported by the LoD1 rung if it comes to that.
+  {
+    const StageTimer stage(Stage::describe);
+    describe_points(input, params, r);
+    if (!input.points.empty()) {
+      try {
+        r.roof_z = lod1_heights(input, params.lod1).roof_z + input.origin.z;
+      } catch (const Error&) {
+        // Reported by the LoD1 rung if it comes to that.
+      }
     }
   }
   if (input.points.empty() && !input.footprint_given) {
@@ -1247,8 +1270,14 @@ BuildingResult reconstruct_building(const BuildingInput& given, const Reconstruc
       }
     }
     if (!result.model) r.status = BuildingStatus::failed;
-    if (result.model) add_levels_of_detail(input, params, lod2_fit, result);
-    if (result.model) r.rmse = r.lods.empty() ? rmse(result.model->mesh, input.points) : highest_level_rmse(r);
+    if (result.model) {
+      const StageTimer stage(Stage::lod1);
+      add_levels_of_detail(input, params, lod2_fit, result);
+    }
+    if (result.model) {
+      const StageTimer stage(Stage::measure);
+      r.rmse = r.lods.empty() ? rmse(result.model->mesh, input.points) : highest_level_rmse(r);
+    }
     if (r.status == BuildingStatus::ok) r.stage.clear(), r.reason.clear();
   }
 
