@@ -34,6 +34,10 @@ constexpr std::size_t kStageCount = static_cast<std::size_t>(Stage::count);
 
 const char* stage_name(Stage stage);
 
+/// CPU seconds of the calling thread (user + system) and of the solver processes it waited for: the
+/// clock of the stages, and of each building's cpu_seconds in the report.
+double building_cpu_seconds();
+
 /// CPU seconds (thread CPU, plus the solver processes a thread waited for) per stage, for a rung's
 /// first model and for its rebuilds, summed over every thread since the start (or the last reset).
 struct StageProfile {

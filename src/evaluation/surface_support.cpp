@@ -23,6 +23,18 @@ struct Column {
   std::vector<std::pair<double, double>> spans;  // (low, high) heights inside the face, ascending
 };
 
+// Newell's normal of a polygon: twice its vector area, robust for non-convex polygons.
+Point3 newell_normal(const std::vector<Point3>& face) {
+  Point3 n{0.0, 0.0, 0.0};
+  for (std::size_t i = 0; i < face.size(); ++i) {
+    const Point3 &a = face[i], &b = face[(i + 1) % face.size()];
+    n.x += (a.y - b.y) * (a.z + b.z);
+    n.y += (a.z - b.z) * (a.x + b.x);
+    n.z += (a.x - b.x) * (a.y + b.y);
+  }
+  return n;
+}
+
 // The columns of `face` when it is vertical (its normal within ~0.06 degrees of horizontal); false
 // otherwise. With `range` (along the foot, as Column::u), only the part of the face within it.
 bool vertical_columns(const std::vector<Point3>& face, double spacing, std::vector<Column>& columns,
@@ -30,13 +42,7 @@ bool vertical_columns(const std::vector<Point3>& face, double spacing, std::vect
   columns.clear();
   const std::size_t n = face.size();
   if (n < 3 || !(spacing > 0.0)) return false;
-  double nx = 0.0, ny = 0.0, nz = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Point3 &a = face[i], &b = face[(i + 1) % n];
-    nx += (a.y - b.y) * (a.z + b.z);
-    ny += (a.z - b.z) * (a.x + b.x);
-    nz += (a.x - b.x) * (a.y + b.y);
-  }
+  const auto [nx, ny, nz] = newell_normal(face);
   const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
   const double plan = std::hypot(nx, ny);
   if (!(length > 0.0) || !(plan > 0.0) || std::abs(nz) > 1e-3 * length) return false;
@@ -282,14 +288,7 @@ double sample_polygon_axes(const std::vector<Point3>& face, double spacing, std:
   out.clear();
   const std::size_t n = face.size();
   if (n < 3 || !(spacing > 0.0)) return 0.0;
-  // Newell's normal: twice the vector area, robust for non-convex polygons.
-  double nx = 0.0, ny = 0.0, nz = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Point3 &a = face[i], &b = face[(i + 1) % n];
-    nx += (a.y - b.y) * (a.z + b.z);
-    ny += (a.z - b.z) * (a.x + b.x);
-    nz += (a.x - b.x) * (a.y + b.y);
-  }
+  auto [nx, ny, nz] = newell_normal(face);
   const double twice = std::sqrt(nx * nx + ny * ny + nz * nz);
   if (!(twice > 0.0) || !std::isfinite(twice)) return 0.0;
   const double area = 0.5 * twice;

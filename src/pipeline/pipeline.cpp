@@ -197,13 +197,6 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// CPU seconds of the calling thread (user + system).
-double thread_cpu_seconds() {
-  timespec t{};
-  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
-
 // The LoD1 rung: always possible when the building has points and a usable footprint.
 BuildingModel lod1_rung(const BuildingInput& input, const ReconstructionParams& params, BuildingReport& report) {
   const StageTimer stage(Stage::lod1);
@@ -1165,7 +1158,7 @@ BuildingInput building_from_cloud(const BuildingId& id, const std::vector<Point3
 BuildingResult reconstruct_building(const BuildingInput& given, const ReconstructionParams& params) {
   const StageTimer building(Stage::other);
   const auto start = Clock::now();
-  const double cpu_start = thread_cpu_seconds() + solver_process_cpu_seconds();
+  const double cpu_start = building_cpu_seconds();
   // A footprint of very many vertices is simplified first (a work limit: walls, arrangement and
   // program grow with its edges); the copy of the input is made only then.
   std::optional<BuildingInput> simplified;
@@ -1282,7 +1275,7 @@ BuildingResult reconstruct_building(const BuildingInput& given, const Reconstruc
   }
 
   r.seconds = seconds_since(start);
-  r.cpu_seconds = thread_cpu_seconds() + solver_process_cpu_seconds() - cpu_start;
+  r.cpu_seconds = building_cpu_seconds() - cpu_start;
   return result;
 }
 

@@ -24,16 +24,9 @@ struct ThreadState {
 };
 thread_local ThreadState state;
 
-// The thread's CPU seconds, and those of the solver processes it waited for.
-double cpu_now() {
-  timespec t{};
-  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec) + solver_process_cpu_seconds();
-}
-
 // Gives the time since the last change to the stage that ran, and restarts the clock.
 void settle() {
-  const double now = cpu_now();
+  const double now = building_cpu_seconds();
   const double spent = now - state.mark;
   state.mark = now;
   if (state.depth == 0 || !(spent > 0.0)) return;
@@ -43,6 +36,12 @@ void settle() {
 }
 
 }  // namespace
+
+double building_cpu_seconds() {
+  timespec t{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec) + solver_process_cpu_seconds();
+}
 
 const char* stage_name(Stage stage) {
   switch (stage) {
