@@ -11,6 +11,7 @@
 #include <ctime>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <sstream>
 
@@ -383,9 +384,19 @@ double point_spacing(const std::vector<Polygon2>& outline, std::size_t points) {
 
 // The candidate faces of a LoD2 rung, one problem per part (a footprint is one part, whatever its
 // polygons; an inferred outline has a part per region modelled, the largest first).
+// What a rung's hypotheses share: the heightmap of the points, its edges and their polylines depend on
+// the points and on their own parameters only, which explain_more's variants do not change (they
+// change the planes, the outline's gap and the left-out points): the variants reuse the rung's.
+struct SharedRaster {
+  std::shared_ptr<const Heightmap> heightmap;
+  std::shared_ptr<const std::vector<Point2>> edges;          // null on the footprint-walls rung
+  std::shared_ptr<const std::vector<Polyline2>> polylines;   // of the edges, before the step lines join them
+};
+
 struct Lod2Hypothesis {
   std::vector<CandidateFaces> parts;
   std::vector<std::size_t> part_numbers;  // each part's number among the outline's parts (for notes)
+  SharedRaster raster;                    // what it was built from, for the variants of explain_more
 };
 
 // A LoD2 rung up to its face hypothesis: planes, walls, candidate faces (paper sections 3.1-3.3).
@@ -393,11 +404,15 @@ struct Lod2Hypothesis {
 // footprint, the outline is inferred closing gaps of kWideGapSpacings point spacings instead of 1.5
 // (explain_more's variant for roofs whose returns have gaps). `unexplained` (explain_more's variant
 // for left-out points), when given, marks the points a model of this rung left farther than 1 m: they
-// get roof levels, and on the full rung cells of their own (pipeline/left_out.hpp). Throws Error naming the stage when a
-// stage fails for the largest part; a further part that fails is left out and said.
+// get roof levels, and on the full rung cells of their own (pipeline/left_out.hpp). `shared` (the
+// rung's hypothesis' raster, for explain_more's variants) is reused where it holds a stage's result.
+// Throws Error naming the stage when a stage fails for the largest part; a further part that fails is
+// left out and said.
 Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionParams& params,
                                bool footprint_walls_only, bool wide_outline, Clock::time_point deadline,
-                               BuildingReport& report, const std::vector<bool>* unexplained = nullptr) {
+                               BuildingReport& report, const std::vector<bool>* unexplained = nullptr,
+                               const SharedRaster* shared = nullptr) {
+  SharedRaster raster = shared ? *shared : SharedRaster{};
   const bool debug = !params.debug_dir.empty();
   const auto& points = input.points;
 
@@ -450,7 +465,8 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
 
   // Heightmap, edges, polylines, regular lines: the inferred vertical planes (paper section 3.2).
   stage.emplace(Stage::heightmap);
-  const Heightmap heightmap = rasterise_tin(points, params.heightmap);
+  if (!raster.heightmap) raster.heightmap = std::make_shared<const Heightmap>(rasterise_tin(points, params.heightmap));
+  const Heightmap& heightmap = *raster.heightmap;
   stage.emplace(Stage::outline);
   std::vector<Polygon2> outline = input.footprint.polygons;
   if (!input.footprint_given) {
@@ -482,9 +498,12 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
   RegularisationResult lines;
   if (!footprint_walls_only) {
     stage.emplace(Stage::edges);
-    const std::vector<Point2> edges = detect_edges(heightmap, params.heightmap);
+    if (!raster.edges) raster.edges = std::make_shared<const std::vector<Point2>>(detect_edges(heightmap, params.heightmap));
+    const std::vector<Point2>& edges = *raster.edges;
     stage.emplace(Stage::polylines);
-    std::vector<Polyline2> polylines = extract_polylines(edges, params.polylines);
+    if (!raster.polylines)
+      raster.polylines = std::make_shared<const std::vector<Polyline2>>(extract_polylines(edges, params.polylines));
+    std::vector<Polyline2> polylines = *raster.polylines;
     stage.emplace(Stage::step_lines);
     // Step lines between roof planes join the heightmap's lines (the same regularisation and walls).
     const std::vector<Polyline2> steps = detect_step_lines(points, roofs, point_spacing(outline, points.size()), params.step_lines);
@@ -519,6 +538,7 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
     for (const Polygon2& part : outline) problems.push_back({part});
 
   Lod2Hypothesis hypothesis;
+  hypothesis.raster = std::move(raster);
   report.walls = report.candidate_faces = 0;
   for (std::size_t k = 0; k < problems.size(); ++k) {
     const std::vector<Polygon2>& part = problems[k];
@@ -868,7 +888,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
     if (!own) {
       try {
         built = lod2_hypothesis(input, hp, footprint_walls_only, h.wide_outline, deadline, after_hypothesis,
-                                h.left_out ? &unexplained : nullptr);
+                                h.left_out ? &unexplained : nullptr, &hypothesis.raster);
       } catch (const Error& e) {
         log_debug("explain: building " + input.id + ": " + name(h, {}) + ": " + e.what());
         continue;
