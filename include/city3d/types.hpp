@@ -108,6 +108,17 @@ struct PolygonMesh {
 /// What a model face is, for CityJSON semantics.
 enum class SurfaceType : std::uint8_t { ground, wall, roof };
 
+/// The CityJSON semantic surface type of `t`: every output names surfaces so (CityJSON, the
+/// GeoPackage's surfaces lists, the OBJ groups and materials, the glTF materials).
+inline const char* surface_type_name(SurfaceType t) {
+  switch (t) {
+    case SurfaceType::ground: return "GroundSurface";
+    case SurfaceType::wall: return "WallSurface";
+    case SurfaceType::roof: return "RoofSurface";
+  }
+  return "RoofSurface";
+}
+
 /// A building's model: the mesh in a local frame plus the origin that takes it back to the world
 /// (world = local + origin).
 struct BuildingModel {

@@ -93,15 +93,6 @@ void append_world(std::string& out, double quantised, double scale, double trans
   out += s;
 }
 
-const char* surface_name(SurfaceType t) {
-  switch (t) {
-    case SurfaceType::ground: return "GroundSurface";
-    case SurfaceType::wall: return "WallSurface";
-    case SurfaceType::roof: return "RoofSurface";
-  }
-  return "RoofSurface";
-}
-
 using Quantised = std::tuple<std::int64_t, std::int64_t, std::int64_t>;
 
 // The faces of a model grouped into edge-connected parts, parts in order of their first face.
@@ -165,7 +156,7 @@ void append_solid(std::string& out, const CityGeometry& g, const std::vector<std
     if (!used[t]) continue;
     if (k++) out += ',';
     out += "{\"type\":\"";
-    out += surface_name(static_cast<SurfaceType>(t));
+    out += surface_type_name(static_cast<SurfaceType>(t));
     out += "\"}";
   }
   out += "],\"values\":[[";

@@ -92,15 +92,6 @@ OGRMultiPolygon footprint_geometry(const std::vector<Polygon2>& polygons) {
   return multi;
 }
 
-const char* surface_type_name(SurfaceType t) {
-  switch (t) {
-    case SurfaceType::ground: return "GroundSurface";
-    case SurfaceType::wall: return "WallSurface";
-    case SurfaceType::roof: return "RoofSurface";
-  }
-  return "RoofSurface";
-}
-
 // A number rounded to 1/`per` (heights to the millimetre: 1000), or null when not finite.
 void set_rounded(OGRFeature& feature, int index, double v, double per) {
   if (std::isfinite(v)) feature.SetField(index, std::round(v * per) / per);

@@ -45,15 +45,6 @@ void print_coordinate_triple(std::FILE* out, const char* prefix, const Point3& p
   std::fputc('\n', out);
 }
 
-const char* surface_name(SurfaceType t) {
-  switch (t) {
-    case SurfaceType::ground: return "GroundSurface";
-    case SurfaceType::wall: return "WallSurface";
-    case SurfaceType::roof: return "RoofSurface";
-  }
-  return "RoofSurface";
-}
-
 // OBJ: one `o <id>` object per building, its faces grouped by semantic surface (ground, walls,
 // roofs: `g` and `usemtl` RoofSurface, WallSurface, GroundSurface, materials of kSurfaceMaterials,
 // so that Blender or MeshLab tell them apart); indices are global (1-based) across objects.
@@ -74,7 +65,7 @@ void write_obj(std::FILE* out, const std::vector<BuildingModel>& models, const M
       bool started = false;
       for (std::size_t f = 0; f < m.mesh.faces.size(); ++f) {
         if (types[f] != type) continue;
-        if (!started) std::fprintf(out, "g %s\nusemtl %s\n", surface_name(type), surface_name(type));
+        if (!started) std::fprintf(out, "g %s\nusemtl %s\n", surface_type_name(type), surface_type_name(type));
         started = true;
         std::fputc('f', out);
         for (std::uint32_t v : m.mesh.faces[f]) std::fprintf(out, " %zu", base + v);

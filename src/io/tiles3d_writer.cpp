@@ -351,7 +351,6 @@ struct TileBuilding {
 // The surface colours (sRGB-ish linear factors): grey ground, off-white walls, red roofs, as the OBJ
 // materials and report.html's 3D view.
 constexpr std::array<std::array<double, 3>, 3> kSurfaceColours = {{{0.45, 0.45, 0.45}, {0.92, 0.91, 0.87}, {0.80, 0.36, 0.28}}};
-constexpr const char* kSurfaceNames[3] = {"GroundSurface", "WallSurface", "RoofSurface"};
 
 std::vector<unsigned char> make_glb(const std::vector<TileBuilding>& buildings, const std::vector<Property>& properties,
                                     const Globe& globe, const Frame& frame, Region& region) {
@@ -417,7 +416,7 @@ std::vector<unsigned char> make_glb(const std::vector<TileBuilding>& buildings, 
     const int normal = accessor(buffer.view(p.normals, kArrayBuffer, views), kFloat, count, "VEC3");
     const int feature = accessor(buffer.view(p.features, kArrayBuffer, views), kFloat, count, "SCALAR");
     const int indices = accessor(buffer.view(p.indices, kElementArrayBuffer, views), kUnsignedInt, p.indices.size(), "SCALAR");
-    materials.push_back({{"name", kSurfaceNames[t]},
+    materials.push_back({{"name", surface_type_name(static_cast<SurfaceType>(t))},
                          {"pbrMetallicRoughness",
                           {{"baseColorFactor", {kSurfaceColours[t][0], kSurfaceColours[t][1], kSurfaceColours[t][2], 1.0}},
                            {"metallicFactor", 0.0},
