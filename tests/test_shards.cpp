@@ -710,6 +710,26 @@ std::vector<std::string> determinism_clouds() {
 // Issue 11: every limit that decides a model counts work, so the outputs do not depend on -j nor on
 // how busy the machine is. The same clouds with -j 1, -j 2 and -j 8, and on one core with -j 4
 // beside two CPU-burning processes on that core: every file equal (reports up to their timings).
+TEST_F(Shards, one_cropping_pass_streams_each_tile_once_and_changes_no_output) {
+  // The sample's blocks of 10 m lie in both tiles: with the default --group-area one cropping pass
+  // takes them all, so each tile is streamed once; with --group-area 0 every block is a pass of its
+  // own and the tiles are streamed again for each. The buildings, their inputs and the outputs are
+  // the same either way, and whatever order two threads take the buildings in.
+  const auto streams = [](const std::string& output, const std::string& tile) {
+    std::size_t n = 0;
+    for (const std::string& line : lines_of(output)) n += contains(line, tile + ": ") && contains(line, "points streamed");
+    return n;
+  };
+  const Result one_pass = reconstruct(dir_ / "one_pass", "-j 2 -v");
+  ASSERT_EQ(one_pass.exit_code, 0) << one_pass.output;
+  EXPECT_EQ(streams(one_pass.output, "delft_sample_1.las"), 1u) << one_pass.output;
+  EXPECT_EQ(streams(one_pass.output, "delft_sample_2.las"), 1u) << one_pass.output;
+  const Result per_block = reconstruct(dir_ / "per_block", "-j 1 -v --group-area 0");
+  ASSERT_EQ(per_block.exit_code, 0) << per_block.output;
+  EXPECT_GT(streams(per_block.output, "delft_sample_1.las") + streams(per_block.output, "delft_sample_2.las"), 2u);
+  expect_same_outputs(dir_ / "per_block", dir_ / "one_pass");
+}
+
 TEST_F(Shards, outputs_are_the_same_for_any_jobs_and_on_a_loaded_core) {
   const std::vector<std::string> clouds = determinism_clouds();
   if (clouds.empty()) GTEST_SKIP() << "no ../shared/data/city3d_smoke or city3d_dev";

@@ -1,7 +1,7 @@
 // The batch job (run_batch) and the merge of shards (merge_shards). A run is planned before any
 // building is reconstructed, from what every shard can compute alike: the footprints are scanned once
 // (no geometry kept) and grouped into square blocks, and the blocks, in the order of their home tiles, are
-// cut into consecutive runs, one per shard. Blocks of one tile are cropped together (one stream of it). Each
+// cut into consecutive runs, one per shard. Consecutive blocks are cropped together (one stream of their tiles). Each
 // block's footprints are then read through an OGR spatial filter, its tiles cropped, its buildings
 // reconstructed in parallel (reconstruct_building, pipeline.cpp), and each finished building's
 // outputs (model file, CityJSONFeature, report rows) recorded in the journal. The run-level files are
@@ -161,10 +161,10 @@ struct ClassCounts {
   std::array<std::uint64_t, 256> n{};   ///< points per class
 };
 
-// Streams every tile that overlaps `extent` (a block's footprints and their ground buffers) into the
-// cropper. A tile whose header has no bounds (PLY) gets them from its points, in `bounds`; a tile
+// Streams every tile that overlaps one of `regions` (the blocks' footprints and their ground buffers)
+// into the cropper. A tile whose header has no bounds (PLY) gets them from its points, in `bounds`; a tile
 // streamed the first time adds its classes to `classes`.
-void crop_tiles(const std::vector<std::string>& files, const Box2& extent, unsigned threads, Cropper& cropper,
+void crop_tiles(const std::vector<std::string>& files, const std::vector<Box2>& regions, unsigned threads, Cropper& cropper,
                 std::vector<Box3>& bounds, ClassCounts& classes) {
   for (std::size_t t = 0; t < files.size(); ++t) {
     const std::string& file = files[t];
@@ -175,7 +175,7 @@ void crop_tiles(const std::vector<std::string>& files, const Box2& extent, unsig
       Box2 tile;
       tile.add({info.bounds.min.x, info.bounds.min.y});
       tile.add({info.bounds.max.x, info.bounds.max.y});
-      if (!tile.intersects(extent)) {
+      if (std::none_of(regions.begin(), regions.end(), [&](const Box2& r) { return tile.intersects(r); })) {
         log_debug("crop: " + file + " does not overlap the block, skipped");
         continue;
       }
@@ -642,13 +642,14 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   std::vector<std::size_t> my_blocks;
   for (std::size_t b : order)
     if (owner[b] == (sharded ? options.shard - 1 : 0)) my_blocks.push_back(b);
-  // Cropping passes: consecutive blocks of one home tile, up to group_area of footprints, so that a
-  // tile is streamed once for several blocks while memory stays bounded.
+  // Cropping passes: consecutive blocks in tile order, up to group_area of footprints, so that a tile
+  // is streamed once for as many blocks as memory allows. (A pass is not cut where the home tile
+  // changes: tiles with fewer footprints than group_area, and the neighbours every block's ground
+  // buffer reaches into, would be streamed once per home tile.)
   std::vector<std::vector<std::size_t>> groups;
   double group_weight = 0.0;
   for (std::size_t b : my_blocks) {
-    if (groups.empty() || !source || home[b] != home[groups.back().front()] ||
-        group_weight + plan.weights[b] > options.group_area) {
+    if (groups.empty() || !source || group_weight + plan.weights[b] > options.group_area) {
       groups.emplace_back();
       group_weight = 0.0;
     }
@@ -691,19 +692,28 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   Progress progress(options.progress, total, journal.restored());
   // outline_of(k) gives its footprint's polygons in world coordinates (nullptr for clouds).
   // amend(k, result) adds what the run knows about the building beyond its input (coverage, how
-  // its id was made).
+  // its id was made). `work` (empty, or one figure per building) orders the buildings for the
+  // threads: the most work first, so that no thread is left with a large building while the others
+  // have finished (longest processing time first). The outputs do not depend on it: the journal's
+  // records are written out in output order.
   auto reconstruct_all = [&](const std::vector<std::uint64_t>& indices,
                              const std::function<BuildingId(std::size_t)>& id_of,
                              const std::function<BuildingInput(std::size_t)>& make_input,
                              const std::function<const std::vector<Polygon2>*(std::size_t)>& outline_of,
-                             const std::function<void(std::size_t, BuildingResult&)>& amend) {
+                             const std::function<void(std::size_t, BuildingResult&)>& amend,
+                             const std::vector<std::size_t>& work) {
+    std::vector<std::size_t> order(indices.size());
+    std::iota(order.begin(), order.end(), 0);
+    if (!work.empty())
+      std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return work[a] > work[b]; });
     std::atomic<std::size_t> next{0};
     std::exception_ptr failure;
     std::mutex failure_mutex;
     auto worker = [&]() {
       for (;;) {
-        const std::size_t k = next++;
-        if (k >= indices.size()) return;
+        const std::size_t taken = next++;
+        if (taken >= order.size()) return;
+        const std::size_t k = order[taken];
         {
           std::lock_guard<std::mutex> lock(failure_mutex);
           if (failure) return;
@@ -754,20 +764,21 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
           [](std::size_t) { return nullptr; },
           [&](std::size_t, BuildingResult& result) {
             if (!cloud.note.empty()) add_note(result.report, cloud.note);
-          });
+          },
+          {});
       continue;
     }
     // The group's footprints and every other footprint that can reach into their ground buffers
     // (ground points inside any footprint never count as ground), read block by block through a
     // spatial filter, so that a building's input does not depend on how footprints are blocked.
     std::vector<std::pair<std::size_t, Footprint>> found;
-    Box2 extent;
+    std::vector<Box2> regions;
     for (std::size_t b : group) {
       Box2 region;
       for (std::uint64_t i : plan.blocks[b]) region.add(plan.boxes[i].min), region.add(plan.boxes[i].max);
       region.min = {region.min.x - reach, region.min.y - reach};
       region.max = {region.max.x + reach, region.max.y + reach};
-      extent.add(region.min), extent.add(region.max);
+      regions.push_back(region);
       std::vector<std::pair<std::size_t, Footprint>> more = source->read_box(region);
       std::vector<std::pair<std::size_t, Footprint>> merged;
       std::merge(std::make_move_iterator(found.begin()), std::make_move_iterator(found.end()),
@@ -797,7 +808,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
       for (std::size_t k = 0; k < indices.size(); ++k) outlines.push_back(footprints[k].polygons);
     Cropper cropper(std::move(footprints), options.crop);
     progress.reading(files.size(), indices.size());
-    crop_tiles(files, extent, static_cast<unsigned>(options.threads), cropper, tile_bounds, classes);
+    crop_tiles(files, regions, static_cast<unsigned>(options.threads), cropper, tile_bounds, classes);
     // Keep only the group's own inputs (the first indices.size()).
     std::vector<BuildingInput> inputs = cropper.finish();
     inputs.resize(indices.size());
@@ -816,6 +827,8 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
       spacings.push_back(point_spacing(tile_bounds[t], infos[t].point_count));
     }
     std::vector<FootprintCoverage> coverage(indices.size());
+    std::vector<std::size_t> points(indices.size());
+    for (std::size_t k = 0; k < indices.size(); ++k) points[k] = inputs[k].points.size();
     reconstruct_all(
         indices, [&](std::size_t k) { return inputs[k].id; },
         [&](std::size_t k) {
@@ -835,7 +848,8 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
           return std::move(inputs[k]);
         },
         [&](std::size_t k) { return outlines.empty() ? nullptr : &outlines[k]; },
-        [&](std::size_t k, BuildingResult& result) { apply_coverage(coverage[k], options.min_coverage, result.report); });
+        [&](std::size_t k, BuildingResult& result) { apply_coverage(coverage[k], options.min_coverage, result.report); },
+        points);
   }
   journal.close();
   progress.finish();
