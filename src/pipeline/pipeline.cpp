@@ -644,13 +644,15 @@ BuildingModel lod2_model(const BuildingInput& input, const Lod2Hypothesis& hypot
   return model;
 }
 
+// Whether two points are the same, exactly.
+bool same_point(const Point3& p, const Point3& q) { return p.x == q.x && p.y == q.y && p.z == q.z; }
+
 // Whether two hypotheses give the same model under the same selection parameters: the same
 // candidate faces (vertices, faces) and the same selection problem, exactly. explain_more's variants
 // often rebuild the rung's own hypothesis (smaller planes that find no new plane, a wide outline
 // that closes no gap): their selections would only repeat ones already made.
 bool same_hypothesis(const Lod2Hypothesis& a, const Lod2Hypothesis& b) {
   if (a.parts.size() != b.parts.size() || a.part_numbers != b.part_numbers) return false;
-  const auto same_point = [](const Point3& p, const Point3& q) { return p.x == q.x && p.y == q.y && p.z == q.z; };
   const auto same_face = [](const CandidateFace& f, const CandidateFace& g) {
     return f.kind == g.kind && f.source == g.source && f.plane_id == g.plane_id && f.cell_or_edge == g.cell_or_edge &&
            f.vertices == g.vertices && f.area == g.area;
@@ -1034,6 +1036,13 @@ std::string roof_type_of(const BuildingModel& model) {
   return "horizontal";
 }
 
+// Whether two models are the same, exactly: vertices, faces, origin and surface types.
+bool same_model(const BuildingModel& a, const BuildingModel& b) {
+  return a.mesh.faces == b.mesh.faces && a.surfaces == b.surfaces && same_point(a.origin, b.origin) &&
+         std::equal(a.mesh.vertices.begin(), a.mesh.vertices.end(), b.mesh.vertices.begin(), b.mesh.vertices.end(),
+                    same_point);
+}
+
 // LoD1.2 and LoD1.3 derived from the LoD2.2 model (or only the LoD1.2 block when the ladder ended
 // there), each valid as written; volumes and RMSE per level; the model OBJ/PLY get is the highest
 // level asked for. `lod2_fit`: the LoD2 model's distances to the points, when already measured.
@@ -1044,12 +1053,22 @@ void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams
   std::vector<LodModel> made;  // in order 1.2, 1.3, 2.2
   std::vector<std::string> real;
   const bool lod2 = r.level == ModelLevel::lod22 || r.level == ModelLevel::lod22_footprint_walls;
+  // A building of one height level has the same blocks at LoD1.3 as at LoD1.2: they are validated
+  // (and below measured) once.
+  std::optional<std::pair<BuildingModel, BuildingModel>> derived;  // the last blocks, as made and as validated
   const auto derive = [&](const char* lod, double step) {
     try {
       BuildingModel blocks = make_lod13_blocks(primary, input.points, input.ground_z, step,
                                                params.lod1.roof_percentile, params.lod1.min_height);
+      if (derived && same_model(blocks, derived->first)) {
+        made.push_back({lod, derived->second});
+        real.push_back(lod);
+        return;
+      }
+      BuildingModel made_blocks = blocks;
       const WrittenValidity v = validate_as_written(blocks, params.output_grid, params.validity);
       if (!v.remaining.empty()) throw ReconstructionError("not valid as written: " + v.remaining.front().text());
+      derived.emplace(std::move(made_blocks), blocks);
       made.push_back({lod, std::move(blocks)});
       real.push_back(lod);
     } catch (const Error& e) {
@@ -1079,9 +1098,12 @@ void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams
     if (asked) kept.push_back(std::move(m));
   }
   if (kept.empty()) kept.push_back({lod2 ? "2.2" : "1.2", primary});
+  std::optional<std::pair<const BuildingModel*, Explained>> measured;  // the last level measured
   for (const LodModel& m : kept) {
     const double volume = check_mesh(m.model.mesh).signed_volume;
-    const Explained fit = lod2 && m.lod == "2.2" && lod2_fit ? *lod2_fit : explained_points(m.model.mesh, input.points);
+    if (!(lod2 && m.lod == "2.2" && lod2_fit) && !(measured && same_model(m.model, *measured->first)))
+      measured.emplace(&m.model, explained_points(m.model.mesh, input.points));
+    const Explained fit = lod2 && m.lod == "2.2" && lod2_fit ? *lod2_fit : measured->second;
     const std::size_t n = input.points.size();
     const double error = n == 0 ? 0.0 : std::sqrt(fit.squares / static_cast<double>(n));
     // The unexplained points of the model the OBJ/PLY files hold: the last level kept.
