@@ -407,17 +407,19 @@ class LazRecordSource final : public RecordSource {
 /// LAZ on several threads: workers decode the chunks after the one being handed out, and the
 /// records still leave in file order, so the output is the same bytes as with one thread. Chunk c
 /// goes to slot c % slots; a slot is refilled only after all its records have been handed out, so
-/// at most `threads` decoded chunks are held. An error in a chunk is kept in its slot and thrown
+/// at most `slots` decoded chunks are held. More slots than workers let the workers run ahead
+/// while the reader's caller converts and crops the records it was handed (with one slot per
+/// worker they could only decode the next chunk each, and waited for the rest of the caller's work). An error in a chunk is kept in its slot and thrown
 /// when that chunk's records are due (the records before it are handed out first). The destructor
 /// stops the workers and joins them; a worker in the middle of a chunk finishes that chunk first.
 class ParallelLazRecordSource final : public RecordSource {
  public:
   ParallelLazRecordSource(std::unique_ptr<detail::LazDecoder> decoder, std::size_t record_length,
-                          unsigned threads)
+                          unsigned threads, std::size_t slots)
       : decoder_(std::move(decoder)),
         record_length_(record_length),
         chunk_count_(decoder_->chunk_count()),
-        slots_(threads) {
+        slots_(std::max<std::size_t>(slots, threads)) {
     try {
       for (unsigned i = 0; i < threads; ++i) workers_.emplace_back([this] { work(); });
     } catch (...) {  // a thread could not be started: stop the ones that were
@@ -537,8 +539,14 @@ class ParallelLazRecordSource final : public RecordSource {
 };
 
 /// Decoded chunks larger than this are decoded by the streaming path even when threads are asked
-/// for: the parallel path holds `threads` whole chunks (a file may have one chunk of 100M points).
+/// for: the parallel path holds at least `threads` whole chunks (a file may have one chunk of 100M
+/// points).
 constexpr std::uint64_t kMaxParallelChunkBytes = 256u << 20;
+
+/// Decoded chunks the parallel path may hold ahead of the reader, in bytes, beyond one per thread
+/// (AHN3's chunks of 50,000 points are 1.7 MB each: up to eight per thread).
+constexpr std::uint64_t kReadAheadBytes = 32u << 20;
+constexpr std::size_t kMaxSlotsPerThread = 8;
 
 /// Picks the record source for a validated header: the file itself, or the LAZ decoder, on
 /// `decode_threads` threads when the file has several chunks (0 counts as 1).
@@ -563,7 +571,10 @@ std::unique_ptr<RecordSource> make_record_source(InputFile file, const LasHeader
   const auto threads = static_cast<unsigned>(std::min<std::size_t>(std::max(decode_threads, 1u), chunks));
   if (threads <= 1 || largest * h.record_length > kMaxParallelChunkBytes)
     return std::make_unique<LazRecordSource>(std::move(decoder));
-  return std::make_unique<ParallelLazRecordSource>(std::move(decoder), h.record_length, threads);
+  const std::uint64_t chunk_bytes = std::max<std::uint64_t>(largest * h.record_length, 1);
+  const auto slots = static_cast<std::size_t>(
+      std::min<std::uint64_t>(kMaxSlotsPerThread * threads, std::max<std::uint64_t>(threads, kReadAheadBytes / chunk_bytes)));
+  return std::make_unique<ParallelLazRecordSource>(std::move(decoder), h.record_length, threads, slots);
 }
 
 /// Grows a vector geometrically, so that many small appends stay linear.
