@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -67,6 +68,11 @@ std::vector<Ring2> ground_rings(const BuildingModel& m) {
 
 // Vertex coordinates of models embedded for the 3D view, at most (keeps a 10,000-building page light).
 constexpr std::size_t kModelVertexBudget = 150000;
+
+// The records of the first pass kept for the two passes after it instead of being read (and their
+// CityJSONFeature parsed) again, up to this many vertices of models and footprints in all: a few MB,
+// every record of a city block, the first ones of a large run.
+constexpr std::size_t kKeptVertexBudget = 300000;
 
 const char* kPage1 = R"HTML(<!DOCTYPE html>
 <html lang="en">
@@ -539,11 +545,19 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
     bool model = false;
   };
   std::vector<Key> keys(records.size());
+  std::vector<std::optional<OverviewRecord>> kept(records.size());
+  std::size_t kept_vertices = 0;
+  // Record k, as kept or read again (into `read`).
+  const auto record = [&](std::size_t k, bool levels, OverviewRecord& read) -> const OverviewRecord& {
+    if (kept[k]) return *kept[k];
+    read = records.at(k, levels);
+    return read;
+  };
   Box2 extent;
   double outline_size = 0;  // the widest inferred outline (single-building clouds)
   std::size_t outlines = 0;
   for (std::size_t k = 0; k < records.size(); ++k) {
-    const OverviewRecord r = records.at(k, true);
+    OverviewRecord r = records.at(k, true);
     for (const Polygon2& p : r.footprint)
       for (const Point2& v : p.outer) extent.add(v);
     if (r.footprint.empty() && !r.lods.empty()) {
@@ -560,6 +574,16 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
                               (std::isfinite(b.unsupported_area) && b.footprint_area > 0 ? b.unsupported_area / b.footprint_area : 0.0);
     keys[k] = {b.status == BuildingStatus::fallback || b.status == BuildingStatus::partial, unfaithful, b.rmse,
                r.lods.empty() ? 0 : r.lods.back().model.mesh.vertices.size(), !r.lods.empty()};
+    std::size_t vertices = 0;
+    for (const Polygon2& p : r.footprint) {
+      vertices += p.outer.size();
+      for (const Ring2& h : p.holes) vertices += h.size();
+    }
+    for (const CityGeometry& level : r.lods) vertices += level.model.mesh.vertices.size();
+    if (kept_vertices + vertices <= kKeptVertexBudget) {
+      kept_vertices += vertices;
+      kept[k] = std::move(r);
+    }
   }
   const bool have_footprints = !extent.empty();
   const Point2 corner = have_footprints ? Point2{std::floor(extent.min.x), std::floor(extent.min.y)} : Point2{0, 0};
@@ -585,7 +609,8 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
   for (std::size_t i : order) {
     if (!keys[i].model || keys[i].vertices > vertex_budget) continue;
     // Only the models shown are read again.
-    const OverviewRecord r = records.at(i, true);
+    OverviewRecord read;
+    const OverviewRecord& r = record(i, true, read);
     const BuildingModel& m = r.lods.back().model;
     vertex_budget -= m.mesh.vertices.size();
     // Centred on the model's plan-view centre, floor at z = 0.
@@ -643,7 +668,8 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
   std::fputs(data.c_str(), out);
   std::size_t placed = 0;  // inferred outlines laid out so far
   for (std::size_t i = 0; i < records.size(); ++i) {
-    const OverviewRecord r = records.at(i, inferred);
+    OverviewRecord read;
+    const OverviewRecord& r = record(i, inferred, read);
     const BuildingReport& b = r.report;
     data.clear();
     if (i) data += ',';
