@@ -70,9 +70,11 @@ std::vector<Ring2> ground_rings(const BuildingModel& m) {
 constexpr std::size_t kModelVertexBudget = 150000;
 
 // The records of the first pass kept for the two passes after it instead of being read (and their
-// CityJSONFeature parsed) again, up to this many vertices of models and footprints in all: a few MB,
-// every record of a city block, the first ones of a large run.
-constexpr std::size_t kKeptVertexBudget = 300000;
+// CityJSONFeature parsed) again: up to this many records and vertices of models and footprints in
+// all (a kept record of the Delft block holds about 15 KB: at most a few MB whatever the size of
+// the run), every record of a city block, the first ones of a large run.
+constexpr std::size_t kKeptRecords = 200;
+constexpr std::size_t kKeptVertexBudget = 50000;
 
 const char* kPage1 = R"HTML(<!DOCTYPE html>
 <html lang="en">
@@ -580,7 +582,7 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
       for (const Ring2& h : p.holes) vertices += h.size();
     }
     for (const CityGeometry& level : r.lods) vertices += level.model.mesh.vertices.size();
-    if (kept_vertices + vertices <= kKeptVertexBudget) {
+    if (k < kKeptRecords && kept_vertices + vertices <= kKeptVertexBudget) {
       kept_vertices += vertices;
       kept[k] = std::move(r);
     }

@@ -20,6 +20,7 @@
 #include <exception>
 #include <filesystem>
 #include <functional>
+#include <future>
 #include <fstream>
 #include <iterator>
 #include <map>
@@ -181,12 +182,16 @@ void crop_tiles(const std::vector<std::string>& files, const std::vector<Box2>& 
       }
     }
     Box3 seen;
-    PointCloud chunk;
     std::uint64_t n = 0;
-    for (;;) {
+    // With more than one thread the next chunk is read (and converted) while this one is cropped.
+    const auto read = [&reader](PointCloud& chunk) {
       chunk.clear();
-      const std::size_t got = reader->read(chunk, 1 << 20);
-      if (got == 0) break;
+      return reader->read(chunk, 1 << 20);
+    };
+    PointCloud chunk, next;
+    for (std::size_t got = read(chunk); got > 0;) {
+      std::future<std::size_t> ahead;
+      if (threads > 1) ahead = std::async(std::launch::async, read, std::ref(next));
       n += got;
       if (info.bounds.empty())
         for (const Point3& p : chunk.points) seen.add(p);
@@ -195,6 +200,8 @@ void crop_tiles(const std::vector<std::string>& files, const std::vector<Box2>& 
         for (std::uint8_t c : chunk.classification) ++classes.n[c];
       }
       cropper.add(chunk);
+      got = ahead.valid() ? ahead.get() : read(next);
+      std::swap(chunk, next);
     }
     classes.counted[t] = true;
     if (info.bounds.empty()) bounds[t] = seen;
