@@ -105,6 +105,49 @@ double segment_dist2(const Point2& p, const Point2& a, const Point2& b) {
   return sq(p.x - (a.x + t * dx)) + sq(p.y - (a.y + t * dy));
 }
 
+// The segments from one point a to points b_k, and the nearest of them to a pixel, with exactly
+// segment_dist2's arithmetic: the terms that depend on one side only are computed once (this is the
+// innermost loop of the simplification). A segment of length 0 gets direction (0, 0) and length 1,
+// with which the formula gives |p - a|^2, as segment_dist2 does.
+class SegmentFan {
+ public:
+  void reset(const Point2& a) {
+    a_ = a;
+    dx_.clear();
+    dy_.clear();
+    len2_.clear();
+  }
+  void add(const Point2& b) {
+    const double dx = b.x - a_.x, dy = b.y - a_.y;
+    const double len2 = dx * dx + dy * dy;
+    const bool degenerate = len2 <= 0.0;
+    dx_.push_back(degenerate ? 0.0 : dx);
+    dy_.push_back(degenerate ? 0.0 : dy);
+    len2_.push_back(degenerate ? 1.0 : len2);
+  }
+  // The first k with the smallest segment_dist2(p, a, b_k), and that squared distance.
+  std::pair<std::size_t, double> nearest(const Point2& p) const {
+    const double ax = a_.x, ay = a_.y;
+    const double rx = p.x - ax, ry = p.y - ay;
+    std::size_t best = 0;
+    double best_d2 = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < len2_.size(); ++k) {
+      const double dx = dx_[k], dy = dy_[k];
+      const double t = std::min(std::max((rx * dx + ry * dy) / len2_[k], 0.0), 1.0);  // std::clamp
+      const double d2 = sq(p.x - (ax + t * dx)) + sq(p.y - (ay + t * dy));
+      if (d2 < best_d2) {
+        best_d2 = d2;
+        best = k;
+      }
+    }
+    return {best, best_d2};
+  }
+
+ private:
+  Point2 a_;
+  std::vector<double> dx_, dy_, len2_;
+};
+
 // Uniform hash grid over the pixels for "is there a pixel within d of q" queries.
 class PixelGrid {
  public:
@@ -351,6 +394,7 @@ class Simplifier {
  private:
   EdgeEval evaluate(int a, int b, const std::vector<int>& pixels) const {
     EdgeEval ev;
+    if (pixels.empty()) return ev;  // a ghost edge of cost 0 (a third of simulate's new edges)
     const Point2 pa = pos_[a], pb = pos_[b];
     const double dx = pb.x - pa.x, dy = pb.y - pa.y;
     const double len = std::sqrt(dx * dx + dy * dy);
@@ -361,14 +405,14 @@ class Simplifier {
       ghost += mass_[p] * d2;
       if (d2 > eps2_) ghost_ok = false;
     }
-    if (pixels.empty() || len <= 0.0) {
+    if (len <= 0.0) {
       ev.cost = ghost;
       ev.valid = ghost_ok;
       return ev;
     }
     const double ux = dx / len, uy = dy / len;
     // (abscissa, normal^2, mass) sorted by abscissa.
-    thread_local std::vector<std::pair<double, std::pair<double, double>>> proj;
+    auto& proj = projections_;
     proj.clear();
     double total_mass = 0.0;
     for (int p : pixels) {
@@ -468,16 +512,10 @@ class Simplifier {
     } else {
       plan.assigned.resize(std::max(plan.assigned.size(), plan.neighbours.size()));
       for (auto& a : plan.assigned) a.clear();
+      fan_.reset(pv);
+      for (int n : plan.neighbours) fan_.add(pos_[n]);
       for (int p : pixels) {
-        std::size_t best = 0;
-        double best_d2 = std::numeric_limits<double>::infinity();
-        for (std::size_t k = 0; k < plan.neighbours.size(); ++k) {
-          const double d2 = segment_dist2(px_[p], pv, pos_[plan.neighbours[k]]);
-          if (d2 < best_d2) {
-            best_d2 = d2;
-            best = k;
-          }
-        }
+        const auto [best, best_d2] = fan_.nearest(px_[p]);
         if (best_d2 > eps2_) return plan;  // no edge can take this pixel: invalid
         plan.assigned[best].push_back(p);
       }
@@ -581,6 +619,8 @@ class Simplifier {
   std::vector<int> entries_;             // queue entries per vertex
   std::vector<std::vector<Memo>> memo_;  // last simulated collapses per vertex
   CollapsePlan scratch_;
+  SegmentFan fan_;  // simulate's new edges around v
+  mutable std::vector<std::pair<double, std::pair<double, double>>> projections_;  // evaluate's buffer
   std::priority_queue<QueueEntry, std::vector<QueueEntry>, std::greater<QueueEntry>> queue_;
   double total_cost_ = 0.0;
 };

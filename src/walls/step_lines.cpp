@@ -21,6 +21,55 @@ namespace {
 
 double plane_height(const Plane3& p, double x, double y) { return -(p.a * x + p.b * y + p.d) / p.c; }
 
+// The distance between two points as std::hypot(dx, dy) returns it, with hypot called only where a
+// comparison needs it (hypot was about half of the step lines' CPU). The squared distance
+// s = dx^2 + dy^2 has a relative error below 2^-51 and hypot one of at most 1 ulp, so when two
+// squared distances differ by more than a relative 1e-9 (a margin that also covers the rounding of
+// the test itself) the two hypot values compare the same way; only closer cases call hypot. Below
+// s = 1e-250 (never for coordinates in metres) underflow would void the error bound, and hypot
+// decides there too.
+class Distance {
+ public:
+  Distance(double dx, double dy) : dx_(dx), dy_(dy), sq_(dx * dx + dy * dy) {}
+  double squared() const { return sq_; }
+  double value() const {
+    if (!known_) value_ = std::hypot(dx_, dy_), known_ = true;
+    return value_;
+  }
+  bool operator<(const Distance& o) const {
+    if (clearly_less(sq_, o.sq_)) return true;
+    if (clearly_less(o.sq_, sq_)) return false;
+    return value() < o.value();
+  }
+
+ private:
+  static bool clearly_less(double s, double t) { return t >= 1e-250 && s < t * (1.0 - 1e-9); }
+  double dx_, dy_, sq_;
+  mutable double value_ = 0.0;
+  mutable bool known_ = false;
+};
+
+// d.value() <= r for many d, decided as Distance's comparisons are: from the squared distance
+// unless it is within a relative 1e-9 of r^2.
+class Radius {
+ public:
+  explicit Radius(double r) : r_(r) {
+    const double r2 = r * r;
+    if (r2 < 1e-250) return;  // hypot decides every case
+    surely_in_ = r2 * (1.0 - 1e-9);
+    surely_out_ = r2 * (1.0 + 1e-9);
+  }
+  bool contains(const Distance& d) const {
+    if (d.squared() < surely_in_) return true;
+    if (d.squared() > surely_out_) return false;
+    return d.value() <= r_;
+  }
+
+ private:
+  double r_;
+  double surely_in_ = -1.0, surely_out_ = std::numeric_limits<double>::infinity();
+};
+
 // A uniform grid over xy positions for radius searches.
 class Grid {
  public:
@@ -34,16 +83,24 @@ class Grid {
     bins_.assign(static_cast<std::size_t>(nx_ * ny_), {});
     for (std::size_t i = 0; i < xy.size(); ++i) bins_[index(xy[i])].push_back(static_cast<std::uint32_t>(i));
   }
+  // visit(k, distance) for every point k within `radius` of p.
   template <typename Visit>
   void near(const Point2& p, double radius, Visit visit) const {
+    near(p, radius, [](std::uint32_t) { return true; }, visit);
+  }
+  // The same for the points k with wanted(k), which is tested first (it is cheaper).
+  template <typename Wanted, typename Visit>
+  void near(const Point2& p, double radius, Wanted wanted, Visit visit) const {
     if (bins_.empty()) return;
+    const Radius within(radius);
     const long i0 = std::max(0L, col(p.x - radius)), i1 = std::min(nx_ - 1, col(p.x + radius));
     const long j0 = std::max(0L, row(p.y - radius)), j1 = std::min(ny_ - 1, row(p.y + radius));
     for (long j = j0; j <= j1; ++j)
       for (long i = i0; i <= i1; ++i)
         for (std::uint32_t k : bins_[static_cast<std::size_t>(j * nx_ + i)]) {
-          const double d = std::hypot(xy_[k].x - p.x, xy_[k].y - p.y);
-          if (d <= radius) visit(k, d);
+          if (!wanted(k)) continue;
+          const Distance d(xy_[k].x - p.x, xy_[k].y - p.y);
+          if (within.contains(d)) visit(k, d);
         }
   }
 
@@ -60,8 +117,10 @@ class Grid {
   std::vector<std::vector<std::uint32_t>> bins_;
 };
 
+using Line = std::pair<Point2, Point2>;  // centre and unit direction
+
 // Least-squares line through `pts` (indices into xy): centre and unit direction.
-std::pair<Point2, Point2> fit_line(const std::vector<Point2>& xy, const std::vector<std::uint32_t>& pts) {
+Line fit_line(const std::vector<Point2>& xy, const std::vector<std::uint32_t>& pts) {
   double cx = 0, cy = 0;
   for (auto k : pts) cx += xy[k].x, cy += xy[k].y;
   cx /= pts.size();
@@ -75,40 +134,61 @@ std::pair<Point2, Point2> fit_line(const std::vector<Point2>& xy, const std::vec
   return {{cx, cy}, {std::cos(angle), std::sin(angle)}};
 }
 
+bool near_line(const Point2& p, const Line& line, double tolerance) {
+  return std::abs(-(p.x - line.first.x) * line.second.y + (p.y - line.first.y) * line.second.x) <= tolerance;
+}
+
 // Straight pieces through the boundary samples of one pair of planes: repeatedly the line with most
 // samples within `tolerance` (candidate lines: the local fit around each sample), refitted, cut at
 // gaps wider than `max_gap`; the longest run is kept when long enough, its samples removed.
+// A sample's candidate line and its count carry over to the next round while the sample's
+// neighbourhood stays the same (the line is then the same): the count only loses the removed
+// samples near the line. Counting every sample for every candidate in every round was quadratic.
 template <typename Separates>
 void extract_lines(const std::vector<Point2>& samples, const StepLineParams& params, double max_gap,
                    Separates separates, std::vector<Polyline2>& out) {
   std::vector<std::uint32_t> left(samples.size());
   std::iota(left.begin(), left.end(), 0u);
   const double tol = params.line_tolerance;
-  while (left.size() >= static_cast<std::size_t>(params.min_samples)) {
+  struct Candidate {
+    std::vector<std::uint32_t> local;  // the neighbourhood the line was fitted to (sample ids, ascending)
+    Line line;
+    std::size_t count = 0;  // samples left near the line
+    int round = -1;         // the round the count is for (-1: none)
+  };
+  std::vector<Candidate> candidates(samples.size());
+  std::vector<std::uint32_t> removed;  // the samples the last round removed
+  std::vector<std::uint32_t> local, local_ids;
+  for (int round = 0; left.size() >= static_cast<std::size_t>(params.min_samples); ++round) {
     std::vector<Point2> xy;
     for (auto k : left) xy.push_back(samples[k]);
     const Grid grid(xy, std::max(tol, max_gap));
     std::size_t best_count = 0;
-    std::pair<Point2, Point2> best_line;
+    Line best_line;
     for (std::uint32_t i = 0; i < xy.size(); ++i) {
-      std::vector<std::uint32_t> local;
-      grid.near(xy[i], max_gap, [&](std::uint32_t k, double) { local.push_back(k); });
+      local.clear();
+      grid.near(xy[i], max_gap, [&](std::uint32_t k, const Distance&) { local.push_back(k); });
       if (local.size() < 3) continue;
       std::sort(local.begin(), local.end());
-      const auto line = fit_line(xy, local);
-      std::size_t count = 0;
-      for (const Point2& p : xy)
-        if (std::abs(-(p.x - line.first.x) * line.second.y + (p.y - line.first.y) * line.second.x) <= tol) ++count;
-      if (count > best_count) best_count = count, best_line = line;
+      local_ids.clear();
+      for (auto k : local) local_ids.push_back(left[k]);  // left is ascending: so are the ids
+      Candidate& c = candidates[left[i]];
+      if (c.round == round - 1 && c.local == local_ids) {
+        for (auto k : removed) c.count -= near_line(samples[k], c.line, tol);
+      } else {
+        c.local = local_ids;
+        c.line = fit_line(xy, local);
+        c.count = 0;
+        for (const Point2& p : xy) c.count += near_line(p, c.line, tol);
+      }
+      c.round = round;
+      if (c.count > best_count) best_count = c.count, best_line = c.line;
     }
     if (best_count < static_cast<std::size_t>(params.min_samples)) return;
-    const auto inliers_of = [&](const std::pair<Point2, Point2>& line) {
+    const auto inliers_of = [&](const Line& line) {
       std::vector<std::uint32_t> in;
-      for (std::uint32_t k = 0; k < xy.size(); ++k) {
-        const Point2& p = xy[k];
-        if (std::abs(-(p.x - line.first.x) * line.second.y + (p.y - line.first.y) * line.second.x) <= tol)
-          in.push_back(k);
-      }
+      for (std::uint32_t k = 0; k < xy.size(); ++k)
+        if (near_line(xy[k], line, tol)) in.push_back(k);
       return in;
     };
     std::vector<std::uint32_t> in = inliers_of(best_line);
@@ -136,8 +216,8 @@ void extract_lines(const std::vector<Point2>& samples, const StepLineParams& par
     std::vector<bool> drop(xy.size(), false);
     for (std::size_t k = best_begin; k < best_end; ++k) drop[along[k].second] = true;
     std::vector<std::uint32_t> rest;
-    for (std::uint32_t k = 0; k < xy.size(); ++k)
-      if (!drop[k]) rest.push_back(left[k]);
+    removed.clear();
+    for (std::uint32_t k = 0; k < xy.size(); ++k) (drop[k] ? removed : rest).push_back(left[k]);
     if (rest.size() == left.size()) return;
     left = std::move(rest);
   }
@@ -182,18 +262,21 @@ std::vector<Polyline2> detect_step_lines(const std::vector<Point3>& points, cons
   // search below finds its middle.
   const std::size_t R = roofs.size();
   std::vector<std::vector<Point2>> samples(R * R);
-  std::vector<double> nearest(R);
+  std::vector<Distance> nearest(R, Distance(0.0, 0.0));
   std::vector<std::uint32_t> nearest_point(R);
+  std::vector<char> found(R);
   for (std::uint32_t i = 0; i < xy.size(); ++i) {
-    std::fill(nearest.begin(), nearest.end(), std::numeric_limits<double>::infinity());
-    grid.near(xy[i], radius, [&](std::uint32_t k, double d) {
+    std::fill(found.begin(), found.end(), 0);
+    const auto other_plane = [&](std::uint32_t k) { return label[k] != label[i]; };
+    grid.near(xy[i], radius, other_plane, [&](std::uint32_t k, const Distance& d) {
       const auto b = static_cast<std::size_t>(label[k]);
-      if (label[k] == label[i]) return;
-      if (d < nearest[b] || (d == nearest[b] && k < nearest_point[b])) nearest[b] = d, nearest_point[b] = k;
+      // The nearest, ties to the lowest index (distances within the radius are not NaN).
+      if (!found[b] || d < nearest[b] || (!(nearest[b] < d) && k < nearest_point[b]))
+        nearest[b] = d, nearest_point[b] = k, found[b] = 1;
     });
     const auto a = static_cast<std::size_t>(label[i]);
     for (std::size_t b = 0; b < R; ++b) {
-      if (!std::isfinite(nearest[b])) continue;
+      if (!found[b]) continue;
       // f = height of a - height of b is linear in xy: where the two planes meet in a crease (a
       // ridge, a hip, a valley) f changes sign between the points, or is small at one of them; at a
       // step it keeps its sign and its size on both sides.
@@ -213,9 +296,11 @@ std::vector<Polyline2> detect_step_lines(const std::vector<Point3>& points, cons
     const Point2 d{(p1.x - p0.x) / len, (p1.y - p0.y) / len};
     const Point2 mid{(p0.x + p1.x) / 2, (p0.y + p1.y) / 2};
     std::size_t a_left = 0, a_right = 0, b_left = 0, b_right = 0;
-    grid.near(mid, len / 2 + radius, [&](std::uint32_t k, double) {
+    const auto of_the_pair = [&](std::uint32_t k) {
+      return label[k] == static_cast<int>(a) || label[k] == static_cast<int>(b);
+    };
+    grid.near(mid, len / 2 + radius, of_the_pair, [&](std::uint32_t k, const Distance&) {
       const auto l = static_cast<std::size_t>(label[k]);
-      if (l != a && l != b) return;
       const double along = (xy[k].x - p0.x) * d.x + (xy[k].y - p0.y) * d.y;
       const double across = -(xy[k].x - p0.x) * d.y + (xy[k].y - p0.y) * d.x;
       if (along < 0.0 || along > len || std::abs(across) > radius) return;
