@@ -55,7 +55,37 @@ using PointMap = CGAL::First_of_pair_property_map<PointWithNormal>;
 using NormalMap = CGAL::Second_of_pair_property_map<PointWithNormal>;
 
 namespace sd = CGAL::Shape_detection;
-using NeighborQuery = sd::Point_set::K_neighbor_query<Kernel, PointRange, PointMap>;
+using KdTreeQuery = sd::Point_set::K_neighbor_query<Kernel, PointRange, PointMap>;
+
+/// Each point's k nearest neighbours, searched once, in the order CGAL's K_neighbor_query gives them
+/// (nearest first, the point itself among them; its kd-tree decides ties). The normals, the seed
+/// ordering, the growing and the refitting all ask for the same lists, the growing once per point a
+/// region reaches and again whenever a region too small is undone, so that the searches took more
+/// than half of the planes' CPU; handed out from here they are byte-for-byte the lists a search gives.
+class StoredNeighbors {
+ public:
+  StoredNeighbors(const PointRange& range, std::size_t k) : count_(std::min(k, range.size())) {
+    const KdTreeQuery search(range, k, PointMap());
+    lists_.reserve(range.size() * count_);
+    std::vector<std::size_t> neighbors;
+    for (std::size_t i = 0; i < range.size(); ++i) {
+      search(i, neighbors);  // always min(k, n) of them: the search fills its k from the whole tree
+      lists_.insert(lists_.end(), neighbors.begin(), neighbors.end());
+    }
+  }
+
+  /// The neighbours of point i, as a CGAL NeighborQuery hands them over.
+  void operator()(std::size_t i, std::vector<std::size_t>& neighbors) const {
+    const auto first = lists_.begin() + static_cast<std::ptrdiff_t>(i * count_);
+    neighbors.assign(first, first + static_cast<std::ptrdiff_t>(count_));
+  }
+
+ private:
+  std::size_t count_;                  // neighbours of every point
+  std::vector<std::uint32_t> lists_;   // point i's at [i * count_, (i + 1) * count_)
+};
+
+using NeighborQuery = StoredNeighbors;
 using RegionType = sd::Point_set::Least_squares_plane_fit_region<Kernel, PointRange, PointMap, NormalMap>;
 using Sorting = sd::Point_set::Least_squares_plane_fit_sorting<Kernel, PointRange, NeighborQuery, PointMap>;
 using RegionGrowing = sd::Region_growing<PointRange, NeighborQuery, RegionType, Sorting::Seed_map>;
@@ -218,8 +248,8 @@ std::vector<PlanarSegment> detect_planes_of_distinct_points(const std::vector<Po
   range.reserve(local_points.size());
   for (const Point3& p : local_points) range.emplace_back(Kernel::Point_3(p.x, p.y, p.z), Kernel::Vector_3(0, 0, 1));
 
-  // One kd-tree serves the normals, the seed ordering and the growing.
-  NeighborQuery neighbor_query(range, static_cast<std::size_t>(params.k_neighbors), PointMap());
+  // One search per point serves the normals, the seed ordering, the growing and the refitting.
+  NeighborQuery neighbor_query(range, static_cast<std::size_t>(params.k_neighbors));
 
   // PCA normals: smallest-eigenvalue direction of the k-neighbourhood. Their sign is irrelevant to
   // the growing (CGAL compares |cos|), so they are left as the solver gives them.
