@@ -115,11 +115,21 @@ Fit fit_plane(const IndexRange& indices, PointAt point_at) {
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   for (auto i : indices) centroid += point_at(i);
   centroid /= static_cast<double>(indices.size());
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  // The sums of d d^T entry by entry, six of them: d_i d_j and d_j d_i are the same double.
+  double xx = 0.0, yx = 0.0, zx = 0.0, yy = 0.0, zy = 0.0, zz = 0.0;
   for (auto i : indices) {
     const Eigen::Vector3d d = point_at(i) - centroid;
-    covariance += d * d.transpose();
+    xx += d.x() * d.x();
+    yx += d.y() * d.x();
+    zx += d.z() * d.x();
+    yy += d.y() * d.y();
+    zy += d.z() * d.y();
+    zz += d.z() * d.z();
   }
+  Eigen::Matrix3d covariance;
+  covariance << xx, yx, zx,
+                yx, yy, zy,
+                zx, zy, zz;
   // Eigenvalues come sorted ascending; column 0 is the normal.
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
   Eigen::Vector3d normal = solver.eigenvectors().col(0);
