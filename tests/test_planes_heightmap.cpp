@@ -439,6 +439,37 @@ TEST(DetectPlanes, output_is_sorted_by_size_and_identical_between_runs) {
   }
 }
 
+// One detector for several detections on the same points (PlaneDetector): each gives what
+// detect_planes() gives with its params, copies of points included; a different k is refused.
+TEST(PlaneDetector, each_detection_equals_detect_planes_with_its_params) {
+  SyntheticBuilding b(5);
+  b.roof(0, 0, 10, 8, [](double, double) { return 6.0; });
+  b.flat_patch(13, 3, 15, 5, 9.0, 30);
+  b.wall_at_x(0, 0, 8, 1, 5);
+  b.points.insert(b.points.end(), b.points.begin(), b.points.begin() + 50);  // copies
+  const city3d::PlaneDetector detector(b.points, PlaneParams{}.k_neighbors);
+  PlaneParams varied[4];
+  varied[1].min_points = 40;
+  varied[2].max_angle = 30.0;
+  varied[3].absorb_rounds = 0;
+  varied[3].max_distance = 0.1;
+  for (const PlaneParams& params : varied) {
+    const auto expected = detect_planes(b.points, params);
+    const auto found = detector.detect(params);
+    ASSERT_EQ(found.size(), expected.size());
+    for (std::size_t i = 0; i < found.size(); ++i) {
+      EXPECT_EQ(found[i].points, expected[i].points);
+      EXPECT_EQ(found[i].plane.d, expected[i].plane.d);
+      EXPECT_EQ(found[i].rms, expected[i].rms);
+      EXPECT_EQ(found[i].kind, expected[i].kind);
+    }
+  }
+  PlaneParams other_k;
+  other_k.k_neighbors = 8;
+  EXPECT_THROW(detector.detect(other_k), city3d::ConfigError);
+  EXPECT_THROW(city3d::PlaneDetector(b.points, 2), city3d::ConfigError);
+}
+
 TEST(DetectPlanes, rejects_non_finite_points_naming_the_index) {
   auto points = flat_box(10, 8, 6.0, 9);
   points[17].z = std::nan("");

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "city3d/types.hpp"
@@ -70,6 +71,30 @@ struct PlanarSegment {
 /// than 2^32 - 1 points).
 std::vector<PlanarSegment> detect_planes(const std::vector<Point3>& local_points,
                                          const PlaneParams& params);
+
+namespace detail {
+struct Neighbourhoods;  // planes.cpp
+}
+
+/// detect_planes() in two steps, for detections that differ in thresholds but not in the points or k:
+/// the first (the constructor) does what depends on the points and k_neighbors only, the k nearest
+/// neighbours of every point, its PCA normal and the seed order, four fifths of the work on the
+/// city3d_dev clouds; each detect() then grows, refits and labels with its own min_points,
+/// max_distance, max_angle, absorb_rounds and wall_max_normal_z. (The pipeline detects again on the
+/// same points: with smaller planes for a building without a roof plane, and in explain_more's variants.)
+/// detect(params) returns exactly what detect_planes(local_points, params) returns. Copyable and
+/// cheap to copy (the shared work is immutable); detect() may run on several threads at once.
+class PlaneDetector {
+ public:
+  /// Throws ConfigError (k_neighbors < 3) or ReconstructionError (as detect_planes()).
+  PlaneDetector(const std::vector<Point3>& local_points, int k_neighbors);
+
+  /// Throws ConfigError (invalid params, or params.k_neighbors not the detector's).
+  std::vector<PlanarSegment> detect(const PlaneParams& params) const;
+
+ private:
+  std::shared_ptr<const detail::Neighbourhoods> shared_;
+};
 
 /// The planes of a building too small or too sparse for region growing (a shed of a few points, a house
 /// in a survey of 2 points per m2, whose k-neighbour normals mix its roof's slopes): the plane through

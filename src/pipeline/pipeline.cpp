@@ -386,11 +386,13 @@ double point_spacing(const std::vector<Polygon2>& outline, std::size_t points) {
 // polygons; an inferred outline has a part per region modelled, the largest first).
 // What a rung's hypotheses share: the heightmap of the points, its edges and their polylines depend on
 // the points and on their own parameters only, which explain_more's variants do not change (they
-// change the planes, the outline's gap and the left-out points): the variants reuse the rung's.
+// change the planes, the outline's gap and the left-out points): the variants reuse the rung's. So do
+// the planes' neighbour searches, normals and seed order, which depend on the points and k only.
 struct SharedRaster {
   std::shared_ptr<const Heightmap> heightmap;
   std::shared_ptr<const std::vector<Point2>> edges;          // null on the footprint-walls rung
   std::shared_ptr<const std::vector<Polyline2>> polylines;   // of the edges, before the step lines join them
+  std::shared_ptr<const PlaneDetector> planes;                // the points' neighbours, normals and seed order
 };
 
 struct Lod2Hypothesis {
@@ -418,7 +420,8 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
 
   // Roof planes (and wall planes, if the cloud sees walls).
   std::optional<StageTimer> stage(Stage::planes);
-  std::vector<PlanarSegment> segments = detect_planes(points, params.planes);
+  if (!raster.planes) raster.planes = std::make_shared<const PlaneDetector>(points, params.planes.k_neighbors);
+  std::vector<PlanarSegment> segments = raster.planes->detect(params.planes);
   const auto has_roof = [](const std::vector<PlanarSegment>& found) {
     return std::any_of(found.begin(), found.end(),
                        [](const PlanarSegment& s) { return s.kind == PlanarSegment::Kind::roof; });
@@ -432,7 +435,7 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
         std::max<int>(kMinPointsForSmallRoof,
                       std::min<int>(params.planes.min_points / 2, static_cast<int>(points.size() / 3)));
     if (small.min_points < params.planes.min_points) {
-      segments = detect_planes(points, small);
+      segments = raster.planes->detect(small);
       const std::string note = "small building: planes of at least " + std::to_string(small.min_points) + " points";
       if (has_roof(segments)) add_note(report, note);
     }

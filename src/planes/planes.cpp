@@ -14,6 +14,8 @@
 #include <cstddef>
 #include <iterator>
 #include <limits>
+#include <numeric>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -55,10 +57,51 @@ using PointMap = CGAL::First_of_pair_property_map<PointWithNormal>;
 using NormalMap = CGAL::Second_of_pair_property_map<PointWithNormal>;
 
 namespace sd = CGAL::Shape_detection;
-using NeighborQuery = sd::Point_set::K_neighbor_query<Kernel, PointRange, PointMap>;
+using KdTreeQuery = sd::Point_set::K_neighbor_query<Kernel, PointRange, PointMap>;
+
+/// Each point's k nearest neighbours, searched once, in the order CGAL's K_neighbor_query gives them
+/// (nearest first, the point itself among them; its kd-tree decides ties). The normals, the seed
+/// ordering, the growing and the refitting all ask for the same lists, the growing once per point a
+/// region reaches and again whenever a region too small is undone, so that the searches took more
+/// than half of the planes' CPU; handed out from here they are byte-for-byte the lists a search gives.
+class StoredNeighbors {
+ public:
+  StoredNeighbors(const PointRange& range, std::size_t k) : count_(std::min(k, range.size())) {
+    const KdTreeQuery search(range, k, PointMap());
+    lists_.reserve(range.size() * count_);
+    std::vector<std::size_t> neighbors;
+    for (std::size_t i = 0; i < range.size(); ++i) {
+      search(i, neighbors);  // always min(k, n) of them: the search fills its k from the whole tree
+      lists_.insert(lists_.end(), neighbors.begin(), neighbors.end());
+    }
+  }
+
+  /// The neighbours of point i.
+  struct List {
+    const std::uint32_t* first;
+    const std::uint32_t* last;
+    const std::uint32_t* begin() const { return first; }
+    const std::uint32_t* end() const { return last; }
+    std::size_t size() const { return static_cast<std::size_t>(last - first); }
+  };
+  List of(std::size_t i) const { return {lists_.data() + i * count_, lists_.data() + (i + 1) * count_}; }
+
+  /// The neighbours of point i, as a CGAL NeighborQuery hands them over.
+  void operator()(std::size_t i, std::vector<std::size_t>& neighbors) const {
+    const List list = of(i);
+    neighbors.assign(list.begin(), list.end());
+  }
+
+ private:
+  std::size_t count_;                  // neighbours of every point
+  std::vector<std::uint32_t> lists_;   // point i's at [i * count_, (i + 1) * count_)
+};
+
+// The queries only read the stored lists, so every detection on the points can share them.
 using RegionType = sd::Point_set::Least_squares_plane_fit_region<Kernel, PointRange, PointMap, NormalMap>;
-using Sorting = sd::Point_set::Least_squares_plane_fit_sorting<Kernel, PointRange, NeighborQuery, PointMap>;
-using RegionGrowing = sd::Region_growing<PointRange, NeighborQuery, RegionType, Sorting::Seed_map>;
+using Sorting = sd::Point_set::Least_squares_plane_fit_sorting<Kernel, PointRange, const StoredNeighbors, PointMap>;
+using SeedMap = Sorting::Seed_map;
+using RegionGrowing = sd::Region_growing<PointRange, const StoredNeighbors, RegionType, SeedMap>;
 
 /// Least-squares plane through `indices` of `points`: the eigenvector of the smallest eigenvalue of
 /// the covariance about the centroid. Centring first keeps the covariance well conditioned.
@@ -72,11 +115,21 @@ Fit fit_plane(const IndexRange& indices, PointAt point_at) {
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   for (auto i : indices) centroid += point_at(i);
   centroid /= static_cast<double>(indices.size());
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  // The sums of d d^T entry by entry, six of them: d_i d_j and d_j d_i are the same double.
+  double xx = 0.0, yx = 0.0, zx = 0.0, yy = 0.0, zy = 0.0, zz = 0.0;
   for (auto i : indices) {
     const Eigen::Vector3d d = point_at(i) - centroid;
-    covariance += d * d.transpose();
+    xx += d.x() * d.x();
+    yx += d.y() * d.x();
+    zx += d.z() * d.x();
+    yy += d.y() * d.y();
+    zy += d.z() * d.y();
+    zz += d.z() * d.z();
   }
+  Eigen::Matrix3d covariance;
+  covariance << xx, yx, zx,
+                yx, yy, zy,
+                zx, zy, zz;
   // Eigenvalues come sorted ascending; column 0 is the normal.
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
   Eigen::Vector3d normal = solver.eigenvectors().col(0);
@@ -119,125 +172,90 @@ PlanarSegment segment_of(const IndexRange& region, const std::vector<Point3>& po
   return segment;
 }
 
+/// Largest first; segments are disjoint, so the smallest point index is a unique tie-breaker.
+bool largest_first(const PlanarSegment& l, const PlanarSegment& r) {
+  if (l.points.size() != r.points.size()) return l.points.size() > r.points.size();
+  return l.points.front() < r.points.front();
+}
+
 }  // namespace
 
-std::vector<PlanarSegment> detect_planes_of_distinct_points(const std::vector<Point3>& local_points,
-                                                            const PlaneParams& params);
-
-}  // namespace detail
-
-std::vector<PlanarSegment> detect_planes(const std::vector<Point3>& local_points, const PlaneParams& params) {
-  params.validate();
-  for (std::size_t i = 0; i < local_points.size(); ++i) {
-    const Point3& p = local_points[i];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-      throw ReconstructionError("planes: point " + std::to_string(i) + " has a non-finite coordinate");
-  }
+/// What the detections on one building's points share, whatever their thresholds (PlaneDetector).
+struct Neighbourhoods {
+  int k_neighbors = 0;
+  std::vector<Point3> points;  // as given
   // Identical points: the neighbour searches see one of each. CGAL's kd-tree cannot split equal
   // points, so 200,000 of them made every k-neighbour query scan all of them (hours); each copy
   // joins the plane of the point it copies. Without copies the points go through as they are.
-  std::vector<std::uint32_t> order(local_points.size());
+  std::vector<Point3> distinct;                     // `points` less their copies; empty without copies
+  std::vector<std::vector<std::uint32_t>> members;  // of each distinct point, its copies in `points`
+  PointRange range;                                 // the searched points with their PCA normals
+  std::optional<StoredNeighbors> neighbors;         // none for fewer than 3 points: no plane to find
+  std::vector<std::size_t> seeds;                   // the searched points, most locally planar first
+
+  /// The points the searches see: `points`, or `distinct` when there are copies.
+  const std::vector<Point3>& searched() const { return members.empty() ? points : distinct; }
+};
+
+namespace {
+
+/// Copies of identical points set aside: fills `distinct` and `members`, or leaves them empty when
+/// no point is repeated.
+void set_copies_aside(Neighbourhoods& n) {
+  const std::vector<Point3>& points = n.points;
+  std::vector<std::uint32_t> order(points.size());
   std::iota(order.begin(), order.end(), 0u);
   const auto less = [&](std::uint32_t a, std::uint32_t b) {
-    const Point3 &p = local_points[a], &q = local_points[b];
+    const Point3 &p = points[a], &q = points[b];
     if (p.x != q.x) return p.x < q.x;
     if (p.y != q.y) return p.y < q.y;
     if (p.z != q.z) return p.z < q.z;
     return a < b;
   };
   const auto same = [&](std::uint32_t a, std::uint32_t b) {
-    const Point3 &p = local_points[a], &q = local_points[b];
+    const Point3 &p = points[a], &q = points[b];
     return p.x == q.x && p.y == q.y && p.z == q.z;
   };
   std::sort(order.begin(), order.end(), less);
-  std::vector<std::uint32_t> original_of(local_points.size());  // each point's first copy
+  std::vector<std::uint32_t> original_of(points.size());  // each point's first copy
   std::size_t copies = 0;
   for (std::size_t k = 0; k < order.size(); ++k) {
     const bool repeat = k > 0 && same(order[k - 1], order[k]);
     original_of[order[k]] = repeat ? original_of[order[k - 1]] : order[k];
     copies += repeat;
   }
-  if (copies == 0) return detail::detect_planes_of_distinct_points(local_points, params);
+  if (copies == 0) return;
 
-  std::vector<Point3> distinct;
-  std::vector<std::uint32_t> distinct_index(local_points.size());
-  std::vector<std::vector<std::uint32_t>> members;
-  for (std::uint32_t i = 0; i < local_points.size(); ++i) {
+  std::vector<std::uint32_t> distinct_index(points.size());
+  for (std::uint32_t i = 0; i < points.size(); ++i) {
     if (original_of[i] == i) {
-      distinct_index[i] = static_cast<std::uint32_t>(distinct.size());
-      distinct.push_back(local_points[i]);
-      members.emplace_back();
+      distinct_index[i] = static_cast<std::uint32_t>(n.distinct.size());
+      n.distinct.push_back(points[i]);
+      n.members.emplace_back();
     }
-    members[distinct_index[original_of[i]]].push_back(i);
+    n.members[distinct_index[original_of[i]]].push_back(i);
   }
   log_debug("planes: " + std::to_string(copies) + " copies of identical points set aside for the searches");
-  std::vector<PlanarSegment> segments = detail::detect_planes_of_distinct_points(distinct, params);
-  for (PlanarSegment& segment : segments) {
-    std::vector<std::uint32_t> points;
-    for (std::uint32_t u : segment.points) points.insert(points.end(), members[u].begin(), members[u].end());
-    std::sort(points.begin(), points.end());
-    double sum_squares = 0.0;
-    for (std::uint32_t i : points) {
-      const double d = segment.plane.signed_distance(local_points[i]);
-      sum_squares += d * d;
-    }
-    segment.rms = std::sqrt(sum_squares / static_cast<double>(points.size()));
-    segment.points = std::move(points);
-  }
-  std::sort(segments.begin(), segments.end(), [](const PlanarSegment& l, const PlanarSegment& r) {
-    if (l.points.size() != r.points.size()) return l.points.size() > r.points.size();
-    return l.points.front() < r.points.front();
-  });
-  return segments;
 }
 
-namespace detail {
-
-std::vector<PlanarSegment> detect_planes_of_distinct_points(const std::vector<Point3>& local_points,
-                                                            const PlaneParams& params) {
-  if (local_points.size() > std::numeric_limits<std::uint32_t>::max())
-    throw ReconstructionError("planes: " + std::to_string(local_points.size()) +
-                              " points, at most 2^32 - 1 supported");
-  for (std::size_t i = 0; i < local_points.size(); ++i) {
-    const Point3& p = local_points[i];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-      throw ReconstructionError("planes: point " + std::to_string(i) + " has a non-finite coordinate");
-  }
+/// The regions grown on the searched points with `params`' thresholds, refitted, as segments of the
+/// searched points, largest first.
+std::vector<PlanarSegment> grow_planes(const Neighbourhoods& n, const PlaneParams& params) {
+  const std::vector<Point3>& local_points = n.searched();
   if (local_points.size() < static_cast<std::size_t>(params.min_points)) {
     log_debug("planes: " + std::to_string(local_points.size()) + " points, fewer than min_points = " +
               std::to_string(params.min_points) + ", no planes");
     return {};
   }
-
   const auto point_at = [&](std::size_t i) {
     const Point3& p = local_points[i];
     return Eigen::Vector3d(p.x, p.y, p.z);
   };
+  const StoredNeighbors& neighbors = *n.neighbors;  // min_points >= 3
 
-  PointRange range;
-  range.reserve(local_points.size());
-  for (const Point3& p : local_points) range.emplace_back(Kernel::Point_3(p.x, p.y, p.z), Kernel::Vector_3(0, 0, 1));
-
-  // One kd-tree serves the normals, the seed ordering and the growing.
-  NeighborQuery neighbor_query(range, static_cast<std::size_t>(params.k_neighbors), PointMap());
-
-  // PCA normals: smallest-eigenvalue direction of the k-neighbourhood. Their sign is irrelevant to
-  // the growing (CGAL compares |cos|), so they are left as the solver gives them.
-  std::vector<std::size_t> neighbors;
-  for (std::size_t i = 0; i < range.size(); ++i) {
-    neighbors.clear();
-    neighbor_query(i, neighbors);
-    if (neighbors.size() < 3) continue;  // keep the vertical default
-    const Fit fit = fit_plane(neighbors, point_at);
-    range[i].second = Kernel::Vector_3(fit.normal.x(), fit.normal.y(), fit.normal.z());
-  }
-
-  RegionType region_type(range, params.max_distance, params.max_angle,
+  RegionType region_type(n.range, params.max_distance, params.max_angle,
                          static_cast<std::size_t>(params.min_points), PointMap(), NormalMap());
-  // Seeds in order of local planarity, so regions start on clean roof patches, not on edges.
-  Sorting sorting(range, neighbor_query, PointMap());
-  sorting.sort();
-  RegionGrowing region_growing(range, neighbor_query, region_type, sorting.seed_map());
+  RegionGrowing region_growing(n.range, neighbors, region_type, SeedMap(n.seeds));
   std::vector<std::vector<std::size_t>> regions;
   region_growing.detect(std::back_inserter(regions));
 
@@ -249,20 +267,18 @@ std::vector<PlanarSegment> detect_planes_of_distinct_points(const std::vector<Po
   // not matter; the planes are refitted at the end.
   if (params.absorb_rounds > 0 && !regions.empty()) {
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
-    std::vector<std::uint32_t> label(range.size(), kNone);
+    std::vector<std::uint32_t> label(local_points.size(), kNone);
     for (std::size_t r = 0; r < regions.size(); ++r)
       for (std::size_t i : regions[r]) label[i] = static_cast<std::uint32_t>(r);
     std::vector<Fit> fits;
     for (const auto& region : regions) fits.push_back(fit_plane(region, point_at));
     for (int round = 0; round < params.absorb_rounds; ++round) {
       std::vector<std::pair<std::size_t, std::uint32_t>> joins;
-      for (std::size_t i = 0; i < range.size(); ++i) {
+      for (std::size_t i = 0; i < local_points.size(); ++i) {
         if (label[i] != kNone) continue;
-        neighbors.clear();
-        neighbor_query(i, neighbors);
         double best = params.max_distance;
         std::uint32_t best_label = kNone;
-        for (std::size_t k : neighbors) {
+        for (std::size_t k : neighbors.of(i)) {
           const std::uint32_t l = label[k];
           if (l == kNone) continue;
           const double d = std::abs(fits[l].normal.dot(point_at(i) - fits[l].centroid));
@@ -286,11 +302,7 @@ std::vector<PlanarSegment> detect_planes_of_distinct_points(const std::vector<Po
     segments.push_back(segment_of(region, local_points, params, building_centroid));
   }
 
-  // Largest first; regions are disjoint, so the smallest point index is a unique tie-breaker.
-  std::sort(segments.begin(), segments.end(), [](const PlanarSegment& l, const PlanarSegment& r) {
-    if (l.points.size() != r.points.size()) return l.points.size() > r.points.size();
-    return l.points.front() < r.points.front();
-  });
+  std::sort(segments.begin(), segments.end(), largest_first);
 
   if (log_level() >= LogLevel::debug) {
     std::size_t walls = 0;
@@ -303,7 +315,81 @@ std::vector<PlanarSegment> detect_planes_of_distinct_points(const std::vector<Po
   return segments;
 }
 
+}  // namespace
 }  // namespace detail
+
+PlaneDetector::PlaneDetector(const std::vector<Point3>& local_points, int k_neighbors) {
+  PlaneParams only_k;  // validate() words a bad k as detect_planes() does
+  only_k.k_neighbors = k_neighbors;
+  only_k.validate();
+  if (local_points.size() > std::numeric_limits<std::uint32_t>::max())
+    throw ReconstructionError("planes: " + std::to_string(local_points.size()) +
+                              " points, at most 2^32 - 1 supported");
+  for (std::size_t i = 0; i < local_points.size(); ++i) {
+    const Point3& p = local_points[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      throw ReconstructionError("planes: point " + std::to_string(i) + " has a non-finite coordinate");
+  }
+  auto n = std::make_shared<detail::Neighbourhoods>();
+  n->k_neighbors = k_neighbors;
+  n->points = local_points;
+  detail::set_copies_aside(*n);
+  const std::vector<Point3>& points = n->searched();
+  if (points.size() >= 3) {
+    n->range.reserve(points.size());
+    for (const Point3& p : points)
+      n->range.emplace_back(detail::Kernel::Point_3(p.x, p.y, p.z), detail::Kernel::Vector_3(0, 0, 1));
+    // One search per point serves the normals, the seed order, the growing and the refitting.
+    const detail::StoredNeighbors& neighbors = n->neighbors.emplace(n->range, static_cast<std::size_t>(k_neighbors));
+
+    // PCA normals: smallest-eigenvalue direction of the k-neighbourhood (at least 3 points). Their
+    // sign is irrelevant to the growing (CGAL compares |cos|), so they are left as the solver gives them.
+    const auto point_at = [&](std::size_t i) { return Eigen::Vector3d(points[i].x, points[i].y, points[i].z); };
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const detail::Fit fit = detail::fit_plane(neighbors.of(i), point_at);
+      n->range[i].second = detail::Kernel::Vector_3(fit.normal.x(), fit.normal.y(), fit.normal.z());
+    }
+
+    // Seeds in order of local planarity, so regions start on clean roof patches, not on edges.
+    detail::Sorting sorting(n->range, neighbors, detail::PointMap());
+    sorting.sort();
+    n->seeds.resize(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) n->seeds[i] = get(sorting.seed_map(), i);
+  }
+  shared_ = std::move(n);
+}
+
+std::vector<PlanarSegment> PlaneDetector::detect(const PlaneParams& params) const {
+  params.validate();
+  const detail::Neighbourhoods& n = *shared_;
+  if (params.k_neighbors != n.k_neighbors)
+    throw ConfigError("planes: the detector found " + std::to_string(n.k_neighbors) +
+                      " neighbours of each point, params ask for k_neighbors = " +
+                      std::to_string(params.k_neighbors));
+  std::vector<PlanarSegment> segments = detail::grow_planes(n, params);
+  if (n.members.empty()) return segments;
+
+  // Each distinct point's copies join its segment; the plane stays the distinct points' fit.
+  for (PlanarSegment& segment : segments) {
+    std::vector<std::uint32_t> points;
+    for (std::uint32_t u : segment.points) points.insert(points.end(), n.members[u].begin(), n.members[u].end());
+    std::sort(points.begin(), points.end());
+    double sum_squares = 0.0;
+    for (std::uint32_t i : points) {
+      const double d = segment.plane.signed_distance(n.points[i]);
+      sum_squares += d * d;
+    }
+    segment.rms = std::sqrt(sum_squares / static_cast<double>(points.size()));
+    segment.points = std::move(points);
+  }
+  std::sort(segments.begin(), segments.end(), detail::largest_first);
+  return segments;
+}
+
+std::vector<PlanarSegment> detect_planes(const std::vector<Point3>& local_points, const PlaneParams& params) {
+  params.validate();
+  return PlaneDetector(local_points, params.k_neighbors).detect(params);
+}
 
 std::vector<PlanarSegment> detect_planes_of_few_points(const std::vector<Point3>& local_points,
                                                        const PlaneParams& params, std::size_t min_inliers,
@@ -354,10 +440,7 @@ std::vector<PlanarSegment> detect_planes_of_few_points(const std::vector<Point3>
     for (std::size_t i : inliers) taken[i] = true;
     segments.push_back(detail::segment_of(inliers, local_points, params, building_centroid));
   }
-  std::sort(segments.begin(), segments.end(), [](const PlanarSegment& l, const PlanarSegment& r) {
-    if (l.points.size() != r.points.size()) return l.points.size() > r.points.size();
-    return l.points.front() < r.points.front();
-  });
+  std::sort(segments.begin(), segments.end(), detail::largest_first);
   return segments;
 }
 
