@@ -183,10 +183,13 @@ void crop_tiles(const std::vector<std::string>& files, const std::vector<Box2>& 
     }
     Box3 seen;
     std::uint64_t n = 0;
-    // With more than one thread the next chunk is read (and converted) while this one is cropped.
-    const auto read = [&reader](PointCloud& chunk) {
+    // With more than one thread the next chunk is read (and converted) while this one is cropped:
+    // two chunks of half the size, so that they hold no more than one did (the crop does not depend
+    // on the chunking).
+    const std::size_t chunk_points = threads > 1 ? std::size_t{1} << 19 : std::size_t{1} << 20;
+    const auto read = [&reader, chunk_points](PointCloud& chunk) {
       chunk.clear();
-      return reader->read(chunk, 1 << 20);
+      return reader->read(chunk, chunk_points);
     };
     PointCloud chunk, next;
     for (std::size_t got = read(chunk); got > 0;) {
