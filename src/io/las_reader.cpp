@@ -409,7 +409,8 @@ class LazRecordSource final : public RecordSource {
 /// goes to slot c % slots; a slot is refilled only after all its records have been handed out, so
 /// at most `slots` decoded chunks are held. More slots than workers let the workers run ahead
 /// while the reader's caller converts and crops the records it was handed (with one slot per
-/// worker they could only decode the next chunk each, and waited for the rest of the caller's work). An error in a chunk is kept in its slot and thrown
+/// worker they could only decode the next chunk each, and waited for the rest of the caller's
+/// work). An error in a chunk is kept in its slot and thrown
 /// when that chunk's records are due (the records before it are handed out first). The destructor
 /// stops the workers and joins them; a worker in the middle of a chunk finishes that chunk first.
 class ParallelLazRecordSource final : public RecordSource {

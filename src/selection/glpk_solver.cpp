@@ -84,9 +84,10 @@ void run_glpk(GlpkRun& run) {
   // than glp_intopt's own presolve and primal simplex, with the same optima (the 67 programs of 150
   // variables or more of the Delft block: 0.38 s against 0.93 s in all). The Delft block's outputs
   // are byte-identical; of the 1,420 dev and instance clouds three differ, by one or two faces, no worse
-  // either way, each a large program solved by windows (docs/BENCHMARKS.md, "GLPK from the dual
-  // simplex"): a window with several optima of (nearly) equal energy may be left at another one. Where the relaxation is not solved to optimality (infeasible, a
-  // limit), glp_intopt's presolver takes the program as before and tells infeasibility apart.
+  // either way, each a large program solved by windows (docs/BENCHMARKS.md, "CPU: issue 27, second
+  // step"): a window with several optima of (nearly) equal energy may be left at another one. Where
+  // the relaxation is not solved to optimality (infeasible, a limit), glp_intopt's presolver takes
+  // the program as before and tells infeasibility apart.
   glp_smcp lp;
   glp_init_smcp(&lp);
   lp.msg_lev = GLP_MSG_OFF;
