@@ -368,7 +368,7 @@ const std::vector<OptionSpec>& option_table() {
        [](const O& o) { return number_text(o.batch.block_size); },
        [](O& o, V v) { o.batch.block_size = parse_double("--block-size", v); }},
       {"--group-area", nullptr, "M2",
-       "blocks of one tile are cropped together, one read of the tile, up to this much footprint area "
+       "consecutive blocks are cropped together, one read of their tiles, up to this much footprint area "
        "(memory follows it; 0 = one block at a time; the output is the same)",
        [](const O& o) { return number_text(o.batch.group_area); },
        [](O& o, V v) { o.batch.group_area = parse_double("--group-area", v); }},
