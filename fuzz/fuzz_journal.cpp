@@ -12,7 +12,7 @@
 
 #include "city3d/error.hpp"
 #include "fuzz_input.hpp"
-#include "pipeline/journal.hpp"
+#include "batch/journal.hpp"
 
 namespace {
 

@@ -5,7 +5,7 @@
 
 #include "city3d/error.hpp"
 #include "fuzz_input.hpp"
-#include "io/footprint_readers.hpp"
+#include "footprints/footprint_readers.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   city3d::fuzz::quiet_logging();

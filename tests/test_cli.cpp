@@ -21,7 +21,7 @@
 #include "city3d/point_cloud_io.hpp"
 #include "cli/option_table.hpp"
 #include "las_writer.hpp"
-#include "pipeline/journal.hpp"
+#include "batch/journal.hpp"
 
 namespace fs = std::filesystem;
 

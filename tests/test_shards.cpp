@@ -31,7 +31,7 @@
 #include "city3d/error.hpp"
 #include "city3d/model_io.hpp"
 #include "city3d/options.hpp"
-#include "pipeline/journal.hpp"
+#include "batch/journal.hpp"
 
 extern char** environ;
 

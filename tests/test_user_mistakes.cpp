@@ -20,7 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "city3d/point_cloud_io.hpp"
-#include "io/input_check.hpp"
+#include "batch/input_check.hpp"
 #include "las_writer.hpp"
 
 namespace fs = std::filesystem;

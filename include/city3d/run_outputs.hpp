@@ -8,10 +8,32 @@
 #include <vector>
 
 #include "city3d/model_io.hpp"
-#include "city3d/pipeline.hpp"
+#include "city3d/building_report.hpp"
+#include "city3d/footprint_io.hpp"
 #include "city3d/types.hpp"
 
 namespace city3d {
+
+/// Counts of one batch run.
+struct BatchSummary {
+  std::size_t buildings = 0, ok = 0, fallback = 0, skipped = 0, failed = 0;
+  std::size_t partial = 0;  ///< reconstructed from points that cover too little of the footprint
+  std::size_t resumed = 0;  ///< buildings taken from the journal of an earlier run into the folder
+  double seconds = 0.0;     ///< this run's wall time (a resumed run's own; a merge: its shards' sum)
+  std::string report_path;  ///< report.html when the run wrote it, else report.csv
+  /// When more than half of the rows share one problem (a status skipped, failed or partial and its
+  /// reason, numbers left out: "skipped: no building points inside the footprint"): that problem,
+  /// the rows that have it and, of those, the footprints outside every tile given (coverage 0).
+  /// Empty otherwise.
+  std::string main_problem;
+  std::size_t main_problem_rows = 0;
+  std::size_t main_problem_outside = 0;
+  /// One line naming the main problem and its likely fix (the tiles have no building class, these
+  /// classes are present; the footprints lie outside the tiles; ...); empty without a main problem.
+  std::string advice;
+  /// Nothing was reconstructed: every row is skipped or failed.
+  bool nothing_built() const { return ok + fallback + partial == 0; }
+};
 
 /// Everything the overview outputs know about one input footprint (or single-building cloud).
 struct OverviewRecord {

@@ -12,7 +12,7 @@
 
 #include "city3d/error.hpp"
 #include "cli/option_table.hpp"
-#include "io/input_check.hpp"
+#include "batch/input_check.hpp"
 
 namespace city3d {
 namespace detail {

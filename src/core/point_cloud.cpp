@@ -1,5 +1,5 @@
 // PointCloud housekeeping: clear and append while keeping every attribute empty or as long as points.
-#include "city3d/point_cloud_io.hpp"
+#include "city3d/point_cloud.hpp"
 
 namespace city3d {
 namespace {

@@ -29,37 +29,6 @@
 namespace city3d {
 namespace fs = std::filesystem;
 
-const char* to_string(BuildingStatus status) {
-  switch (status) {
-    case BuildingStatus::ok: return "ok";
-    case BuildingStatus::fallback: return "fallback";
-    case BuildingStatus::skipped: return "skipped";
-    case BuildingStatus::failed: return "failed";
-    case BuildingStatus::partial: return "partial";
-  }
-  return "failed";
-}
-
-const char* to_string(ModelLevel level) {
-  switch (level) {
-    case ModelLevel::none: return "none";
-    case ModelLevel::lod22: return "LoD2.2";
-    case ModelLevel::lod22_footprint_walls: return "LoD2.2 footprint walls";
-    case ModelLevel::lod12: return "LoD1.2";
-  }
-  return "none";
-}
-
-const char* cityjson_lod(ModelLevel level) {
-  switch (level) {
-    case ModelLevel::lod22:
-    case ModelLevel::lod22_footprint_walls: return "2.2";
-    case ModelLevel::lod12: return "1.2";
-    case ModelLevel::none: return "";
-  }
-  return "";
-}
-
 void ReconstructionParams::validate() const {
   // Each stage collects its own problems; gather them all into one message.
   std::string problems;

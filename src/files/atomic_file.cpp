@@ -1,5 +1,5 @@
 // AtomicFile: temporary file + rename (rename is atomic within one file system on POSIX).
-#include "io/atomic_file.hpp"
+#include "files/atomic_file.hpp"
 
 #include <unistd.h>
 

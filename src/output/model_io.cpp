@@ -7,7 +7,7 @@
 #include <cstring>
 
 #include "city3d/error.hpp"
-#include "io/atomic_file.hpp"
+#include "files/atomic_file.hpp"
 
 namespace city3d {
 namespace {

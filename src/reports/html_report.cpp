@@ -12,7 +12,7 @@
 
 #include "city3d/error.hpp"
 #include "city3d/run_outputs.hpp"
-#include "io/atomic_file.hpp"
+#include "files/atomic_file.hpp"
 
 namespace city3d {
 namespace {

@@ -1,6 +1,6 @@
 // Input checks across files: file identity by device and inode (names, links, folders), copies by
 // size and the bytes at both ends, CRS comparison through OGR.
-#include "io/input_check.hpp"
+#include "batch/input_check.hpp"
 
 #include <ogr_spatialref.h>
 #include <sys/stat.h>
@@ -17,8 +17,8 @@
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
 #include <cpl_conv.h>
-#include "io/input_file.hpp"
-#include "io/las_reader.hpp"
+#include "points/input_file.hpp"
+#include "points/las_reader.hpp"
 
 namespace city3d::detail {
 namespace {

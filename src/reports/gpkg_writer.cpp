@@ -18,7 +18,7 @@
 
 #include "city3d/error.hpp"
 #include "city3d/run_outputs.hpp"
-#include "pipeline/report.hpp"
+#include "reports/report.hpp"
 
 namespace city3d {
 namespace {

@@ -38,12 +38,12 @@
 #include "city3d/log.hpp"
 #include "city3d/model_io.hpp"
 #include "city3d/point_cloud_io.hpp"
-#include "io/input_check.hpp"
-#include "io/output_folder.hpp"
-#include "io/atomic_file.hpp"
-#include "pipeline/finalise.hpp"
-#include "pipeline/journal.hpp"
-#include "pipeline/report.hpp"
+#include "batch/input_check.hpp"
+#include "files/output_folder.hpp"
+#include "files/atomic_file.hpp"
+#include "batch/finalise.hpp"
+#include "batch/journal.hpp"
+#include "reports/report.hpp"
 
 namespace city3d {
 namespace fs = std::filesystem;

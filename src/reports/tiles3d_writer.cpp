@@ -43,8 +43,8 @@
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
 #include "city3d/run_outputs.hpp"
-#include "io/atomic_file.hpp"
-#include "pipeline/report.hpp"
+#include "files/atomic_file.hpp"
+#include "reports/report.hpp"
 
 namespace city3d {
 namespace {

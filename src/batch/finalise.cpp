@@ -1,5 +1,5 @@
 // Run-level output assembly and output-folder housekeeping (see finalise.hpp).
-#include "pipeline/finalise.hpp"
+#include "batch/finalise.hpp"
 
 #include <fcntl.h>
 #include <signal.h>
@@ -21,8 +21,8 @@
 #include "city3d/log.hpp"
 #include "city3d/model_io.hpp"
 #include "city3d/run_outputs.hpp"
-#include "io/atomic_file.hpp"
-#include "pipeline/report.hpp"
+#include "files/atomic_file.hpp"
+#include "reports/report.hpp"
 
 namespace city3d::detail {
 namespace fs = std::filesystem;

@@ -1,7 +1,7 @@
 // PLY reader: parses the header (ascii, binary little/big endian; every scalar type and its alias;
 // list properties), skips elements before the vertex element, and streams vertices into PointCloud.
 // Elements after the vertex element are never read.
-#include "io/ply_reader.hpp"
+#include "points/ply_reader.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "city3d/error.hpp"
-#include "io/input_file.hpp"
+#include "points/input_file.hpp"
 
 namespace city3d::detail {
 namespace {

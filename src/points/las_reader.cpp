@@ -1,7 +1,7 @@
 // LAS reader: validates the public header (collecting every problem before throwing once), walks
 // VLRs and EVLRs with bounds checks, and streams point records (formats 0-10) into PointCloud.
 // Raw records come from a RecordSource: a plain file read, or the LAZ decoder (src/laz/).
-#include "io/las_reader.hpp"
+#include "points/las_reader.hpp"
 
 #include <algorithm>
 #include <array>
@@ -18,7 +18,7 @@
 
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
-#include "io/input_file.hpp"
+#include "points/input_file.hpp"
 #include "laz/laz_decoder.hpp"
 
 // Fields are copied straight out of the little-endian records with memcpy.

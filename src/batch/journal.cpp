@@ -1,7 +1,7 @@
 // Resume journal: JSON lines, each prefixed by the FNV-1a hash of its JSON text, read back with
 // nlohmann-json. Doubles of a kept mesh are written in nlohmann's shortest round-trip form, so a
 // restored model is bit-identical to the computed one.
-#include "pipeline/journal.hpp"
+#include "batch/journal.hpp"
 
 #include <cerrno>
 #include <cmath>

@@ -1,13 +1,13 @@
 // Report writers: CSV for spreadsheets and shell tools, JSON for programs. Numbers are printed with
 // fixed precision so that reports of identical runs differ only in their timings.
-#include "pipeline/report.hpp"
+#include "reports/report.hpp"
 
 #include <algorithm>
 
 #include <cmath>
 #include <cstdio>
 
-#include "io/atomic_file.hpp"
+#include "files/atomic_file.hpp"
 
 namespace city3d::detail {
 namespace {

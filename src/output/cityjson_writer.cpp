@@ -16,7 +16,7 @@
 
 #include "city3d/error.hpp"
 #include "city3d/model_io.hpp"
-#include "io/atomic_file.hpp"
+#include "files/atomic_file.hpp"
 
 namespace city3d {
 namespace {

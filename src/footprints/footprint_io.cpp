@@ -6,7 +6,7 @@
 #include "city3d/error.hpp"
 #include "city3d/footprint_io.hpp"
 #include "city3d/log.hpp"
-#include "io/footprint_readers.hpp"
+#include "footprints/footprint_readers.hpp"
 
 namespace city3d {
 

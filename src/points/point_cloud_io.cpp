@@ -9,9 +9,9 @@
 #include <string>
 
 #include "city3d/error.hpp"
-#include "io/input_file.hpp"
-#include "io/las_reader.hpp"
-#include "io/ply_reader.hpp"
+#include "points/input_file.hpp"
+#include "points/las_reader.hpp"
+#include "points/ply_reader.hpp"
 
 namespace city3d {
 namespace {

@@ -7,7 +7,7 @@
 #include <memory>
 #include <string>
 
-#include "city3d/batch.hpp"
+#include "city3d/run_outputs.hpp"
 
 namespace city3d::detail {
 

@@ -1,7 +1,7 @@
 // Output folders: create with std::filesystem's error codes (never its exceptions), name the path
 // component at fault, and probe writability with a real file (access(2) ignores read-only mounts
 // for root and knows nothing of ACLs or quotas).
-#include "io/output_folder.hpp"
+#include "files/output_folder.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>

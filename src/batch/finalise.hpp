@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "city3d/batch.hpp"
-#include "pipeline/journal.hpp"
+#include "batch/journal.hpp"
 
 namespace city3d::detail {
 
