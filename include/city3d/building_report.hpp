@@ -97,6 +97,10 @@ struct BuildingReport {
   double height_excess = std::numeric_limits<double>::quiet_NaN();
 };
 
+/// Adds `note` to the report's notes ("; " between them) unless it is there already (a rung can run
+/// twice).
+void add_note(BuildingReport& report, const std::string& note);
+
 /// A point farther than this from its building's model is "unexplained" (BuildingReport), metres:
 /// well beyond the noise of airborne LiDAR roofs (a few cm) and the misfit of a roof plane over a
 /// slightly bent roof (tens of cm), so what it counts is structure the model does not have.

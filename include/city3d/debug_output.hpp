@@ -1,10 +1,11 @@
 // Debug output (--debug DIR): each stage's intermediate result of one building, written for a person
 // to look at (PNG images, coloured PLY points, OBJ lines and faces). The geometry modules do no file
-// IO: the pipeline passes their results to these writers. Every writer throws IoError naming the file
+// IO: the pipeline hands one DebugTrace through a building's stages, which give it their results. Every writer throws IoError naming the file
 // when it cannot be written.
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "city3d/heightmap.hpp"
@@ -50,5 +51,37 @@ void write_candidates_obj(const std::string& path, const CandidateFaces& candida
 /// point asks for).
 void write_selection_csv(const std::string& path, const CandidateFaces& candidates, const std::vector<bool>& selected,
                          const SelectionParams& energy);
+
+/// The debug output of one building: the pipeline hands it through the stages of a rung, each gives
+/// it its result, and it writes them into `<debug_dir>/<id>/` (file names in README, "Debug output"),
+/// or nothing when made without a folder (no --debug, and the variants of a rebuild).
+class DebugTrace {
+ public:
+  DebugTrace() = default;
+  DebugTrace(std::string debug_dir, BuildingId id) : dir_(std::move(debug_dir)), id_(std::move(id)) {}
+
+  /// planes.ply: the points coloured by plane.
+  void planes(const std::vector<Point3>& points, const std::vector<PlanarSegment>& segments) const;
+  /// step_lines.obj at the floor's height `z`.
+  void step_lines(const std::vector<Polyline2>& steps, double z) const;
+  /// heightmap.png, edges.png, polylines.obj and regularised.obj (lines at the floor's height `z`).
+  void vertical_lines(const Heightmap& heightmap, const std::vector<Point2>& edges,
+                      const std::vector<Polyline2>& polylines, const std::vector<Segment2>& regularised,
+                      double z) const;
+  /// walls<suffix>.obj, from z0 to z1.
+  void walls(const std::string& suffix, const std::vector<VerticalPlane>& walls, double z0, double z1) const;
+  /// candidates<suffix>.obj.
+  void candidates(const std::string& suffix, const CandidateFaces& candidates) const;
+  /// selection<suffix>.csv.
+  void selection(const std::string& suffix, const CandidateFaces& candidates, const std::vector<bool>& selected,
+                 const SelectionParams& energy) const;
+  /// rejected_<rung>.obj: a model no rung may write (not valid as written), in local coordinates.
+  void rejected(const std::string& rung, const BuildingModel& model) const;
+
+ private:
+  std::string path(const std::string& name) const { return debug_path(dir_, id_, name); }
+  std::string dir_;  ///< empty: write nothing
+  BuildingId id_;
+};
 
 }  // namespace city3d

@@ -36,8 +36,10 @@
 
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
+#include "city3d/rings.hpp"
 #include "city3d/model_io.hpp"
 #include "city3d/point_cloud_io.hpp"
+#include "batch/advice.hpp"
 #include "batch/input_check.hpp"
 #include "files/output_folder.hpp"
 #include "files/atomic_file.hpp"
@@ -52,8 +54,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Adds a note to a report row (after the pipeline's own, "; "-separated).
-void add_note(BuildingReport& report, const std::string& note) {
+// Adds a note to a report row (after the pipeline's own, "; "-separated), even when the row has it
+// already (add_note, of the pipeline, adds a note only once).
+void append_note(BuildingReport& report, const std::string& note) {
   report.note += (report.note.empty() ? "" : "; ") + note;
 }
 
@@ -137,36 +140,22 @@ Box2 bounds(const Footprint& f) {
   return box;
 }
 
-double ring_area(const Ring2& ring) {
-  if (ring.size() < 3) return 0.0;
-  double sum = 0.0;
-  for (std::size_t i = 1; i + 1 < ring.size(); ++i)
-    sum += (ring[i].x - ring[0].x) * (ring[i + 1].y - ring[0].y) - (ring[i + 1].x - ring[0].x) * (ring[i].y - ring[0].y);
-  return std::abs(sum) / 2;
-}
+double ring_area_world(const Ring2& ring) { return std::abs(twice_signed_area(ring)) / 2; }
 
 double area(const Footprint& f) {
   double a = 0.0;
   for (const Polygon2& p : f.polygons) {
-    a += ring_area(p.outer);
-    for (const Ring2& h : p.holes) a -= ring_area(h);
+    a += ring_area_world(p.outer);
+    for (const Ring2& h : p.holes) a -= ring_area_world(h);
   }
   return std::max(a, 0.0);
 }
-
-/// The classes of the tiles' points, each tile counted once, as the crop streamed them: what the
-/// advice of a run without building points names.
-struct ClassCounts {
-  std::vector<bool> counted;            ///< per tile
-  bool any = false;                     ///< some tile had classes
-  std::array<std::uint64_t, 256> n{};   ///< points per class
-};
 
 // Streams every tile that overlaps one of `regions` (the blocks' footprints and their ground buffers)
 // into the cropper. A tile whose header has no bounds (PLY) gets them from its points, in `bounds`; a tile
 // streamed the first time adds its classes to `classes`.
 void crop_tiles(const std::vector<std::string>& files, const std::vector<Box2>& regions, unsigned threads, Cropper& cropper,
-                std::vector<Box3>& bounds, ClassCounts& classes) {
+                std::vector<Box3>& bounds, detail::ClassCounts& classes) {
   for (std::size_t t = 0; t < files.size(); ++t) {
     const std::string& file = files[t];
     // Cropping runs between reconstructions, so every thread can decode LAZ chunks meanwhile.
@@ -232,12 +221,12 @@ void apply_coverage(const FootprintCoverage& c, double min_coverage, BuildingRep
       r.reason = buf + (r.reason.empty() ? "" : "; " + r.reason);
       if (r.stage.empty()) r.stage = "coverage";
     } else {
-      add_note(r, buf);
+      append_note(r, buf);
     }
   } else if (c.cells < min_coverage) {
     std::snprintf(buf, sizeof buf, "no point at all over %.1f%% of the footprint (point_coverage %.3f)",
                   100.0 * (1.0 - c.cells), c.cells);
-    add_note(r, buf);
+    append_note(r, buf);
   }
 }
 
@@ -444,57 +433,6 @@ std::string readable_numbers(const std::string& lines) {
   return out;
 }
 
-std::string with_thousands(std::uint64_t n) {
-  std::string digits = std::to_string(n), out;
-  for (std::size_t i = 0; i < digits.size(); ++i) {
-    if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
-    out += digits[i];
-  }
-  return out;
-}
-
-// One line naming the problem most rows share (BatchSummary::main_problem) and its likely fix, from
-// what the run knows: the classes its tiles hold (`classes`, when it streamed any with classes) and
-// its options (`building_classes`: --building-classes as given; empty for a merge).
-std::string advice_for(const BatchSummary& s, const ClassCounts* classes, const std::string& building_classes) {
-  if (s.main_problem.empty()) return {};
-  const std::string rows = std::to_string(s.main_problem_rows) + " of " + std::to_string(s.buildings);
-  const std::string problem = s.main_problem.substr(s.main_problem.find(": ") + 2);
-  if (s.main_problem == "skipped: no building points inside the footprint") {
-    if (s.main_problem_outside == s.main_problem_rows)
-      return rows + " footprints are skipped: they lie outside every tile given; give the tiles that cover them, "
-             "or choose the footprints of these tiles (--bbox, --where)";
-    std::string present, wanted;
-    bool building_points = false;
-    if (classes) {
-      for (int c = 0; c < 256; ++c)
-        if (classes->n[static_cast<std::size_t>(c)] > 0)
-          present += (present.empty() ? "" : ", ") + std::to_string(c) + " (" + las_class_name(c) + ", " +
-                     with_thousands(classes->n[static_cast<std::size_t>(c)]) + ")";
-      std::stringstream list(building_classes);
-      for (std::string c; std::getline(list, c, ',');)
-        building_points = building_points || (!c.empty() && classes->n[static_cast<std::size_t>(std::stoi(c)) & 255] > 0);
-    }
-    if (classes && !building_classes.empty() && !building_points)
-      return rows + " footprints are skipped for want of building points: the tiles hold no point of class " +
-             building_classes + " (--building-classes) but of classes " + present +
-             "; give the building classes with --building-classes, or --ignore-classes to take every point inside "
-             "a footprint";
-    if (s.main_problem_outside > 0)
-      return rows + " footprints are skipped for want of building points; " + std::to_string(s.main_problem_outside) +
-             " of them lie outside every tile given: give the tiles that cover them, or choose the footprints of "
-             "these tiles (--bbox, --where)";
-    return rows + " footprints are skipped for want of building points inside them: are the tiles and the "
-           "footprints of the same place (and the points classified as --building-classes says)?";
-  }
-  if (s.main_problem.rfind("partial: ", 0) == 0)
-    return rows + " buildings are partial: the tiles given cover too little of their footprints (the coverage "
-           "column); give the neighbouring tiles too";
-  const std::string status = s.main_problem.substr(0, s.main_problem.find(':'));
-  return rows + (status == "failed" ? " buildings failed" : " footprints are " + status) + " for one reason: " +
-         problem + "; see the reason column of " + s.report_path;
-}
-
 detail::RunLayout layout_of(const BatchOptions& o) {
   detail::RunLayout l;
   l.cityjson = o.cityjson;
@@ -560,7 +498,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   // Each tile's bounds (a PLY's once its points are streamed), for the footprints' coverage.
   std::vector<Box3> tile_bounds;
   for (const PointCloudInfo& info : infos) tile_bounds.push_back(info.bounds);
-  ClassCounts classes;
+  detail::ClassCounts classes;
   classes.counted.assign(files.size(), false);
   log_info("parameters:\n" + readable_numbers(parameters_text(options.reconstruction)));
 
@@ -773,7 +711,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
           [&](std::size_t) { return building_from_cloud(cloud.id, read_all_points(file), options.ground_z); },
           [](std::size_t) { return nullptr; },
           [&](std::size_t, BuildingResult& result) {
-            if (!cloud.note.empty()) add_note(result.report, cloud.note);
+            if (!cloud.note.empty()) append_note(result.report, cloud.note);
           },
           {});
       continue;
@@ -885,129 +823,11 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   if (options.crop.use_classes != ClassUse::never)
     for (std::uint8_t c : options.crop.building_classes)
       building_classes += (building_classes.empty() ? "" : ",") + std::to_string(c);
-  summary.advice = advice_for(summary, classes.any ? &classes : nullptr, building_classes);
+  summary.advice = detail::advice_for(summary, classes.any ? &classes : nullptr, building_classes);
   return summary;
 }
 
 }  // namespace
-
-BatchSummary merge_shards(const MergeOptions& options) {
-  const auto start = Clock::now();
-  if (options.shard_dirs.empty()) throw ConfigError("merge: no shard folder given");
-  struct Shard {
-    std::string dir;
-    std::unique_ptr<detail::JournalReader> journal;
-    detail::RunManifest manifest;
-  };
-  std::vector<Shard> shards;
-  std::error_code ec;
-  const fs::path out_canonical = fs::weakly_canonical(options.output_dir, ec);
-  for (const std::string& dir : options.shard_dirs) {
-    Shard s;
-    s.dir = dir;
-    if (fs::weakly_canonical(dir, ec) == out_canonical)
-      throw ConfigError("merge: the output folder " + options.output_dir + " is one of the shard folders");
-    const fs::path journal = fs::path(dir) / "resume.journal";
-    if (!fs::exists(journal, ec))
-      throw IoError("merge: " + dir + " holds no resume.journal: not the output folder of `city3d reconstruct --shard`");
-    s.journal = std::make_unique<detail::JournalReader>(journal.string());
-    if (!s.journal->header_ok())
-      throw IoError("merge: the journal of " + dir + " is damaged or from another city3d version; run that shard again");
-    const detail::JournalHeader& h = s.journal->header();
-    const std::string name = "shard " + std::to_string(h.shard) + "/" + std::to_string(h.shards) + " (" + dir + ")";
-    if (h.shards == 0) throw ConfigError("merge: " + dir + " is the output of a whole run, not of a shard (--shard K/N)");
-    if (!s.journal->damaged().empty())
-      throw IoError("merge: " + name + " is damaged (line " + std::to_string(s.journal->damaged().front().first) +
-                    " of its journal); run that shard again, it recomputes what is damaged");
-    const bool complete = detail::read_manifest(dir, s.manifest) && s.manifest.header.fingerprint == h.fingerprint &&
-                          s.manifest.header.shard == h.shard && s.manifest.header.shards == h.shards &&
-                          s.manifest.records == h.expected && s.journal->records().size() == h.expected;
-    if (!complete)
-      throw IoError("merge: " + name + " is incomplete: " + std::to_string(s.journal->records().size()) + " of " +
-                    std::to_string(h.expected) + " buildings finished" +
-                    (fs::exists(fs::path(dir) / "run.json", ec) ? "" : ", no run.json") +
-                    "; run it again (it resumes where it stopped)");
-    shards.push_back(std::move(s));
-  }
-  const detail::JournalHeader& first = shards.front().journal->header();
-  std::vector<const Shard*> by_number(static_cast<std::size_t>(first.shards) + 1, nullptr);
-  for (const Shard& s : shards) {
-    const detail::JournalHeader& h = s.journal->header();
-    detail::JournalHeader as_first = h;
-    as_first.shard = first.shard;
-    as_first.expected = first.expected;
-    if (!as_first.same_run(first))
-      throw ConfigError("merge: " + shards.front().dir + " and " + s.dir +
-                        " are shards of different runs (inputs, parameters, block size or shard count differ)");
-    if (by_number[static_cast<std::size_t>(h.shard)])
-      throw ConfigError("merge: shard " + std::to_string(h.shard) + "/" + std::to_string(h.shards) + " given twice: " +
-                        by_number[static_cast<std::size_t>(h.shard)]->dir + " and " + s.dir);
-    by_number[static_cast<std::size_t>(h.shard)] = &s;
-  }
-  for (int k = 1; k <= first.shards; ++k)
-    if (!by_number[static_cast<std::size_t>(k)])
-      throw ConfigError("merge: shard " + std::to_string(k) + "/" + std::to_string(first.shards) +
-                        " is missing (give the folders of all " + std::to_string(first.shards) + " shards)");
-
-  const detail::RunLayout& layout = first.layout;
-  std::vector<detail::RecordSource> sources;
-  for (const Shard& s : shards)
-    for (const detail::RecordRef& ref : s.journal->records()) sources.push_back({s.journal.get(), &ref});
-  std::sort(sources.begin(), sources.end(),
-            [](const detail::RecordSource& a, const detail::RecordSource& b) { return a.ref->index < b.ref->index; });
-  for (std::size_t i = 0; i < sources.size(); ++i)
-    if (sources[i].ref->index != i || i >= layout.records)
-      throw IoError("merge: record " + std::to_string(i) + " is " +
-                    (sources[i].ref->index > i ? "in no shard" : "in two shards") + " (" +
-                    sources[i].journal->path() + ")");
-  if (sources.size() != layout.records)
-    throw IoError("merge: the shards hold " + std::to_string(sources.size()) + " of " +
-                  std::to_string(layout.records) + " buildings");
-
-  detail::OutputFolder folder(options.output_dir, detail::run_level_files(layout, detail::FinaliseScope::whole_run));
-  detail::JournalHeader whole = first;
-  whole.shard = whole.shards = 0;
-  whole.block_size = 0.0;
-  whole.expected = layout.records;
-  {
-    // What an earlier run left in the output folder's journal (other inputs or parameters).
-    detail::Journal previous(options.output_dir, whole, false);
-    folder.remove_earlier_models(previous.earlier_models());
-  }
-  // Model files, copied and checked against the hash their shard recorded.
-  if (layout.per_building_files) fs::create_directories(fs::path(options.output_dir) / "models");
-  for (const detail::RecordSource& source : sources) {
-    const detail::RecordRef& ref = *source.ref;
-    if (ref.model_file.empty()) continue;
-    const fs::path from = fs::path(source.journal->path()).parent_path() / "models" / ref.model_file;
-    std::ifstream in(from, std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (!in.good() && !in.eof()) bytes.clear();
-    if (!in || detail::content_hash(bytes) != ref.model_hash)
-      throw IoError("merge: " + from.string() + " is missing or changed since its shard wrote it; run that shard again");
-    detail::AtomicFile copy((fs::path(options.output_dir) / "models" / ref.model_file).string());
-    std::fwrite(bytes.data(), 1, bytes.size(), copy.file());
-    copy.commit();
-  }
-  // The merged folder's journal, as one process would have left it: a later run of the same inputs
-  // and parameters into it resumes every building. Its lines are copied one at a time: the journals of
-  // a region's shards can be gigabytes.
-  detail::write_journal((fs::path(options.output_dir) / "resume.journal").string(), whole, sources.size(),
-                        [&sources](std::size_t k) { return sources[k].journal->line(*sources[k].ref); });
-  double seconds = 0.0;
-  for (const Shard& s : shards) seconds += s.manifest.seconds;
-  detail::RunManifest manifest;
-  manifest.header = whole;
-  manifest.records = sources.size();
-  BatchSummary summary =
-      detail::finalise_run(options.output_dir, layout, sources, seconds, 0, detail::FinaliseScope::whole_run, manifest.outputs);
-  summary.advice = advice_for(summary, nullptr, "");
-  manifest.seconds = seconds;
-  folder.write_manifest(manifest);
-  log_info("merge: " + std::to_string(shards.size()) + " shards, " + std::to_string(sources.size()) +
-           " buildings in " + std::to_string(seconds_since(start)) + " s");
-  return summary;
-}
 
 BatchSummary run_batch(const BatchOptions& options) {
   std::error_code ec;

@@ -34,4 +34,8 @@ const char* cityjson_lod(ModelLevel level) {
   return "";
 }
 
+void add_note(BuildingReport& report, const std::string& note) {
+  if (report.note.find(note) == std::string::npos) report.note += (report.note.empty() ? "" : "; ") + note;
+}
+
 }  // namespace city3d

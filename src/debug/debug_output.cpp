@@ -218,4 +218,43 @@ void write_selection_csv(const std::string& path, const CandidateFaces& candidat
   if (std::fclose(file) != 0) throw IoError("selection: cannot write " + path);
 }
 
+void DebugTrace::planes(const std::vector<Point3>& points, const std::vector<PlanarSegment>& segments) const {
+  if (!dir_.empty()) write_planes_ply(path("planes.ply"), points, segments);
+}
+
+void DebugTrace::step_lines(const std::vector<Polyline2>& steps, double z) const {
+  if (!dir_.empty()) write_polylines_obj(path("step_lines.obj"), steps, z);
+}
+
+void DebugTrace::vertical_lines(const Heightmap& heightmap, const std::vector<Point2>& edges,
+                                const std::vector<Polyline2>& polylines, const std::vector<Segment2>& regularised,
+                                double z) const {
+  if (dir_.empty()) return;
+  write_heightmap_png(heightmap, path("heightmap.png"));
+  write_edges_png(heightmap, edges, path("edges.png"));
+  write_polylines_obj(path("polylines.obj"), polylines, z);
+  write_segments_obj(path("regularised.obj"), regularised, z);
+}
+
+void DebugTrace::walls(const std::string& suffix, const std::vector<VerticalPlane>& walls, double z0,
+                       double z1) const {
+  if (!dir_.empty()) write_walls_obj(path("walls" + suffix + ".obj"), walls, z0, z1);
+}
+
+void DebugTrace::candidates(const std::string& suffix, const CandidateFaces& candidates) const {
+  if (!dir_.empty()) write_candidates_obj(path("candidates" + suffix + ".obj"), candidates);
+}
+
+void DebugTrace::selection(const std::string& suffix, const CandidateFaces& candidates,
+                           const std::vector<bool>& selected, const SelectionParams& energy) const {
+  if (!dir_.empty()) write_selection_csv(path("selection" + suffix + ".csv"), candidates, selected, energy);
+}
+
+void DebugTrace::rejected(const std::string& rung, const BuildingModel& model) const {
+  if (dir_.empty()) return;
+  ModelWriteOptions local;
+  local.local_coordinates = true;
+  write_model(path("rejected_" + rung + ".obj"), model, local);
+}
+
 }  // namespace city3d

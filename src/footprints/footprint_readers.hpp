@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "city3d/footprint_io.hpp"
+#include "city3d/rings.hpp"
 #include "city3d/types.hpp"
 
 namespace city3d::detail {
@@ -51,21 +52,6 @@ struct RepairedPolygons {
 /// repairs invalid ones with MakeValid (when `repair`), exactly as OGR sources are treated, so that a
 /// bow-tie gives the same footprint from GeoJSON and from an OBJ file. Rings come out normalised.
 RepairedPolygons check_and_repair(const std::vector<Polygon2>& polygons, bool repair);
-
-/// Twice the signed area of a ring (shoelace formula); positive when counter-clockwise. The
-/// first vertex is subtracted from every vertex first, which keeps the products small at RD New
-/// magnitudes (x ~ 85 000, y ~ 447 000) where they would otherwise cancel catastrophically.
-inline double twice_signed_area(const Ring2& ring) {
-  if (ring.size() < 3) return 0.0;
-  const Point2 origin = ring.front();
-  double sum = 0.0;
-  for (std::size_t i = 1; i + 1 < ring.size(); ++i) {
-    const double ax = ring[i].x - origin.x, ay = ring[i].y - origin.y;
-    const double bx = ring[i + 1].x - origin.x, by = ring[i + 1].y - origin.y;
-    sum += ax * by - bx * ay;
-  }
-  return sum;
-}
 
 /// Drops the closing vertex and consecutive duplicate vertices (exact comparison: the readers
 /// must not move a vertex). A ring of fewer than 3 vertices afterwards is degenerate.

@@ -15,6 +15,7 @@
 
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
+#include "city3d/rings.hpp"
 
 namespace city3d {
 
@@ -289,15 +290,6 @@ RegularisationResult regularise(const std::vector<Polyline2>& polylines,
 
 namespace {
 
-double ring_area(const Ring2& r) {
-  double a2 = 0.0;
-  for (std::size_t i = 0; i < r.size(); ++i) {
-    const Point2& p = r[i];
-    const Point2& q = r[(i + 1) % r.size()];
-    a2 += p.x * q.y - q.x * p.y;
-  }
-  return a2 / 2;
-}
 
 bool segments_cross(const Point2& a, const Point2& b, const Point2& c, const Point2& d) {
   auto orient = [](const Point2& p, const Point2& q, const Point2& r) {
@@ -403,7 +395,7 @@ Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold, dou
     for (const Point2& v : ring) best = std::min(best, std::hypot(c.x - v.x, c.y - v.y));
     if (best > max_shift) return polygon;
   }
-  const double before = ring_area(ring), after = ring_area(result.outer);
+  const double before = signed_area(ring), after = signed_area(result.outer);
   if (!(after > 0) || std::abs(after - before) > 0.1 * std::abs(before) || !ring_is_simple(result.outer))
     return polygon;
   result.holes = polygon.holes;
@@ -464,7 +456,7 @@ Polygon2 fit_outline_to_points(const Polygon2& outline, const std::vector<Point3
   }
   for (std::size_t i = 0; i < n; ++i)
     if (std::hypot(result.outer[i].x - ring[i].x, result.outer[i].y - ring[i].y) > max_shift) return outline;
-  const double before = ring_area(ring), after = ring_area(result.outer);
+  const double before = signed_area(ring), after = signed_area(result.outer);
   if (!(after > 0) || std::abs(after - before) > 0.25 * std::abs(before) || !ring_is_simple(result.outer))
     return outline;
   result.holes = outline.holes;

@@ -10,6 +10,7 @@
 
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
+#include "city3d/rings.hpp"
 
 namespace city3d {
 
@@ -35,15 +36,6 @@ constexpr double kCollinearTolerance = 1e-3;  // metres: footprint vertices this
 
 double length(const Point2& a, const Point2& b) { return std::hypot(b.x - a.x, b.y - a.y); }
 
-double signed_area(const Ring2& r) {
-  double s = 0;
-  for (std::size_t i = 0; i < r.size(); ++i) {
-    const Point2& p = r[i];
-    const Point2& q = r[(i + 1) % r.size()];
-    s += p.x * q.y - q.x * p.y;
-  }
-  return 0.5 * s;
-}
 
 double point_segment_distance(const Point2& p, const Point2& a, const Point2& b) {
   const double dx = b.x - a.x, dy = b.y - a.y;

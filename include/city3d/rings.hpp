@@ -1,0 +1,37 @@
+// Plane geometry of rings and polygons, shared by every module that measures or tests an outline:
+// areas, point in ring, distances, the convex hull. Each function is the one formula its callers use,
+// so that two modules measuring the same ring get the same bits.
+#pragma once
+
+#include <vector>
+
+#include "city3d/types.hpp"
+
+namespace city3d {
+
+/// The signed area of a ring (shoelace formula over the vertices as given), m2; positive when
+/// counter-clockwise. For rings in a local frame (near the origin); see twice_signed_area() for
+/// world coordinates.
+double signed_area(const Ring2& ring);
+
+/// The area of a ring, m2, whatever its orientation.
+double ring_area(const Ring2& ring);
+
+/// The area of polygons with holes, m2: outer rings less their holes.
+double polygons_area(const std::vector<Polygon2>& polygons);
+
+/// Twice the signed area of a ring (shoelace formula); positive when counter-clockwise. The
+/// first vertex is subtracted from every vertex first, which keeps the products small at RD New
+/// magnitudes (x ~ 85 000, y ~ 447 000) where they would otherwise cancel catastrophically.
+double twice_signed_area(const Ring2& ring);
+
+/// Whether `p` lies inside `ring` (even-odd crossing rule; a point on an edge is either).
+bool inside_ring(const Ring2& ring, const Point2& p);
+
+/// The distance from `p` to the segment from `a` to `b`, metres.
+double segment_distance(const Point2& p, const Point2& a, const Point2& b);
+
+/// The convex hull of `points`, counter-clockwise, without collinear points (monotone chain).
+Ring2 convex_hull(std::vector<Point2> points);
+
+}  // namespace city3d

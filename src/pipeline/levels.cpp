@@ -1,0 +1,173 @@
+// The report's figures of a building and its levels of detail (levels.hpp).
+#include "pipeline/levels.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+
+#include "city3d/error.hpp"
+#include "city3d/evaluation.hpp"
+#include "city3d/mesh_check.hpp"
+#include "city3d/rings.hpp"
+
+namespace city3d::detail {
+namespace {
+
+// A roof face within this many degrees of horizontal is flat (roof_type_of).
+constexpr double kFlatRoofAngle = 3.0;
+
+// Flat roof faces whose mean heights differ by more than this are on different levels, metres.
+constexpr double kRoofLevelGap = 0.3;
+
+// Roof type of an LoD2.2 model as 3DBAG names them: every roof face within kFlatRoofAngle of
+// horizontal and all at one height (within kRoofLevelGap): "horizontal"; horizontal at several heights: "multiple
+// horizontal"; otherwise "slanted".
+std::string roof_type_of(const BuildingModel& model) {
+  const std::vector<SurfaceType> types = surface_types(model);
+  std::vector<double> heights;
+  bool slanted = false;
+  for (std::size_t f = 0; f < model.mesh.faces.size(); ++f) {
+    if (types[f] != SurfaceType::roof) continue;
+    const auto& face = model.mesh.faces[f];
+    double nx = 0, ny = 0, nz = 0, zsum = 0;
+    for (std::size_t k = 0; k < face.size(); ++k) {
+      const Point3& a = model.mesh.vertices[face[k]];
+      const Point3& b = model.mesh.vertices[face[(k + 1) % face.size()]];
+      nx += (a.y - b.y) * (a.z + b.z);
+      ny += (a.z - b.z) * (a.x + b.x);
+      nz += (a.x - b.x) * (a.y + b.y);
+      zsum += a.z;
+    }
+    const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+    if (!(len > 0)) continue;
+    if (nz / len < std::cos(kFlatRoofAngle * 3.14159265358979 / 180.0)) slanted = true;
+    heights.push_back(zsum / face.size());
+  }
+  if (heights.empty()) return "could not be detected";
+  if (slanted) return "slanted";
+  std::sort(heights.begin(), heights.end());
+  for (std::size_t k = 1; k < heights.size(); ++k)
+    if (heights[k] - heights[k - 1] > kRoofLevelGap) return "multiple horizontal";
+  return "horizontal";
+}
+
+// Whether two models are the same, exactly: vertices, faces, origin and surface types.
+bool same_model(const BuildingModel& a, const BuildingModel& b) {
+  return a.mesh.faces == b.mesh.faces && a.surfaces == b.surfaces && same_point(a.origin, b.origin) &&
+         std::equal(a.mesh.vertices.begin(), a.mesh.vertices.end(), b.mesh.vertices.begin(), b.mesh.vertices.end(),
+                    same_point);
+}
+
+}  // namespace
+
+void describe_points(const BuildingInput& input, const ReconstructionParams& params, BuildingReport& r) {
+  const double area = polygons_area(input.footprint.polygons);
+  r.footprint_area = area;
+  r.point_density = area > 0 ? input.points.size() / area : 0.0;
+  if (input.points.empty()) {
+    r.roof_type = "no points";
+    return;
+  }
+  std::vector<double> z;
+  z.reserve(input.points.size());
+  for (const Point3& p : input.points) z.push_back(p.z + input.origin.z);
+  r.h_roof_50p = percentile(z, 50.0);
+  r.h_roof_70p = percentile(z, params.lod1.roof_percentile);
+  r.h_roof_min = *std::min_element(z.begin(), z.end());
+  r.h_roof_max = *std::max_element(z.begin(), z.end());
+  r.roof_type = "could not be detected";
+}
+
+void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams& params,
+                          const std::optional<Explained>& lod2_fit, BuildingResult& result) {
+  BuildingReport& r = result.report;
+  const BuildingModel primary = *result.model;
+  std::vector<LodModel> made;  // in order 1.2, 1.3, 2.2
+  std::vector<std::string> real;
+  const bool lod2 = r.level == ModelLevel::lod22 || r.level == ModelLevel::lod22_footprint_walls;
+  // A building of one height level has the same blocks at LoD1.3 as at LoD1.2: they are validated
+  // (and below measured) once.
+  std::optional<std::pair<BuildingModel, BuildingModel>> derived;  // the last blocks, as made and as validated
+  const auto derive = [&](const char* lod, double step) {
+    try {
+      BuildingModel blocks = make_lod13_blocks(primary, input.points, input.ground_z, step,
+                                               params.lod1.roof_percentile, params.lod1.min_height);
+      if (derived && same_model(blocks, derived->first)) {
+        made.push_back({lod, derived->second});
+        real.push_back(lod);
+        return;
+      }
+      BuildingModel made_blocks = blocks;
+      const WrittenValidity v = validate_as_written(blocks, params.output_grid, params.validity);
+      if (!v.remaining.empty()) throw ReconstructionError("not valid as written: " + v.remaining.front().text());
+      derived.emplace(std::move(made_blocks), blocks);
+      made.push_back({lod, std::move(blocks)});
+      real.push_back(lod);
+    } catch (const Error& e) {
+      r.note += (r.note.empty() ? "" : "; ") + std::string("LoD") + lod + " not made: " + e.what();
+    }
+  };
+  if (lod2) {
+    if (params.lods.lod12) derive("1.2", std::numeric_limits<double>::infinity());
+    if (params.lods.lod13) derive("1.3", params.lod13_step_height);
+    made.push_back({"2.2", primary});
+    real.push_back("2.2");
+    r.h_ridge = -std::numeric_limits<double>::infinity();
+    const std::vector<SurfaceType> types = surface_types(primary);
+    for (std::size_t f = 0; f < primary.mesh.faces.size(); ++f)
+      if (types[f] == SurfaceType::roof)
+        for (std::uint32_t v : primary.mesh.faces[f]) r.h_ridge = std::max(r.h_ridge, primary.mesh.vertices[v].z + primary.origin.z);
+    r.roof_type = roof_type_of(primary);
+  } else {
+    made.push_back({"1.2", primary});
+    real.push_back("1.2");
+  }
+  // Keep the levels asked for; when none of them could be made, the ladder's fallback is kept.
+  std::vector<LodModel> kept;
+  for (LodModel& m : made) {
+    const bool asked = (m.lod == "1.2" && params.lods.lod12) || (m.lod == "1.3" && params.lods.lod13) ||
+                       (m.lod == "2.2" && params.lods.lod22);
+    if (asked) kept.push_back(std::move(m));
+  }
+  if (kept.empty()) kept.push_back({lod2 ? "2.2" : "1.2", primary});
+  std::optional<std::pair<const BuildingModel*, Explained>> measured;  // the last level measured
+  for (const LodModel& m : kept) {
+    const double volume = check_mesh(m.model.mesh).signed_volume;
+    if (!(lod2 && m.lod == "2.2" && lod2_fit) && !(measured && same_model(m.model, *measured->first)))
+      measured.emplace(&m.model, explained_points(m.model.mesh, input.points));
+    const Explained fit = lod2 && m.lod == "2.2" && lod2_fit ? *lod2_fit : measured->second;
+    const std::size_t n = input.points.size();
+    const double error = n == 0 ? 0.0 : std::sqrt(fit.squares / static_cast<double>(n));
+    // The unexplained points of the model the OBJ/PLY files hold: the last level kept.
+    r.unexplained_points = static_cast<double>(fit.far);
+    r.unexplained_share = n == 0 ? 0.0 : static_cast<double>(fit.far) / static_cast<double>(n);
+    (m.lod == "1.2" ? r.volume_lod12 : m.lod == "1.3" ? r.volume_lod13 : r.volume_lod22) = volume;
+    (m.lod == "1.2" ? r.rmse_lod12 : m.lod == "1.3" ? r.rmse_lod13 : r.rmse_lod22) = error;
+    r.lods += (r.lods.empty() ? "" : ",") + m.lod;
+    if (std::find(real.begin(), real.end(), m.lod) != real.end())
+      r.lods_reconstructed += (r.lods_reconstructed.empty() ? "" : ",") + m.lod;
+  }
+  result.model = kept.back().model;
+  r.faces = result.model->mesh.faces.size();
+  // The model written, from the model to the points (explain_more measured a LoD2.2 model already).
+  if (!input.points.empty()) {
+    const SurfaceSupportParams& support_params = params.hypothesis.surface_support;
+    const SurfaceSupport support =
+        lod2 && kept.back().lod == "2.2" && lod2_fit
+            ? lod2_fit->support
+            : surface_support(result.model->mesh, surface_types(*result.model),
+                              LocalTop(input.points, support_params.radius), support_params);
+    r.unsupported_area = support.unsupported_area;
+    r.height_excess = support.height_excess;
+  }
+  result.lods = std::move(kept);
+}
+
+double highest_level_rmse(const BuildingReport& r) {
+  const std::string highest = r.lods.substr(r.lods.rfind(',') == std::string::npos ? 0 : r.lods.rfind(',') + 1);
+  return highest == "1.2" ? r.rmse_lod12 : highest == "1.3" ? r.rmse_lod13 : r.rmse_lod22;
+}
+
+}  // namespace city3d::detail

@@ -1,0 +1,166 @@
+// The parameters of the reconstruction: their check (ReconstructionParams::validate), their text
+// (parameters_text, kept with a run so that a resume uses the same ones) and the set of levels of detail.
+#include <cmath>
+#include <sstream>
+
+#include "city3d/error.hpp"
+#include "city3d/pipeline.hpp"
+
+namespace city3d {
+
+void ReconstructionParams::validate() const {
+  // Each stage collects its own problems; gather them all into one message.
+  std::string problems;
+  auto check = [&](auto&& validate_stage) {
+    try {
+      validate_stage();
+    } catch (const ConfigError& e) {
+      problems += (problems.empty() ? "" : "; ") + std::string(e.what());
+    }
+  };
+  check([&] { planes.validate(); });
+  check([&] { heightmap.validate(); });
+  check([&] { polylines.validate(); });
+  check([&] { regularise.validate(); });
+  check([&] { walls.validate(); });
+  check([&] { step_lines.validate(); });
+  check([&] { hypothesis.validate(); });
+  check([&] { selection.validate(); });
+  check([&] { assemble.validate(); });
+  check([&] { lod1.validate(); });
+  check([&] { validity.validate(); });
+  if (!lods.any()) problems += (problems.empty() ? "" : "; ") + std::string("lods: no level of detail asked for");
+  if (!(lod13_step_height > 0)) problems += (problems.empty() ? "" : "; ") + std::string("lod13_step_height must be > 0 (metres)");
+  if (!(output_grid >= 0) || !std::isfinite(output_grid))
+    problems += (problems.empty() ? "" : "; ") + std::string("output_grid must be >= 0 (metres)");
+  if (max_footprint_vertices < 3)
+    problems += (problems.empty() ? "" : "; ") + std::string("max_footprint_vertices must be >= 3");
+  if (!(retry_unexplained_share >= 0) || !std::isfinite(retry_unexplained_share))
+    problems += (problems.empty() ? "" : "; ") + std::string("retry_unexplained_share must be a share >= 0 (1: never retry)");
+  if (!(retry_unsupported_area >= 0) || std::isnan(retry_unsupported_area))
+    problems += (problems.empty() ? "" : "; ") + std::string("retry_unsupported_area must be >= 0 (m2)");
+  if (!(time_limit >= 0) || !std::isfinite(time_limit))
+    problems += (problems.empty() ? "" : "; ") + std::string("time_limit must be >= 0 seconds (0: none)");
+  if (!problems.empty()) throw ConfigError(problems);
+}
+
+std::string parameters_text(const ReconstructionParams& p) {
+  std::ostringstream s;
+  s.precision(17);
+  auto put = [&](const char* name, auto value) { s << name << " = " << value << "\n"; };
+  put("planes.k_neighbors", p.planes.k_neighbors);
+  put("planes.min_points", p.planes.min_points);
+  put("planes.max_distance", p.planes.max_distance);
+  put("planes.max_angle", p.planes.max_angle);
+  put("planes.absorb_rounds", p.planes.absorb_rounds);
+  put("planes.wall_max_normal_z", p.planes.wall_max_normal_z);
+  put("heightmap.resolution", p.heightmap.resolution);
+  put("heightmap.max_edge_length", p.heightmap.max_edge_length);
+  put("heightmap.closing_size", p.heightmap.closing_size);
+  put("heightmap.canny_low", p.heightmap.canny_low);
+  put("heightmap.canny_high", p.heightmap.canny_high);
+  put("polylines.max_hausdorff", p.polylines.max_hausdorff);
+  put("polylines.max_cost", p.polylines.max_cost);
+  put("polylines.resolution", p.polylines.resolution);
+  put("polylines.link_pixels", p.polylines.link_pixels);
+  put("polylines.min_polyline_length", p.polylines.min_polyline_length);
+  put("polylines.relocate", p.polylines.relocate);
+  put("regularise.angle_threshold", p.regularise.angle_threshold);
+  put("regularise.cluster_distance", p.regularise.cluster_distance);
+  put("regularise.cluster_angle", p.regularise.cluster_angle);
+  put("regularise.min_cluster", p.regularise.min_cluster);
+  put("regularise.merge_gap", p.regularise.merge_gap);
+  put("regularise.min_footprint_edge", p.regularise.min_footprint_edge);
+  put("regularise.min_segment_length", p.regularise.min_segment_length);
+  put("walls.mode", static_cast<int>(p.walls.mode));
+  put("walls.min_wall_length", p.walls.min_wall_length);
+  put("walls.footprint_margin", p.walls.footprint_margin);
+  put("walls.min_detected_lines", p.walls.min_detected_lines);
+  put("walls.detected_length_ratio", p.walls.detected_length_ratio);
+  put("step_lines.enabled", p.step_lines.enabled);
+  put("step_lines.min_step", p.step_lines.min_step);
+  put("step_lines.search_spacings", p.step_lines.search_spacings);
+  put("step_lines.line_tolerance", p.step_lines.line_tolerance);
+  put("step_lines.min_length", p.step_lines.min_length);
+  put("step_lines.min_samples", p.step_lines.min_samples);
+  put("step_lines.min_separation", p.step_lines.min_separation);
+  put("hypothesis.support_distance", p.hypothesis.support_distance);
+  put("hypothesis.min_face_area", p.hypothesis.min_face_area);
+  put("hypothesis.line_support_margin", p.hypothesis.line_support_margin);
+  put("hypothesis.cell_support_margin", p.hypothesis.cell_support_margin);
+  put("hypothesis.min_support_points", p.hypothesis.min_support_points);
+  put("hypothesis.vertex_merge_tolerance", p.hypothesis.vertex_merge_tolerance);
+  put("hypothesis.parallel_tolerance", p.hypothesis.parallel_tolerance);
+  put("hypothesis.min_edge_length", p.hypothesis.min_edge_length);
+  put("hypothesis.max_planes_per_cell", p.hypothesis.max_planes_per_cell);
+  put("hypothesis.floor_clearance", p.hypothesis.floor_clearance);
+  put("hypothesis.unmeasured_floor_drop", p.hypothesis.unmeasured_floor_drop);
+  put("hypothesis.min_part_area", p.hypothesis.min_part_area);
+  put("hypothesis.min_cell_width", p.hypothesis.min_cell_width);
+  put("hypothesis.line_merge_distance", p.hypothesis.line_merge_distance);
+  put("hypothesis.min_line_overlap", p.hypothesis.min_line_overlap);
+  put("hypothesis.large_cell_count", p.hypothesis.large_cell_count);
+  put("hypothesis.max_planes_per_large_cell", p.hypothesis.max_planes_per_large_cell);
+  put("hypothesis.max_unsupported_area", p.hypothesis.max_unsupported_area);
+  put("hypothesis.support_cut_height", p.hypothesis.support_cut_height);
+  put("hypothesis.support_cut_rise", p.hypothesis.support_cut_rise);
+  put("hypothesis.support_cut_area", p.hypothesis.support_cut_area);
+  put("hypothesis.surface_support.sample_spacing", p.hypothesis.surface_support.sample_spacing);
+  put("hypothesis.surface_support.radius", p.hypothesis.surface_support.radius);
+  put("hypothesis.surface_support.tolerance", p.hypothesis.surface_support.tolerance);
+  put("selection.lambda_data", p.selection.lambda_data);
+  put("selection.lambda_complexity", p.selection.lambda_complexity);
+  put("selection.lambda_roof", p.selection.lambda_roof);
+  put("selection.lambda_unsupported", p.selection.lambda_unsupported);
+  put("selection.solver", p.selection.solver);
+  put("selection.time_limit", p.selection.time_limit);
+  put("selection.node_limit", p.selection.node_limit);
+  put("selection.max_exact_variables", p.selection.max_exact_variables);
+  put("selection.window_variables", p.selection.window_variables);
+  put("selection.window_rounds", p.selection.window_rounds);
+  put("selection.use_face_prior", p.selection.use_face_prior);
+  put("selection.use_single_layer", p.selection.use_single_layer);
+  put("assemble.collinear_tolerance", p.assemble.collinear_tolerance);
+  put("assemble.merge_coplanar", p.assemble.merge_coplanar);
+  put("lod1.roof_percentile", p.lod1.roof_percentile);
+  put("lod1.min_height", p.lod1.min_height);
+  put("output_grid", p.output_grid);
+  put("lods", lod_set_text(p.lods));
+  put("lod13_step_height", p.lod13_step_height);
+  put("validity.snap_tolerance", p.validity.snap_tolerance);
+  put("validity.planarity_distance", p.validity.planarity_distance);
+  put("validity.planarity_normals", p.validity.planarity_normals);
+  put("max_level", to_string(p.max_level));
+  put("max_footprint_vertices", p.max_footprint_vertices);
+  put("retry_unexplained_share", p.retry_unexplained_share);
+  put("retry_unsupported_area", p.retry_unsupported_area);
+  put("time_limit", p.time_limit);
+  return s.str();
+}
+
+LodSet parse_lod_set(const std::string& text) {
+  LodSet set{false, false, false};
+  if (text == "all") return LodSet{};
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t comma = text.find(',', start);
+    const std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    if (item == "1.2") set.lod12 = true;
+    else if (item == "1.3") set.lod13 = true;
+    else if (item == "2.2" || item == "2") set.lod22 = true;
+    else throw ConfigError("lod: '" + item + "' is not 1.2, 1.3 or 2.2 (give a comma-separated list, e.g. 1.2,2.2)");
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return set;
+}
+
+std::string lod_set_text(const LodSet& lods) {
+  std::string s;
+  if (lods.lod12) s += "1.2";
+  if (lods.lod13) s += std::string(s.empty() ? "" : ",") + "1.3";
+  if (lods.lod22) s += std::string(s.empty() ? "" : ",") + "2.2";
+  return s;
+}
+
+}  // namespace city3d

@@ -1,0 +1,3 @@
+// The higher module.
+#pragma once
+#include "city3d/low.hpp"

@@ -1,0 +1,2 @@
+// The lower module.
+#pragma once

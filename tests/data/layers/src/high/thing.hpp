@@ -1,0 +1,3 @@
+// A private header of the higher module.
+#pragma once
+#include "city3d/high.hpp"
