@@ -316,11 +316,18 @@ TEST(Smoke, tiny_buildings_get_lod2_from_smaller_planes_and_the_convex_hull) {
 TEST(Smoke, poorly_explained_models_are_rebuilt_until_their_points_are_explained) {
   const std::string folder = std::string(CITY3D_SHARED_DATA) + "/city3d_dev_large/AHN3/";
   if (!fs::exists(folder)) GTEST_SKIP() << "../shared/data is not beside the repository";
-  const std::pair<const char*, const char*> cases[] = {{"00731", "rebuilt (without the face prior)"},
-                                                       {"08171", "rebuilt (an outline closing gaps"},
-                                                       {"09083", "rebuilt (roofs for the points left out"},
-                                                       {"19772", "rebuilt (roofs for the points left out"}};
-  for (const auto& [name, note] : cases) {
+  // The variant each keeps: of the hypothesis (smaller planes, wide outline, left-out roofs), and for
+  // 00731 of the selection too (without the face prior; the others' selection variant is free).
+  struct Case {
+    const char* name;
+    RebuildOutcome::Variant variant;
+    bool selection_checked;
+  };
+  const Case cases[] = {{"00731", {false, false, false, true, false}, true},
+                        {"08171", {false, true, false, false, false}, false},
+                        {"09083", {false, false, true, false, false}, false},
+                        {"19772", {false, false, true, false, false}, false}};
+  for (const auto& [name, variant, selection_checked] : cases) {
     SCOPED_TRACE(name);
     const PointCloud cloud = read_point_cloud(folder + name + ".ply", kFieldXyz);
     const BuildingInput input = building_from_cloud(name, cloud.points);
@@ -328,14 +335,25 @@ TEST(Smoke, poorly_explained_models_are_rebuilt_until_their_points_are_explained
     off.retry_unexplained_share = 1.0;
     const BuildingResult before = reconstruct_building(input, off);
     EXPECT_GT(before.report.unexplained_share, 0.05);
-    EXPECT_EQ(before.report.note.find("rebuilt"), std::string::npos) << before.report.note;
+    EXPECT_NE(before.report.rebuild.result, RebuildOutcome::Result::rebuilt) << before.report.note;
 
     const BuildingResult r = reconstruct_building(input, {});
     EXPECT_EQ(r.report.status, BuildingStatus::ok) << r.report.reason;
     EXPECT_EQ(r.report.level, ModelLevel::lod22);
     ASSERT_TRUE(r.model.has_value());
     EXPECT_TRUE(check_mesh(r.model->mesh).valid());
-    EXPECT_NE(r.report.note.find(note), std::string::npos) << r.report.note;
+    const RebuildOutcome& rebuild = r.report.rebuild;
+    EXPECT_EQ(rebuild.result, RebuildOutcome::Result::rebuilt) << r.report.note;
+    EXPECT_TRUE(rebuild.unexplained);
+    EXPECT_EQ(rebuild.variant.smaller_planes, variant.smaller_planes) << r.report.note;
+    EXPECT_EQ(rebuild.variant.wide_outline, variant.wide_outline) << r.report.note;
+    EXPECT_EQ(rebuild.variant.left_out, variant.left_out) << r.report.note;
+    if (selection_checked) {
+      EXPECT_EQ(rebuild.variant.without_prior, variant.without_prior) << r.report.note;
+      EXPECT_EQ(rebuild.variant.half_complexity, variant.half_complexity) << r.report.note;
+    }
+    EXPECT_LT(rebuild.far_after, rebuild.far_before);
+    EXPECT_DOUBLE_EQ(static_cast<double>(rebuild.far_after), r.report.unexplained_points);
     EXPECT_LT(r.report.unexplained_share, 0.05);
     EXPECT_LT(r.report.rmse, before.report.rmse);
     // The share the report gives is the written model's.
@@ -356,8 +374,9 @@ TEST(Smoke, models_with_unsupported_surface_are_rebuilt_until_the_points_support
   FootprintReadOptions by_id;
   by_id.id_field = "gml_id";
   const FootprintSet set = read_footprints(kDelft + "/footprints/bgt_pand_laz_area.gpkg", by_id);
-  const std::pair<const char*, const char*> cases[] = {{"b31bbff4a", "rebuilt (roof planes of at least 10 points"},
-                                                       {"b31bc4dbd", "rebuilt (roofs for the points left out"}};
+  // The variant of the hypothesis each keeps: smaller planes, roofs for the points left out.
+  const std::pair<const char*, RebuildOutcome::Variant> cases[] = {{"b31bbff4a", {true, false, false, false, false}},
+                                                                   {"b31bc4dbd", {false, false, true, false, false}}};
   std::vector<Footprint> chosen;
   for (const Footprint& f : set.footprints)
     for (const auto& c : cases)
@@ -381,8 +400,14 @@ TEST(Smoke, models_with_unsupported_surface_are_rebuilt_until_the_points_support
     const BuildingResult r = reconstruct_building(input, {});
     EXPECT_EQ(r.report.status, BuildingStatus::ok) << r.report.reason;
     ASSERT_TRUE(r.model.has_value());
-    EXPECT_NE(r.report.note.find(c->second), std::string::npos) << r.report.note;
-    EXPECT_NE(r.report.note.find("unsupported surface"), std::string::npos) << r.report.note;
+    const RebuildOutcome& rebuild = r.report.rebuild;
+    EXPECT_EQ(rebuild.result, RebuildOutcome::Result::rebuilt) << r.report.note;
+    EXPECT_TRUE(rebuild.unsupported);
+    EXPECT_EQ(rebuild.variant.smaller_planes, c->second.smaller_planes) << r.report.note;
+    EXPECT_EQ(rebuild.variant.left_out, c->second.left_out) << r.report.note;
+    EXPECT_FALSE(rebuild.variant.wide_outline);
+    EXPECT_GT(rebuild.unsupported_before, 10.0);
+    EXPECT_DOUBLE_EQ(rebuild.unsupported_after, r.report.unsupported_area);
     EXPECT_LT(r.report.unsupported_area, 1.0);
     EXPECT_LT(r.report.rmse, before.report.rmse);
   }
@@ -440,7 +465,9 @@ TEST(Smoke, a_model_no_rebuild_improves_is_kept_and_reported) {
   const BuildingResult r = reconstruct_building(input, {});
   ASSERT_TRUE(r.model.has_value());
   EXPECT_GT(r.report.unexplained_share, 0.05);
-  EXPECT_NE(r.report.note.find("no rebuild explained more"), std::string::npos) << r.report.note;
+  EXPECT_EQ(r.report.rebuild.result, RebuildOutcome::Result::no_better) << r.report.note;
+  EXPECT_TRUE(r.report.rebuild.unexplained);
+  EXPECT_EQ(r.report.rebuild.far_after, r.report.rebuild.far_before);
   EXPECT_EQ(r.model->mesh.faces, before.model->mesh.faces);
 }
 
@@ -477,10 +504,13 @@ TEST(Smoke, rebuild_variants_over_the_work_limit_are_not_selected_and_said) {
   EXPECT_EQ(r.report.level, ModelLevel::lod22);
   EXPECT_LE(r.report.candidate_faces, 3000u);
   EXPECT_LT(r.report.unexplained_share, 0.05);
-  EXPECT_NE(r.report.note.find("rebuilt (roofs for the points left out"), std::string::npos) << r.report.note;
-  EXPECT_NE(r.report.note.find("not tried (more than 3000 candidate faces): roof planes of at least 10 points: "),
-            std::string::npos)
-      << r.report.note;
+  const RebuildOutcome& rebuild = r.report.rebuild;
+  EXPECT_EQ(rebuild.result, RebuildOutcome::Result::rebuilt) << r.report.note;
+  EXPECT_TRUE(rebuild.variant.left_out) << r.report.note;
+  // The smaller planes' hypothesis is over the limit, and not selected over.
+  ASSERT_FALSE(rebuild.over_limit.empty()) << r.report.note;
+  EXPECT_TRUE(rebuild.over_limit.front().first.smaller_planes);
+  EXPECT_GT(rebuild.over_limit.front().second, 3000u);
 }
 
 // Left-out points in no plane, grouped by plan and height, become horizontal roof levels.

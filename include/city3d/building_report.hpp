@@ -6,6 +6,8 @@
 #include <cstddef>
 #include <limits>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "city3d/types.hpp"
 
@@ -34,6 +36,35 @@ const char* to_string(BuildingStatus status);
 const char* to_string(ModelLevel level);
 /// CityJSON LoD string of a level ("2.2", "1.2"; empty for none).
 const char* cityjson_lod(ModelLevel level);
+
+/// What the rebuilds of a LoD2 model did (explain_more, src/pipeline/rebuild.hpp): why they ran, which
+/// variant replaced the model, and how faithful the model was before and after, both ways. The
+/// report's note says the same in words; these fields are for programs and tests.
+struct RebuildOutcome {
+  enum class Result {
+    none,       ///< not asked for: the model explained its points and carried no unsupported surface
+    too_large,  ///< not rebuilt: its hypothesis had more candidate faces than the rebuilds' work limit
+    rebuilt,    ///< a variant replaced the model
+    no_better,  ///< no variant was more faithful and closer both ways: the model was kept
+  };
+  /// A variant: of the hypothesis (the first three) and of the selection (the last two).
+  struct Variant {
+    bool smaller_planes = false;   ///< roof planes of half min_points
+    bool wide_outline = false;     ///< without a footprint, an outline closing wider gaps
+    bool left_out = false;         ///< roofs for the points left out
+    bool without_prior = false;    ///< the selection without the face prior
+    bool half_complexity = false;  ///< the selection with half the complexity weight
+  };
+  Result result = Result::none;
+  bool unexplained = false;  ///< asked for by the points left out (more than retry_unexplained_share)
+  bool unsupported = false;  ///< asked for by the surface no point supports (more than retry_unsupported_area)
+  Variant variant;           ///< the variant kept (result rebuilt)
+  std::size_t far_before = 0, far_after = 0;                 ///< points farther than kUnexplainedDistance
+  double unsupported_before = 0.0, unsupported_after = 0.0;  ///< m2 of surface no point supports
+  /// Variants of the hypothesis not selected over: more candidate faces than the work limit (their count).
+  std::vector<std::pair<Variant, std::size_t>> over_limit;
+  bool stopped = false;  ///< the opt-in time limit stopped the rebuilds before every variant was tried
+};
 
 /// One row of the report.
 struct BuildingReport {
@@ -95,6 +126,8 @@ struct BuildingReport {
   /// height of its surface above that point, metres; NaN without a model.
   double unsupported_area = std::numeric_limits<double>::quiet_NaN();
   double height_excess = std::numeric_limits<double>::quiet_NaN();
+  /// The rebuilds of the LoD2 model written (none for a LoD1 block).
+  RebuildOutcome rebuild;
 };
 
 /// Adds `note` to the report's notes ("; " between them) unless it is there already (a rung can run

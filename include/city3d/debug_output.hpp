@@ -4,6 +4,8 @@
 // when it cannot be written.
 #pragma once
 
+#include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -52,36 +54,38 @@ void write_candidates_obj(const std::string& path, const CandidateFaces& candida
 void write_selection_csv(const std::string& path, const CandidateFaces& candidates, const std::vector<bool>& selected,
                          const SelectionParams& energy);
 
-/// The debug output of one building: the pipeline hands it through the stages of a rung, each gives
-/// it its result, and it writes them into `<debug_dir>/<id>/` (file names in README, "Debug output"),
-/// or nothing when made without a folder (no --debug, and the variants of a rebuild).
-class DebugTrace {
- public:
-  DebugTrace() = default;
-  DebugTrace(std::string debug_dir, BuildingId id) : dir_(std::move(debug_dir)), id_(std::move(id)) {}
-
-  /// planes.ply: the points coloured by plane.
-  void planes(const std::vector<Point3>& points, const std::vector<PlanarSegment>& segments) const;
-  /// step_lines.obj at the floor's height `z`.
-  void step_lines(const std::vector<Polyline2>& steps, double z) const;
-  /// heightmap.png, edges.png, polylines.obj and regularised.obj (lines at the floor's height `z`).
-  void vertical_lines(const Heightmap& heightmap, const std::vector<Point2>& edges,
-                      const std::vector<Polyline2>& polylines, const std::vector<Segment2>& regularised,
-                      double z) const;
-  /// walls<suffix>.obj, from z0 to z1.
-  void walls(const std::string& suffix, const std::vector<VerticalPlane>& walls, double z0, double z1) const;
-  /// candidates<suffix>.obj.
-  void candidates(const std::string& suffix, const CandidateFaces& candidates) const;
-  /// selection<suffix>.csv.
-  void selection(const std::string& suffix, const CandidateFaces& candidates, const std::vector<bool>& selected,
-                 const SelectionParams& energy) const;
-  /// rejected_<rung>.obj: a model no rung may write (not valid as written), in local coordinates.
-  void rejected(const std::string& rung, const BuildingModel& model) const;
-
- private:
-  std::string path(const std::string& name) const { return debug_path(dir_, id_, name); }
-  std::string dir_;  ///< empty: write nothing
-  BuildingId id_;
+/// The debug output of one building (--debug DIR): a rung's stages each leave their result here as
+/// they go, and write_debug_trace() writes what they left, in one place, when the rung has ended
+/// (with a model or not). File names in README, "Debug output".
+struct DebugTrace {
+  std::string dir;                            ///< --debug DIR
+  BuildingId id;
+  double ground_z = 0.0;                      ///< lines and walls are drawn from the floor's height
+  const std::vector<Point3>* points = nullptr;
+  std::optional<std::vector<PlanarSegment>> planes;     ///< planes.ply: the points coloured by plane
+  std::optional<std::vector<Polyline2>> step_lines;     ///< step_lines.obj
+  /// heightmap.png, edges.png, polylines.obj (with the step lines) and regularised.obj
+  std::shared_ptr<const Heightmap> heightmap;
+  std::shared_ptr<const std::vector<Point2>> edges;
+  std::optional<std::vector<Polyline2>> polylines;
+  std::optional<std::vector<Segment2>> regularised;
+  /// walls<part>.obj and candidates<part>.obj, by the part's suffix ("" or "_part1")
+  std::vector<std::pair<std::string, std::vector<VerticalPlane>>> walls;
+  std::vector<std::pair<std::string, CandidateFaces>> candidates;
+  /// selection<part>.csv: the part's candidates, the faces selected and the energy's parameters
+  struct Selection {
+    std::string suffix;
+    CandidateFaces candidates;
+    std::vector<bool> selected;
+    SelectionParams energy;
+  };
+  std::vector<Selection> selections;
+  /// rejected_<rung>.obj: a model not valid as written, in local coordinates
+  std::vector<std::pair<std::string, BuildingModel>> rejected;
 };
+
+/// Writes what `trace` holds into `<dir>/<id>/` and empties it (the next rung fills it anew). Throws
+/// IoError as the writers above do.
+void write_debug_trace(DebugTrace& trace);
 
 }  // namespace city3d

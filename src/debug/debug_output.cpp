@@ -62,6 +62,9 @@ void write_png(const cv::Mat& image, const std::string& path) {
   if (!written) throw IoError("debug: cannot write " + path);
 }
 
+// The height of the walls drawn above the floor, metres.
+constexpr double kDebugWallHeight = 20.0;
+
 }  // namespace
 
 std::string debug_path(const std::string& debug_dir, const BuildingId& id, const std::string& name) {
@@ -218,43 +221,33 @@ void write_selection_csv(const std::string& path, const CandidateFaces& candidat
   if (std::fclose(file) != 0) throw IoError("selection: cannot write " + path);
 }
 
-void DebugTrace::planes(const std::vector<Point3>& points, const std::vector<PlanarSegment>& segments) const {
-  if (!dir_.empty()) write_planes_ply(path("planes.ply"), points, segments);
-}
-
-void DebugTrace::step_lines(const std::vector<Polyline2>& steps, double z) const {
-  if (!dir_.empty()) write_polylines_obj(path("step_lines.obj"), steps, z);
-}
-
-void DebugTrace::vertical_lines(const Heightmap& heightmap, const std::vector<Point2>& edges,
-                                const std::vector<Polyline2>& polylines, const std::vector<Segment2>& regularised,
-                                double z) const {
-  if (dir_.empty()) return;
-  write_heightmap_png(heightmap, path("heightmap.png"));
-  write_edges_png(heightmap, edges, path("edges.png"));
-  write_polylines_obj(path("polylines.obj"), polylines, z);
-  write_segments_obj(path("regularised.obj"), regularised, z);
-}
-
-void DebugTrace::walls(const std::string& suffix, const std::vector<VerticalPlane>& walls, double z0,
-                       double z1) const {
-  if (!dir_.empty()) write_walls_obj(path("walls" + suffix + ".obj"), walls, z0, z1);
-}
-
-void DebugTrace::candidates(const std::string& suffix, const CandidateFaces& candidates) const {
-  if (!dir_.empty()) write_candidates_obj(path("candidates" + suffix + ".obj"), candidates);
-}
-
-void DebugTrace::selection(const std::string& suffix, const CandidateFaces& candidates,
-                           const std::vector<bool>& selected, const SelectionParams& energy) const {
-  if (!dir_.empty()) write_selection_csv(path("selection" + suffix + ".csv"), candidates, selected, energy);
-}
-
-void DebugTrace::rejected(const std::string& rung, const BuildingModel& model) const {
-  if (dir_.empty()) return;
-  ModelWriteOptions local;
-  local.local_coordinates = true;
-  write_model(path("rejected_" + rung + ".obj"), model, local);
+void write_debug_trace(DebugTrace& trace) {
+  const auto path = [&trace](const std::string& name) { return debug_path(trace.dir, trace.id, name); };
+  if (trace.planes && trace.points) write_planes_ply(path("planes.ply"), *trace.points, *trace.planes);
+  if (trace.step_lines) write_polylines_obj(path("step_lines.obj"), *trace.step_lines, trace.ground_z);
+  if (trace.heightmap && trace.edges && trace.polylines && trace.regularised) {
+    write_heightmap_png(*trace.heightmap, path("heightmap.png"));
+    write_edges_png(*trace.heightmap, *trace.edges, path("edges.png"));
+    write_polylines_obj(path("polylines.obj"), *trace.polylines, trace.ground_z);
+    write_segments_obj(path("regularised.obj"), *trace.regularised, trace.ground_z);
+  }
+  for (const auto& [suffix, walls] : trace.walls)
+    write_walls_obj(path("walls" + suffix + ".obj"), walls, trace.ground_z, trace.ground_z + kDebugWallHeight);
+  for (const auto& [suffix, candidates] : trace.candidates)
+    write_candidates_obj(path("candidates" + suffix + ".obj"), candidates);
+  for (const DebugTrace::Selection& s : trace.selections)
+    write_selection_csv(path("selection" + s.suffix + ".csv"), s.candidates, s.selected, s.energy);
+  for (const auto& [rung, model] : trace.rejected) {
+    ModelWriteOptions local;
+    local.local_coordinates = true;
+    write_model(path("rejected_" + rung + ".obj"), model, local);
+  }
+  DebugTrace empty;
+  empty.dir = std::move(trace.dir);
+  empty.id = std::move(trace.id);
+  empty.ground_z = trace.ground_z;
+  empty.points = trace.points;
+  trace = std::move(empty);
 }
 
 }  // namespace city3d

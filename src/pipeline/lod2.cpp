@@ -16,9 +16,6 @@
 namespace city3d::detail {
 namespace {
 
-// The height of the walls in the debug trace above the floor, metres.
-constexpr double kDebugWallHeight = 20.0;
-
 bool has_roof(const std::vector<PlanarSegment>& found) {
   return std::any_of(found.begin(), found.end(),
                      [](const PlanarSegment& s) { return s.kind == PlanarSegment::Kind::roof; });
@@ -34,7 +31,7 @@ struct BuildingPlanes {
 // Roof planes (and wall planes, if the cloud sees walls), by region growing (paper section 3.1), with
 // two retries for buildings of few points. Throws ReconstructionError when no roof plane is found.
 BuildingPlanes building_planes(const std::vector<Point3>& points, const ReconstructionParams& params,
-                               const PlaneDetector& detector, const DebugTrace& trace, BuildingReport& report) {
+                               const PlaneDetector& detector, DebugTrace* trace, BuildingReport& report) {
   std::vector<PlanarSegment> segments = detector.detect(params.planes);
   if (!has_roof(segments) && points.size() >= kMinPointsForSmallRoof) {
     // A shed or a garage can hold fewer points than min_points in all: rather than a block, try
@@ -68,7 +65,7 @@ BuildingPlanes building_planes(const std::vector<Point3>& points, const Reconstr
       planes.detected_walls.push_back(wall_line(s, points));
   }
   report.planes = planes.roofs.size();
-  trace.planes(points, segments);
+  if (trace) trace->planes = segments;
   if (planes.roofs.empty())
     throw ReconstructionError("planes: no roof plane among " + std::to_string(points.size()) + " points (min_points " +
                               std::to_string(params.planes.min_points) + ")");
@@ -82,7 +79,7 @@ BuildingPlanes building_planes(const std::vector<Point3>& points, const Reconstr
 RegularisationResult vertical_lines(const BuildingInput& input, const std::vector<PlanarSegment>& roofs,
                                     const std::vector<Polygon2>& outline, const ReconstructionParams& params,
                                     const std::vector<bool>* unexplained, SharedRaster& raster,
-                                    const DebugTrace& trace) {
+                                    DebugTrace* trace) {
   const std::vector<Point3>& points = input.points;
   const Heightmap& heightmap = *raster.heightmap;
   std::optional<StageTimer> stage(Stage::edges);
@@ -95,7 +92,7 @@ RegularisationResult vertical_lines(const BuildingInput& input, const std::vecto
   stage.emplace(Stage::step_lines);
   // Step lines between roof planes join the heightmap's lines (the same regularisation and walls).
   const std::vector<Polyline2> steps = detect_step_lines(points, roofs, point_spacing(outline, points.size()), params.step_lines);
-  trace.step_lines(steps, input.ground_z);
+  if (trace) trace->step_lines = steps;
   polylines.insert(polylines.end(), steps.begin(), steps.end());
   stage.emplace(Stage::regularise);
   RegularisationResult lines = regularise(polylines, &outline, params.regularise);
@@ -106,7 +103,12 @@ RegularisationResult vertical_lines(const BuildingInput& input, const std::vecto
     lines.segments.insert(lines.segments.end(), left_out.begin(), left_out.end());
     lines.segments_after = lines.segments.size();
   }
-  trace.vertical_lines(heightmap, edges, polylines, lines.segments, input.ground_z);
+  if (trace) {
+    trace->heightmap = raster.heightmap;
+    trace->edges = raster.edges;
+    trace->polylines = polylines;
+    trace->regularised = lines.segments;
+  }
   return lines;
 }
 
@@ -117,7 +119,7 @@ RegularisationResult vertical_lines(const BuildingInput& input, const std::vecto
 Lod2Hypothesis part_hypotheses(const BuildingInput& input, const std::vector<Polygon2>& outline,
                                const BuildingPlanes& planes, const RegularisationResult& lines,
                                const ReconstructionParams& params, bool footprint_walls_only,
-                               Clock::time_point deadline, const DebugTrace& trace, BuildingReport& report) {
+                               Clock::time_point deadline, DebugTrace* trace, BuildingReport& report) {
   const std::vector<Point3>& points = input.points;
   const std::vector<PlanarSegment>& roofs = planes.roofs;
   WallParams wall_params = params.walls;
@@ -141,7 +143,7 @@ Lod2Hypothesis part_hypotheses(const BuildingInput& input, const std::vector<Pol
           wall_params);
       report.walls += walls.size();
       check_time(deadline, "walls");
-      trace.walls(suffix, walls, input.ground_z, input.ground_z + kDebugWallHeight);
+      if (trace) trace->walls.emplace_back(suffix, walls);
 
       // An inferred part's roofs are the planes it holds a share of: a plane of points elsewhere
       // (another part, or ground returns around a tree, AHN3 large/06050) would put a roof where none
@@ -156,7 +158,7 @@ Lod2Hypothesis part_hypotheses(const BuildingInput& input, const std::vector<Pol
                               params.selection);
       report.candidate_faces += candidates.faces.size();
       check_time(deadline, "hypothesis");
-      trace.candidates(suffix, candidates);
+      if (trace) trace->candidates.emplace_back(suffix, candidates);
       hypothesis.parts.push_back(std::move(candidates));
       hypothesis.part_numbers.push_back(k);
     } catch (const ReconstructionError& e) {
@@ -176,7 +178,7 @@ void check_time(Clock::time_point deadline, const char* stage) {
 }
 
 Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionParams& params,
-                               const Lod2Variant& variant, Clock::time_point deadline, const DebugTrace& trace,
+                               const Lod2Variant& variant, Clock::time_point deadline, DebugTrace* trace,
                                BuildingReport& report) {
   SharedRaster raster = variant.shared ? *variant.shared : SharedRaster{};
   const std::vector<Point3>& points = input.points;
@@ -211,7 +213,7 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
 }
 
 BuildingModel lod2_model(const BuildingInput& input, const Lod2Hypothesis& hypothesis,
-                         const ReconstructionParams& params, Clock::time_point deadline, const DebugTrace& trace,
+                         const ReconstructionParams& params, Clock::time_point deadline, DebugTrace* trace,
                          BuildingReport& report, bool* without_prior) {
   std::size_t dropped = 0;
   BuildingModel model;
@@ -247,8 +249,10 @@ BuildingModel lod2_model(const BuildingInput& input, const Lod2Hypothesis& hypot
                                                   : "selection: no solution within the limits") +
                                   " (" + std::to_string(selection.variables) + " variables): " + selection.message);
 
-      trace.selection(hypothesis.parts.size() > 1 ? "_part" + std::to_string(hypothesis.part_numbers[k]) : "",
-                      candidates, selection.selected, selection_params);
+      if (trace)
+        trace->selections.push_back(
+            {hypothesis.parts.size() > 1 ? "_part" + std::to_string(hypothesis.part_numbers[k]) : "", candidates,
+             selection.selected, selection_params});
       stage.emplace(Stage::assemble);
       std::vector<SurfaceType> surfaces;
       const PolygonMesh mesh = assemble_model(candidates, selection.selected, params.assemble, &surfaces);
@@ -283,7 +287,7 @@ BuildingModel lod1_rung(const BuildingInput& input, const ReconstructionParams& 
 }
 
 BuildingModel checked_model(const ReconstructionParams& params, ModelLevel level, bool footprint_walls_only,
-                            BuildingModel model, const DebugTrace& trace, BuildingReport& r) {
+                            BuildingModel model, DebugTrace* trace, BuildingReport& r) {
   const StageTimer stage(Stage::validity);
   const WrittenValidity validity = validate_as_written(model, params.output_grid, params.validity);
   if (!validity.found.empty()) {
@@ -291,7 +295,9 @@ BuildingModel checked_model(const ReconstructionParams& params, ModelLevel level
     r.validity_found += (r.validity_found.empty() ? "" : "; ") + found;
   }
   if (!validity.remaining.empty()) {
-    trace.rejected(level == ModelLevel::lod12 ? "lod12" : footprint_walls_only ? "footprint_walls" : "lod22", model);
+    if (trace)
+      trace->rejected.emplace_back(
+          level == ModelLevel::lod12 ? "lod12" : footprint_walls_only ? "footprint_walls" : "lod22", model);
     std::string problems;
     for (std::size_t k = 0; k < validity.remaining.size() && k < 3; ++k)
       problems += (k ? "; " : "") + validity.remaining[k].text();

@@ -64,7 +64,7 @@ struct Lod2Variant {
 /// candidate faces of each part. Throws Error naming the stage when a stage fails for the largest part;
 /// a further part that fails is left out and said in the report's note.
 Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionParams& params,
-                               const Lod2Variant& variant, Clock::time_point deadline, const DebugTrace& trace,
+                               const Lod2Variant& variant, Clock::time_point deadline, DebugTrace* trace,
                                BuildingReport& report);
 
 /// A LoD2 rung's selection (paper section 3.3) and model: each part's faces selected and assembled, the
@@ -72,7 +72,7 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
 /// part without one is left out and said. `without_prior` (when given) tells whether every part's
 /// selection had to drop the face prior (its program was infeasible with it).
 BuildingModel lod2_model(const BuildingInput& input, const Lod2Hypothesis& hypothesis,
-                         const ReconstructionParams& params, Clock::time_point deadline, const DebugTrace& trace,
+                         const ReconstructionParams& params, Clock::time_point deadline, DebugTrace* trace,
                          BuildingReport& report, bool* without_prior = nullptr);
 
 /// The LoD1 rung: always possible when the building has points and a usable footprint.
@@ -82,6 +82,6 @@ BuildingModel lod1_rung(const BuildingInput& input, const ReconstructionParams& 
 /// rule: a model that does not is repaired (spikes cut, warped faces split), or this throws and the
 /// ladder moves on: an invalid model is never written (the trace keeps it).
 BuildingModel checked_model(const ReconstructionParams& params, ModelLevel level, bool footprint_walls_only,
-                            BuildingModel model, const DebugTrace& trace, BuildingReport& report);
+                            BuildingModel model, DebugTrace* trace, BuildingReport& report);
 
 }  // namespace city3d::detail

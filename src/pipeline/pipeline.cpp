@@ -106,7 +106,7 @@ struct Rung {
 // no point supports is rebuilt (explain_more), which measures it: `lod2_fit`. Throws Error when the
 // rung gives no model.
 BuildingModel rung_model(const BuildingInput& input, const ReconstructionParams& params, const Rung& rung,
-                         Clock::time_point deadline, const DebugTrace& trace, BuildingReport& r,
+                         Clock::time_point deadline, DebugTrace* trace, BuildingReport& r,
                          std::optional<detail::Explained>& lod2_fit) {
   using namespace detail;
   if (rung.level == ModelLevel::lod12)
@@ -132,7 +132,15 @@ BuildingModel rung_model(const BuildingInput& input, const ReconstructionParams&
 std::optional<BuildingModel> walk_ladder(const BuildingInput& input, const ReconstructionParams& params,
                                          Clock::time_point start, BuildingReport& r,
                                          std::optional<detail::Explained>& lod2_fit) {
-  const DebugTrace trace(params.debug_dir, input.id);
+  std::optional<DebugTrace> trace;  // with --debug: what each rung's stages leave, written as the rung ends
+  if (!params.debug_dir.empty()) {
+    trace.emplace();
+    trace->dir = params.debug_dir;
+    trace->id = input.id;
+    trace->ground_z = input.ground_z;
+    trace->points = &input.points;
+  }
+  DebugTrace* const tracing = trace ? &*trace : nullptr;
   const Rung rungs[] = {{ModelLevel::lod22, false}, {ModelLevel::lod22_footprint_walls, true}, {ModelLevel::lod12, false}};
   const ModelLevel requested = params.max_level == ModelLevel::none ? ModelLevel::lod22 : params.max_level;
   bool started = false;
@@ -145,7 +153,8 @@ std::optional<BuildingModel> walk_ladder(const BuildingInput& input, const Recon
                                 ? start + std::chrono::duration_cast<Clock::duration>(
                                               std::chrono::duration<double>(share * params.time_limit))
                                 : Clock::time_point::max();
-      BuildingModel model = rung_model(input, params, rung, deadline, trace, r, lod2_fit);
+      BuildingModel model = rung_model(input, params, rung, deadline, tracing, r, lod2_fit);
+      if (trace) write_debug_trace(*trace);
       r.level = rung.level;
       r.status = rung.level == requested ? BuildingStatus::ok : BuildingStatus::fallback;
       r.faces = model.mesh.faces.size();
@@ -156,6 +165,11 @@ std::optional<BuildingModel> walk_ladder(const BuildingInput& input, const Recon
         r.reason = e.what();
         const std::string what = e.what();
         r.stage = what.substr(0, what.find(':'));
+      }
+      try {
+        if (trace) write_debug_trace(*trace);  // what the stages before the failure left
+      } catch (const Error& w) {
+        add_note(r, w.what());
       }
     }
   }

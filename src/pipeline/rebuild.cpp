@@ -102,7 +102,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
   if (!too_many_left_out && !unsupported) return best;
   std::vector<bool> unexplained = points_beneath_unsupported(best.support, input.points, support_params);
   for (std::size_t i = 0; i < n; ++i) unexplained[i] = unexplained[i] || distances[i] > kUnexplainedDistance;
-  const double area = polygons_area(input.footprint.polygons);
+  const double area = r.footprint_area;  // of input.footprint.polygons (describe_points)
   const double density = area > 0.0 ? static_cast<double>(n) / area : 0.0;
   const auto what = [&](const Explained& e) {
     std::string text;
@@ -122,7 +122,14 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
   };
   const std::size_t faces = candidate_faces(hypothesis);
   const RebuildScope rebuilding;  // from here on, the stages count as the rebuild's
+  RebuildOutcome outcome;
+  outcome.unexplained = too_many_left_out;
+  outcome.unsupported = unsupported;
+  outcome.far_before = outcome.far_after = best.far;
+  outcome.unsupported_before = outcome.unsupported_after = best.support.unsupported_area;
   if (faces > kMaxRebuildFaces) {
+    outcome.result = RebuildOutcome::Result::too_large;
+    r.rebuild = outcome;
     add_note(r, what(best) + ": not rebuilt (" + std::to_string(faces) + " candidate faces, more than " +
                     std::to_string(kMaxRebuildFaces) + ")");
     return best;
@@ -145,6 +152,9 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
     bool half_complexity;
   };
   const SelectionVariant selections[] = {{false, false}, {true, false}, {false, true}, {true, true}};
+  const auto variant_of = [](const HypothesisVariant& h, const SelectionVariant& v) {
+    return RebuildOutcome::Variant{h.smaller_planes, h.wide_outline, h.left_out, v.without_prior, v.half_complexity};
+  };
   const auto name = [&](const HypothesisVariant& h, const SelectionVariant& v) {
     std::string text;
     const auto add = [&text](const std::string& part) { text += (text.empty() ? "" : ", ") + part; };
@@ -177,13 +187,14 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
       try {
         const Lod2Variant variant{rung.footprint_walls_only, h.wide_outline, h.left_out ? &unexplained : nullptr,
                                   &hypothesis.raster};
-        built = lod2_hypothesis(input, hp, variant, deadline, DebugTrace{}, after_hypothesis);
+        built = lod2_hypothesis(input, hp, variant, deadline, nullptr, after_hypothesis);
       } catch (const Error& e) {
         log_debug("explain: building " + input.id + ": " + name(h, {}) + ": " + e.what());
         continue;
       }
       if (candidate_faces(*built) > kMaxRebuildFaces) {
         over_limit += (over_limit.empty() ? "" : ", ") + name(h, {}) + ": " + std::to_string(candidate_faces(*built));
+        outcome.over_limit.emplace_back(variant_of(h, {}), candidate_faces(*built));
         continue;
       }
       // A hypothesis already selected over gives the same models again: none could be kept.
@@ -211,7 +222,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
         bool dropped = false;
         BuildingModel m = checked_model(
             p, rung.level, rung.footprint_walls_only,
-            lod2_model(input, own ? hypothesis : *built, p, deadline, DebugTrace{}, trial, &dropped), DebugTrace{}, trial);
+            lod2_model(input, own ? hypothesis : *built, p, deadline, nullptr, trial, &dropped), nullptr, trial);
         if (!v.without_prior && !v.half_complexity) prior_dropped = dropped;
         Explained e = explained(m, input.points, local_top, support_params);
         if (e.unfaithful(density) < best.unfaithful(density) &&
@@ -219,6 +230,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
           best = std::move(e);
           model = std::move(m);
           kept = name(h, v);
+          outcome.variant = variant_of(h, v);
           kept_report = std::move(trial);
         }
       } catch (const Error& e) {
@@ -228,6 +240,10 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
     }
     if (built) tried.push_back(std::move(*built));
   }
+  outcome.stopped = stopped;
+  outcome.far_after = best.far;
+  outcome.unsupported_after = best.support.unsupported_area;
+  outcome.result = kept.empty() ? RebuildOutcome::Result::no_better : RebuildOutcome::Result::rebuilt;
   if (!kept.empty()) {
     r = std::move(kept_report);
     std::string change;
@@ -246,6 +262,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
   if (!over_limit.empty())
     add_note(r, "not tried (more than " + std::to_string(kMaxRebuildFaces) + " candidate faces): " + over_limit);
   if (stopped) add_note(r, "rebuilds stopped at the time limit");
+  r.rebuild = std::move(outcome);
   return best;
 }
 
