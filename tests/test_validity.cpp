@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "city3d/evaluation.hpp"
+#include "city3d/repair.hpp"
 
 namespace city3d {
 namespace {

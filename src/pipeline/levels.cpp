@@ -10,6 +10,7 @@
 #include "city3d/error.hpp"
 #include "city3d/evaluation.hpp"
 #include "city3d/mesh_check.hpp"
+#include "city3d/repair.hpp"
 #include "city3d/rings.hpp"
 
 namespace city3d::detail {

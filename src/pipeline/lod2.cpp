@@ -9,6 +9,7 @@
 #include "city3d/error.hpp"
 #include "city3d/evaluation.hpp"
 #include "city3d/mesh_check.hpp"
+#include "city3d/repair.hpp"
 #include "city3d/stage_profile.hpp"
 #include "pipeline/left_out.hpp"
 #include "pipeline/outline.hpp"
