@@ -24,10 +24,34 @@ class ConfigError : public Error {
   using Error::Error;
 };
 
-/// A building could not be reconstructed at the requested level.
+/// The stage of a building's reconstruction an error comes from, as the report's `stage` column names it
+/// (stage_name()).
+enum class ReconstructionStage {
+  footprint,   ///< "footprint": the footprint's simplification
+  planes,      ///< "planes": roof planes
+  heightmap,   ///< "heightmap": the TIN heightmap and the inferred outline
+  polylines,   ///< "polylines"
+  walls,       ///< "walls": the vertical planes, and an outline that cannot be inferred
+  hypothesis,  ///< "hypothesis": the candidate faces
+  selection,   ///< "selection": the integer program
+  model,       ///< "model": the assembled faces, a model not valid as written
+  lod1,        ///< "lod1": the LoD1.2 block
+  lod13,       ///< "lod1.3": the LoD1.3 blocks
+  evaluation,  ///< "evaluation": a measure of the model
+};
+
+/// "planes", "lod1.3", ...
+const char* stage_name(ReconstructionStage stage);
+
+/// A building could not be reconstructed at the requested level: what() is "<stage>: <message>".
 class ReconstructionError : public Error {
  public:
-  using Error::Error;
+  ReconstructionError(ReconstructionStage stage, const std::string& message)
+      : Error(std::string(stage_name(stage)) + ": " + message), stage_(stage) {}
+  ReconstructionStage stage() const { return stage_; }
+
+ private:
+  ReconstructionStage stage_;
 };
 
 }  // namespace city3d

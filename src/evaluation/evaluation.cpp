@@ -145,14 +145,14 @@ std::vector<double> point_distances(const PolygonMesh& mesh, const std::vector<P
   using Tri = Kernel::Triangle_3;
   using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<Tri>::const_iterator>;
   using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
-  if (points.empty()) throw ReconstructionError("evaluation: rmse needs at least one point");
+  if (points.empty()) throw ReconstructionError(ReconstructionStage::evaluation, "rmse needs at least one point");
   std::vector<Tri> triangles;
   for (const auto& t : triangulate(mesh)) {
     Tri tri(to_cgal(mesh.vertices[t[0]]), to_cgal(mesh.vertices[t[1]]), to_cgal(mesh.vertices[t[2]]));
     if (!tri.is_degenerate()) triangles.push_back(tri);  // AABB distance queries need real triangles
   }
   if (triangles.empty())
-    throw ReconstructionError("evaluation: rmse of a mesh without area (" +
+    throw ReconstructionError(ReconstructionStage::evaluation, "rmse of a mesh without area (" +
                               std::to_string(mesh.faces.size()) + " faces)");
   Tree tree(triangles.begin(), triangles.end());
   std::vector<double> distances;

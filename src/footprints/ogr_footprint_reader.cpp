@@ -716,7 +716,7 @@ SimplifiedFootprint simplify_footprint(const std::vector<Polygon2>& polygons, st
     out.tolerance = tolerance;
     return out;
   }
-  throw ReconstructionError("footprint: " + std::to_string(out.vertices_before) +
+  throw ReconstructionError(ReconstructionStage::footprint, "" + std::to_string(out.vertices_before) +
                             " vertices could not be simplified to " + std::to_string(max_vertices));
 }
 

@@ -110,7 +110,7 @@ Heightmap rasterise_tin(const std::vector<Point3>& local_points, const Heightmap
   for (std::size_t i = 0; i < local_points.size(); ++i) {
     const Point3& p = local_points[i];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-      throw ReconstructionError("heightmap: point " + std::to_string(i) + " has a non-finite coordinate");
+      throw ReconstructionError(ReconstructionStage::heightmap, "point " + std::to_string(i) + " has a non-finite coordinate");
     points.emplace_back(p.x, p.y, p.z);
   }
   std::sort(points.begin(), points.end(), [](const Kernel::Point_3& l, const Kernel::Point_3& r) {
@@ -124,12 +124,12 @@ Heightmap rasterise_tin(const std::vector<Point3>& local_points, const Heightmap
                            }),
                points.end());
   if (points.size() < 3)
-    throw ReconstructionError("heightmap: " + std::to_string(points.size()) +
+    throw ReconstructionError(ReconstructionStage::heightmap, "" + std::to_string(points.size()) +
                               " distinct xy positions, need at least 3");
 
   Tin tin(points.begin(), points.end());
   if (tin.dimension() < 2)
-    throw ReconstructionError("heightmap: all " + std::to_string(points.size()) +
+    throw ReconstructionError(ReconstructionStage::heightmap, "all " + std::to_string(points.size()) +
                               " points are collinear in xy, no TIN");
 
   // Keep the triangles whose edges are all short enough; measure the density on them.
@@ -155,7 +155,7 @@ Heightmap rasterise_tin(const std::vector<Point3>& local_points, const Heightmap
   std::sort(used_vertices.begin(), used_vertices.end());
   used_vertices.erase(std::unique(used_vertices.begin(), used_vertices.end()), used_vertices.end());
   if (triangles.empty() || !(area > 0.0))
-    throw ReconstructionError("heightmap: no TIN triangle with all edges below max_edge_length = " +
+    throw ReconstructionError(ReconstructionStage::heightmap, "no TIN triangle with all edges below max_edge_length = " +
                               format_number(params.max_edge_length) + " m");
 
   const double density = static_cast<double>(used_vertices.size()) / area;
@@ -178,7 +178,7 @@ Heightmap rasterise_tin(const std::vector<Point3>& local_points, const Heightmap
   const double columns = std::floor((max_x - map.origin.x) / r) + 1 + kMarginPixels;
   const double rows = std::floor((max_y - map.origin.y) / r) + 1 + kMarginPixels;
   if (columns * rows > static_cast<double>(kMaxPixels))
-    throw ReconstructionError("heightmap: raster of " + format_number(columns) + " x " +
+    throw ReconstructionError(ReconstructionStage::heightmap, "raster of " + format_number(columns) + " x " +
                               format_number(rows) + " pixels at r = " + format_number(r) +
                               " m exceeds " + std::to_string(kMaxPixels) + " pixels");
   map.width = static_cast<int>(columns);

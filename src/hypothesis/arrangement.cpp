@@ -228,7 +228,7 @@ PlainArrangement build_arrangement(std::vector<InputCurve> curves, double min_ce
   }
   for (auto f = arr.faces_begin(); f != arr.faces_end(); ++f)
     if (!f->is_unbounded() && f->data() == 1 && f->number_of_inner_ccbs() > 0)
-      throw ReconstructionError("hypothesis: a cell of the arrangement keeps a hole after bridging");
+      throw ReconstructionError(ReconstructionStage::hypothesis, "a cell of the arrangement keeps a hole after bridging");
 
   // Collinearity classes of the curves (exact predicates on the input segments): the vertical plane
   // over an edge is identified by its class, so walls over collinear pieces are coplanar.

@@ -113,7 +113,7 @@ PlainArrangement contract_short_edges(const PlainArrangement& in, double min_len
         edge.wall_source = old.wall_source;
       int& side = (a == edge.u) ? edge.left : edge.right;
       if (side >= 0)
-        throw ReconstructionError("hypothesis: degenerate arrangement (two cells on one side of an edge after snapping)");
+        throw ReconstructionError(ReconstructionStage::hypothesis, "degenerate arrangement (two cells on one side of an edge after snapping)");
       side = static_cast<int>(c);
       cell.loop.emplace_back(it->second, a == edge.u);
       cell.polygon.push_back(out.vertices[a]);

@@ -141,7 +141,7 @@ std::vector<InputCurve> arrangement_curves(const std::vector<Point3>& points, co
       for (std::size_t i = 0; i < ring->size(); ++i)
         curves.push_back({(*ring)[i], (*ring)[(i + 1) % ring->size()], CurveKind::footprint, -1});
   }
-  if (curves.size() < 3) throw ReconstructionError("hypothesis: empty footprint");
+  if (curves.size() < 3) throw ReconstructionError(ReconstructionStage::hypothesis, "empty footprint");
   const double margin = params.line_support_margin;
   for (std::size_t i = 0; i < walls.size(); ++i) {
     const auto& w = walls[i];

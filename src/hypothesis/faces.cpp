@@ -277,7 +277,7 @@ std::vector<std::vector<std::uint32_t>> lift_cells(const PlainArrangement& arr,
   }
   for (std::size_t i = 0; i < faces.size(); ++i)
     if (!alive[i] && faces[i].kind == FaceKind::floor)
-      throw ReconstructionError("hypothesis: floor face over cell " + std::to_string(faces[i].cell_or_edge) +
+      throw ReconstructionError(ReconstructionStage::hypothesis, "floor face over cell " + std::to_string(faces[i].cell_or_edge) +
                                 " cannot be closed (internal error)");
 
   std::vector<std::uint32_t> new_index(faces.size(), 0);

@@ -64,12 +64,12 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
   for (const auto& s : roof_planes_in)
     if (s.kind == PlanarSegment::Kind::roof && std::abs(s.plane.c) > 1e-6) roofs.push_back(s);
   if (roofs.empty())
-    throw ReconstructionError("hypothesis: " + std::to_string(roof_planes_in.size()) +
+    throw ReconstructionError(ReconstructionStage::hypothesis, "" + std::to_string(roof_planes_in.size()) +
                               " planes, need at least 1 roof plane");
   for (const auto& s : roofs)
     for (std::uint32_t i : s.points)
       if (i >= points.size())
-        throw ReconstructionError("hypothesis: roof segment refers to point " + std::to_string(i) + " of " +
+        throw ReconstructionError(ReconstructionStage::hypothesis, "roof segment refers to point " + std::to_string(i) + " of " +
                                   std::to_string(points.size()));
   const std::size_t R = roofs.size();
 
@@ -81,7 +81,7 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
                             params.min_part_area);
   };
   PlainArrangement arr = arrange();
-  if (arr.cells.empty()) throw ReconstructionError("hypothesis: the footprint has no inside cell");
+  if (arr.cells.empty()) throw ReconstructionError(ReconstructionStage::hypothesis, "the footprint has no inside cell");
 
   // 3. The roof planes lifted onto each cell; where a plane's face would run beyond its points' height
   // range over no point, the cell is cut at the plane's contour (support cuts) and the arrangement
@@ -98,7 +98,7 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
   if (!cuts.empty()) {
     curves.insert(curves.end(), cuts.begin(), cuts.end());
     arr = arrange();
-    if (arr.cells.empty()) throw ReconstructionError("hypothesis: the footprint has no inside cell");
+    if (arr.cells.empty()) throw ReconstructionError(ReconstructionStage::hypothesis, "the footprint has no inside cell");
     cell_planes = cell_roof_planes(points, roofs, arr, local_top, params);
     log_debug("hypothesis: " + std::to_string(cuts.size()) + " support cuts");
   }

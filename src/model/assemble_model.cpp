@@ -158,7 +158,7 @@ PolygonMesh assemble_model(const CandidateFaces& candidates, const std::vector<b
   std::vector<Face> model;
   for (std::size_t i = 0; i < faces.size(); ++i)
     if (selected[i]) model.push_back({faces[i].vertices, faces[i].plane_id, faces[i].kind});
-  if (model.empty()) throw ReconstructionError("model: no face selected");
+  if (model.empty()) throw ReconstructionError(ReconstructionStage::model, "no face selected");
 
   // 1. Weld: every undirected edge in exactly two selected faces.
   struct Use {
@@ -175,7 +175,7 @@ PolygonMesh assemble_model(const CandidateFaces& candidates, const std::vector<b
   }
   for (const auto& [edge, list] : uses)
     if (list.size() != 2)
-      throw ReconstructionError("model: edge " + edge_name(edge) + " is used by " + std::to_string(list.size()) +
+      throw ReconstructionError(ReconstructionStage::model, "edge " + edge_name(edge) + " is used by " + std::to_string(list.size()) +
                                 " selected faces (need 2)");
 
   // 2. Orient: neighbours must traverse their shared edge in opposite directions.
@@ -201,7 +201,7 @@ PolygonMesh assemble_model(const CandidateFaces& candidates, const std::vector<b
           flip[g] = want;
           queue.push_back(g);
         } else if (flip[g] != want) {
-          throw ReconstructionError("model: the selected faces are not orientable (a Moebius-like strip)");
+          throw ReconstructionError(ReconstructionStage::model, "the selected faces are not orientable (a Moebius-like strip)");
         }
       }
     }
@@ -359,14 +359,14 @@ PolygonMesh assemble_model(const CandidateFaces& candidates, const std::vector<b
   const MeshCheck check = check_mesh(mesh);
   if (!check.valid()) {
     std::ostringstream message;
-    message << "model: invalid mesh (" << mesh.faces.size() << " faces):";
+    message << "invalid mesh (" << mesh.faces.size() << " faces):";
     if (!check.closed) message << " not closed, " << check.boundary_edges << " boundary edges;";
     if (!check.manifold)
       message << " not manifold, " << check.non_manifold_edges << " edges and " << check.non_manifold_vertices
               << " vertices;";
     if (check.degenerate_faces) message << " " << check.degenerate_faces << " degenerate faces;";
     if (!check.outward) message << " volume " << check.signed_volume << " m3 <= 0;";
-    throw ReconstructionError(message.str());
+    throw ReconstructionError(ReconstructionStage::model, message.str());
   }
   return mesh;
 }

@@ -39,15 +39,15 @@ Ring2 clean_ring(const Ring2& ring, bool counter_clockwise, const std::string& w
   Ring2 out;
   for (const Point2& v : ring) {
     if (!std::isfinite(v.x) || !std::isfinite(v.y))
-      throw ReconstructionError("lod1: building " + id + ": " + what + " has a non-finite vertex");
+      throw ReconstructionError(ReconstructionStage::lod1, "building " + id + ": " + what + " has a non-finite vertex");
     if (out.empty() || !same(out.back(), v)) out.push_back(v);
   }
   while (out.size() > 1 && same(out.front(), out.back())) out.pop_back();
   if (out.size() < 3)
-    throw ReconstructionError("lod1: building " + id + ": " + what + " has " + std::to_string(out.size()) +
+    throw ReconstructionError(ReconstructionStage::lod1, "building " + id + ": " + what + " has " + std::to_string(out.size()) +
                               " distinct vertices, need 3");
   const double area = signed_area(out);
-  if (area == 0.0) throw ReconstructionError("lod1: building " + id + ": " + what + " has no area");
+  if (area == 0.0) throw ReconstructionError(ReconstructionStage::lod1, "building " + id + ": " + what + " has no area");
   if ((area > 0.0) != counter_clockwise) std::reverse(out.begin(), out.end());
   return out;
 }
@@ -151,7 +151,7 @@ Loop bridge_holes(const std::vector<Point2>& pts, Loop outer, std::vector<Loop> 
       break;
     }
     if (!bridged)
-      throw ReconstructionError("lod1: building " + id +
+      throw ReconstructionError(ReconstructionStage::lod1, "building " + id +
                                 ": cannot connect a hole to the outer ring "
                                 "(rings intersect or touch)");
   }
@@ -192,12 +192,12 @@ std::vector<Loop> ear_clip(const std::vector<Point2>& pts, const Loop& loop, con
     } else {
       current = next[current];
       if (++failures > remaining)
-        throw ReconstructionError("lod1: building " + id + ": cannot split a roof with holes (no ear among " +
+        throw ReconstructionError(ReconstructionStage::lod1, "building " + id + ": cannot split a roof with holes (no ear among " +
                                   std::to_string(remaining) + " vertices; self-intersecting rings?)");
     }
   }
   if (orient(pts[loop[prev[current]]], pts[loop[current]], pts[loop[next[current]]]) <= 0.0)
-    throw ReconstructionError("lod1: building " + id + ": roof with holes ends in a degenerate triangle");
+    throw ReconstructionError(ReconstructionStage::lod1, "building " + id + ": roof with holes ends in a degenerate triangle");
   triangles.push_back({loop[prev[current]], loop[current], loop[next[current]]});
   return triangles;
 }
@@ -261,7 +261,7 @@ void Lod1Params::validate() const {
 
 Lod1Heights lod1_heights(const BuildingInput& input, const Lod1Params& params) {
   params.validate();
-  if (input.points.empty()) throw ReconstructionError("lod1: building " + input.id + " has no points");
+  if (input.points.empty()) throw ReconstructionError(ReconstructionStage::lod1, "building " + input.id + " has no points");
   std::vector<double> heights;
   heights.reserve(input.points.size());
   for (const Point3& p : input.points) heights.push_back(p.z);
@@ -281,7 +281,7 @@ Lod1Heights lod1_heights(const BuildingInput& input, const Lod1Params& params) {
 PolygonMesh extrude_polygons(const std::vector<Polygon2>& polygons, double floor_z, double roof_z,
                              const BuildingId& id) {
   if (!(roof_z > floor_z))
-    throw ReconstructionError("lod1: building " + id + ": roof z " + std::to_string(roof_z) +
+    throw ReconstructionError(ReconstructionStage::lod1, "building " + id + ": roof z " + std::to_string(roof_z) +
                               " is not above floor z " + std::to_string(floor_z));
   PolygonMesh mesh;
   for (std::size_t p = 0; p < polygons.size(); ++p) {
@@ -441,7 +441,7 @@ BuildingModel make_lod13_blocks(const BuildingModel& lod22, const std::vector<Po
     parts.push_back(std::move(loop));
     mean_z.push_back(z / lod22.mesh.faces[f].size());
   }
-  if (parts.empty()) throw ReconstructionError("lod1.3: building " + lod22.id + ": the LoD2 model has no roof face");
+  if (parts.empty()) throw ReconstructionError(ReconstructionStage::lod13, "building " + lod22.id + ": the LoD2 model has no roof face");
 
   // Plan-view vertices lying on another part's edge split that edge, so neighbouring parts share
   // whole edges (a low roof's eave edge against the vertices of the taller part's step wall). "On"

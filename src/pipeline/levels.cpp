@@ -102,7 +102,10 @@ void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams
       }
       BuildingModel made_blocks = blocks;
       const WrittenValidity v = validate_as_written(blocks, params.output_grid, params.validity);
-      if (!v.remaining.empty()) throw ReconstructionError("not valid as written: " + v.remaining.front().text());
+      if (!v.remaining.empty()) {
+        add_note(r, std::string("LoD") + lod + " not made: not valid as written: " + v.remaining.front().text());
+        return;
+      }
       derived.emplace(std::move(made_blocks), blocks);
       made.push_back({lod, std::move(blocks)});
       real.push_back(lod);

@@ -68,7 +68,7 @@ BuildingPlanes building_planes(const std::vector<Point3>& points, const Reconstr
   report.planes = planes.roofs.size();
   if (trace) trace->planes = segments;
   if (planes.roofs.empty())
-    throw ReconstructionError("planes: no roof plane among " + std::to_string(points.size()) + " points (min_points " +
+    throw ReconstructionError(ReconstructionStage::planes, "no roof plane among " + std::to_string(points.size()) + " points (min_points " +
                               std::to_string(params.planes.min_points) + ")");
   planes.segments = std::move(segments);
   return planes;
@@ -143,7 +143,7 @@ Lod2Hypothesis part_hypotheses(const BuildingInput& input, const std::vector<Pol
           lines, &part, footprint_walls_only ? std::vector<std::pair<Point2, Point2>>{} : planes.detected_walls,
           wall_params);
       report.walls += walls.size();
-      check_time(deadline, "walls");
+      check_time(deadline, ReconstructionStage::walls);
       if (trace) trace->walls.emplace_back(suffix, walls);
 
       // An inferred part's roofs are the planes it holds a share of: a plane of points elsewhere
@@ -151,14 +151,14 @@ Lod2Hypothesis part_hypotheses(const BuildingInput& input, const std::vector<Pol
       // of its points are.
       const std::vector<PlanarSegment> part_roofs = input.footprint_given ? roofs : roofs_of_part(roofs, part.front(), points);
       if (part_roofs.empty())
-        throw ReconstructionError("planes: none of the " + std::to_string(roofs.size()) +
+        throw ReconstructionError(ReconstructionStage::planes, "none of the " + std::to_string(roofs.size()) +
                                   " roof planes lies inside the inferred outline");
       stage.emplace(Stage::hypothesis);
       CandidateFaces candidates =
           generate_candidates(points, part_roofs, walls, part, input.ground_z, input.ground_measured, params.hypothesis,
                               params.selection);
       report.candidate_faces += candidates.faces.size();
-      check_time(deadline, "hypothesis");
+      check_time(deadline, ReconstructionStage::hypothesis);
       if (trace) trace->candidates.emplace_back(suffix, candidates);
       hypothesis.parts.push_back(std::move(candidates));
       hypothesis.part_numbers.push_back(k);
@@ -173,9 +173,9 @@ Lod2Hypothesis part_hypotheses(const BuildingInput& input, const std::vector<Pol
 
 }  // namespace
 
-void check_time(Clock::time_point deadline, const char* stage) {
+void check_time(Clock::time_point deadline, ReconstructionStage stage) {
   if (deadline != Clock::time_point::max() && Clock::now() > deadline)
-    throw ReconstructionError(std::string(stage) + ": the building's time limit is used up (see --time-limit)");
+    throw ReconstructionError(stage, "the building's time limit is used up (see --time-limit)");
 }
 
 Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionParams& params,
@@ -186,7 +186,7 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
   std::optional<StageTimer> stage(Stage::planes);
   if (!raster.planes) raster.planes = std::make_shared<const PlaneDetector>(points, params.planes.k_neighbors);
   BuildingPlanes planes = building_planes(points, params, *raster.planes, trace, report);
-  check_time(deadline, "planes");
+  check_time(deadline, ReconstructionStage::planes);
 
   stage.emplace(Stage::heightmap);
   if (!raster.heightmap) raster.heightmap = std::make_shared<const Heightmap>(rasterise_tin(points, params.heightmap));
@@ -245,10 +245,11 @@ BuildingModel lod2_model(const BuildingInput& input, const Lod2Hypothesis& hypot
       else
         for (const std::string& failure : selection.backend_failures) add_note(report, failure);
       if (selection.status != SelectionStatus::optimal && selection.status != SelectionStatus::feasible)
-        throw ReconstructionError(std::string(selection.status == SelectionStatus::infeasible
-                                                  ? "selection: infeasible"
-                                                  : "selection: no solution within the limits") +
-                                  " (" + std::to_string(selection.variables) + " variables): " + selection.message);
+        throw ReconstructionError(ReconstructionStage::selection,
+                                  std::string(selection.status == SelectionStatus::infeasible
+                                                  ? "infeasible"
+                                                  : "no solution within the limits") +
+                                      " (" + std::to_string(selection.variables) + " variables): " + selection.message);
 
       if (trace)
         trace->selections.push_back(
@@ -280,7 +281,7 @@ BuildingModel lod1_rung(const BuildingInput& input, const ReconstructionParams& 
   BuildingModel model = make_lod1_block(input, params.lod1);
   const MeshCheck check = check_mesh(model.mesh);
   if (!check.valid())
-    throw ReconstructionError("lod1: building " + input.id + ": block is not a valid solid (" +
+    throw ReconstructionError(ReconstructionStage::lod1, "building " + input.id + ": block is not a valid solid (" +
                               std::to_string(check.boundary_edges) + " boundary edges, " +
                               std::to_string(check.non_manifold_edges) + " non-manifold edges, volume " +
                               std::to_string(check.signed_volume) + ")");
@@ -303,7 +304,7 @@ BuildingModel checked_model(const ReconstructionParams& params, ModelLevel level
     for (std::size_t k = 0; k < validity.remaining.size() && k < 3; ++k)
       problems += (k ? "; " : "") + validity.remaining[k].text();
     if (validity.remaining.size() > 3) problems += "; ...";
-    throw ReconstructionError("model: not a valid solid as written: " + problems);
+    throw ReconstructionError(ReconstructionStage::model, "not a valid solid as written: " + problems);
   }
   r.repairs = validity.repairs;
   return model;

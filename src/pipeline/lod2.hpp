@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "city3d/debug_output.hpp"
+#include "city3d/error.hpp"
 #include "city3d/pipeline.hpp"
 
 namespace city3d::detail {
@@ -22,7 +23,7 @@ constexpr std::size_t kMinPointsForSmallRoof = 10;
 
 /// Throws ReconstructionError when the rung's time is used up after `stage`, so the ladder moves on
 /// (only with the opt-in --time-limit; without it the deadline is time_point::max()).
-void check_time(Clock::time_point deadline, const char* stage);
+void check_time(Clock::time_point deadline, ReconstructionStage stage);
 
 /// Whether two points are the same, exactly.
 inline bool same_point(const Point3& p, const Point3& q) { return p.x == q.x && p.y == q.y && p.z == q.z; }

@@ -111,7 +111,7 @@ std::vector<Polygon2> building_outline(const BuildingInput& input, const Heightm
     outline.push_back(regularise_outline(input.footprint.polygons.front(), params.regularise.angle_threshold));
     add_note(report, "outline: convex hull of the points");
   }
-  if (outline.empty()) throw ReconstructionError("walls: no outline could be inferred from the points");
+  if (outline.empty()) throw ReconstructionError(ReconstructionStage::walls, "no outline could be inferred from the points");
   if (outline.size() > 1) outline = separate_parts(outline, inferred, roofs, points);
   if (outline.size() > 1) add_note(report, "outline: " + std::to_string(outline.size()) + " parts");
   return outline;

@@ -96,6 +96,16 @@ bool nothing_to_reconstruct(const BuildingInput& input, BuildingReport& r) {
   return true;
 }
 
+// The report's stage of an error that ended a rung: the stage of a ReconstructionError. The stages do no
+// file IO, so an IoError is the debug trace's (--debug), and a ConfigError is a parameter the building's
+// stages cannot work with.
+const char* failed_stage(const Error& e) {
+  if (const auto* failure = dynamic_cast<const ReconstructionError*>(&e)) return stage_name(failure->stage());
+  if (dynamic_cast<const IoError*>(&e)) return "debug";
+  if (dynamic_cast<const ConfigError*>(&e)) return "parameters";
+  return "reconstruction";
+}
+
 // A rung of the fallback ladder.
 struct Rung {
   ModelLevel level;
@@ -163,8 +173,7 @@ std::optional<BuildingModel> walk_ladder(const BuildingInput& input, const Recon
     } catch (const Error& e) {
       if (r.reason.empty()) {
         r.reason = e.what();
-        const std::string what = e.what();
-        r.stage = what.substr(0, what.find(':'));
+        r.stage = failed_stage(e);
       }
       try {
         if (trace) write_debug_trace(*trace);  // what the stages before the failure left

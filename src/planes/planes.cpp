@@ -323,12 +323,12 @@ PlaneDetector::PlaneDetector(const std::vector<Point3>& local_points, int k_neig
   only_k.k_neighbors = k_neighbors;
   only_k.validate();
   if (local_points.size() > std::numeric_limits<std::uint32_t>::max())
-    throw ReconstructionError("planes: " + std::to_string(local_points.size()) +
+    throw ReconstructionError(ReconstructionStage::planes, "" + std::to_string(local_points.size()) +
                               " points, at most 2^32 - 1 supported");
   for (std::size_t i = 0; i < local_points.size(); ++i) {
     const Point3& p = local_points[i];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-      throw ReconstructionError("planes: point " + std::to_string(i) + " has a non-finite coordinate");
+      throw ReconstructionError(ReconstructionStage::planes, "point " + std::to_string(i) + " has a non-finite coordinate");
   }
   auto n = std::make_shared<detail::Neighbourhoods>();
   n->k_neighbors = k_neighbors;

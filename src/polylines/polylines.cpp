@@ -678,7 +678,7 @@ std::vector<Polyline2> extract_polylines(const std::vector<Point2>& edge_pixels,
   std::vector<double> mass;
   for (const Point2& p : sorted) {
     if (!std::isfinite(p.x) || !std::isfinite(p.y))
-      throw ReconstructionError("polylines: edge pixel with a non-finite coordinate");
+      throw ReconstructionError(ReconstructionStage::polylines, "edge pixel with a non-finite coordinate");
     if (!pixels.empty() && pixels.back().x == p.x && pixels.back().y == p.y) {
       mass.back() += 1.0;
     } else {

@@ -162,10 +162,10 @@ void check_problem(const SelectionProblem& problem) {
   check_list(problem.forced_on, "forced_on");
   check_list(problem.forced_off, "forced_off");
   if (errors.empty()) return;
-  std::string message = "selection: invalid problem (" + std::to_string(n) + " faces):";
+  std::string message = "invalid problem (" + std::to_string(n) + " faces):";
   for (const auto& e : errors) message += " " + e + ";";
   message.pop_back();
-  throw ReconstructionError(message);
+  throw ReconstructionError(ReconstructionStage::selection, message);
 }
 
 /// The objective coefficient of x_i (without the constant lambda_d).
@@ -646,7 +646,7 @@ double selection_energy(const SelectionProblem& problem, const std::vector<bool>
                         const SelectionParams& params) {
   check_problem(problem);
   if (selected.size() != problem.face_count)
-    throw ReconstructionError("selection: assignment has " + std::to_string(selected.size()) +
+    throw ReconstructionError(ReconstructionStage::selection, "assignment has " + std::to_string(selected.size()) +
                               " entries for " + std::to_string(problem.face_count) + " faces");
   double support = 0.0, roof = 0.0, unsupported = 0.0;
   for (std::size_t i = 0; i < problem.face_count; ++i) {

@@ -88,12 +88,12 @@ double children_cpu_seconds() { return children_cpu; }
 ChildResult run_in_child(const std::function<std::string()>& work, double time_limit) {
   int result_pipe[2], stderr_pipe[2];
   if (::pipe2(result_pipe, O_CLOEXEC) != 0)
-    throw ReconstructionError(std::string("selection: cannot make a pipe for the solver process: ") + std::strerror(errno));
+    throw ReconstructionError(ReconstructionStage::selection, std::string("cannot make a pipe for the solver process: ") + std::strerror(errno));
   if (::pipe2(stderr_pipe, O_CLOEXEC) != 0) {
     const int error = errno;
     ::close(result_pipe[0]);
     ::close(result_pipe[1]);
-    throw ReconstructionError(std::string("selection: cannot make a pipe for the solver process: ") + std::strerror(error));
+    throw ReconstructionError(ReconstructionStage::selection, std::string("cannot make a pipe for the solver process: ") + std::strerror(error));
   }
   const auto start = std::chrono::steady_clock::now();
   const pid_t pid = ::fork();
@@ -104,7 +104,7 @@ ChildResult run_in_child(const std::function<std::string()>& work, double time_l
   if (pid < 0) {
     ::close(result_pipe[0]);
     ::close(stderr_pipe[0]);
-    throw ReconstructionError(std::string("selection: cannot start the solver process: ") + std::strerror(fork_error));
+    throw ReconstructionError(ReconstructionStage::selection, std::string("cannot start the solver process: ") + std::strerror(fork_error));
   }
 
   ChildResult result;

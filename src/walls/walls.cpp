@@ -275,7 +275,7 @@ std::vector<VerticalPlane> infer_walls(const RegularisationResult& lines,
   if (mode == WallMode::footprint && !has_footprint)
     throw ConfigError("walls: wall mode 'footprint' needs a footprint, and this building has none");
   if (mode == WallMode::detected && detected_wall_lines.empty())
-    throw ReconstructionError("walls: wall mode 'detected' but no wall lines were detected");
+    throw ReconstructionError(ReconstructionStage::walls, "wall mode 'detected' but no wall lines were detected");
 
   std::vector<VerticalPlane> walls;
   switch (mode) {
