@@ -16,6 +16,7 @@
 #include "city3d/error.hpp"
 #include "city3d/options.hpp"
 #include "cli/option_table.hpp"
+#include "core/json_text.hpp"
 
 namespace city3d {
 namespace detail {
@@ -162,28 +163,8 @@ std::vector<ConfigEntry> read_table(const toml::table& table, const std::string&
   return entries;
 }
 
-/// A TOML basic string: quotes, backslashes and control characters escaped.
-std::string toml_quoted(const std::string& s) {
-  std::string out = "\"";
-  for (const char c : s) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      case '\r': out += "\\r"; break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
-          char buf[8];
-          std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned char>(c));
-          out += buf;
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out + "\"";
-}
+/// A TOML basic string: quotes, backslashes and control characters escaped as JSON escapes them, and DEL.
+std::string toml_quoted(const std::string& s) { return json_string(s, JsonEscapes::toml); }
 
 std::string toml_value(const OptionSpec& spec, const std::string& text) {
   switch (value_type(spec)) {

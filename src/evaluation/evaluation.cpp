@@ -20,6 +20,8 @@
 #include <vector>
 
 #include "city3d/error.hpp"
+#include "core/mesh_faces.hpp"
+#include "core/vec.hpp"
 
 namespace city3d {
 namespace {
@@ -27,32 +29,13 @@ namespace {
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Triangle = std::array<std::uint32_t, 3>;
 
-struct Vec {
-  double x, y, z;
-};
-Vec sub(const Point3& a, const Point3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-Vec cross(const Vec& a, const Vec& b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-double dot(const Vec& a, const Vec& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+using detail::cross;
+using detail::dot;
+using detail::sub;
+using detail::Vec;
 
 bool indices_valid(const PolygonMesh& mesh, const std::vector<std::uint32_t>& face) {
-  return face.size() >= 3 &&
-         std::all_of(face.begin(), face.end(), [&](std::uint32_t v) { return v < mesh.vertices.size(); });
-}
-
-/// Newell's normal of a polygon: twice its vector area, robust for non-convex and slightly
-/// non-planar polygons.
-Vec newell_normal(const PolygonMesh& mesh, const std::vector<std::uint32_t>& face) {
-  Vec n{0, 0, 0};
-  for (std::size_t i = 0; i < face.size(); ++i) {
-    const Point3& a = mesh.vertices[face[i]];
-    const Point3& b = mesh.vertices[face[(i + 1) % face.size()]];
-    n.x += (a.y - b.y) * (a.z + b.z);
-    n.y += (a.z - b.z) * (a.x + b.x);
-    n.z += (a.x - b.x) * (a.y + b.y);
-  }
-  return n;
+  return face.size() >= 3 && detail::indices_in_range(face, mesh.vertices);
 }
 
 /// Ear clipping of one face in 2D: drop the dominant axis of the Newell normal, keep the polygon
@@ -66,7 +49,7 @@ void triangulate_face(const PolygonMesh& mesh, const std::vector<std::uint32_t>&
     out.push_back({face[0], face[1], face[2]});
     return;
   }
-  const Vec normal = newell_normal(mesh, face);
+  const Vec normal = detail::newell_normal(mesh.vertices, face);
   const double ax = std::fabs(normal.x), ay = std::fabs(normal.y), az = std::fabs(normal.z);
   // 2D coordinates (u, v) such that the polygon is counter-clockwise when the normal points at us.
   std::vector<double> u(n), v(n);
@@ -232,24 +215,8 @@ MeshValidity check_validity(const PolygonMesh& mesh, double planarity_tolerance)
     for (std::size_t i = 0; i < face.size(); ++i)
       corners[face[i]].emplace_back(face[(i + face.size() - 1) % face.size()], face[(i + 1) % face.size()]);
   std::size_t pinched = 0;
-  for (const auto& around : corners) {
-    if (around.size() < 2) continue;
-    std::vector<std::size_t> parent(around.size());
-    std::iota(parent.begin(), parent.end(), 0);
-    const auto find = [&parent](std::size_t i) {
-      while (parent[i] != i) i = parent[i] = parent[parent[i]];
-      return i;
-    };
-    std::unordered_map<std::uint32_t, std::size_t> first_with_neighbour;
-    for (std::size_t c = 0; c < around.size(); ++c)
-      for (std::uint32_t w : {around[c].first, around[c].second}) {
-        const auto [it, inserted] = first_with_neighbour.emplace(w, c);
-        if (!inserted) parent[find(c)] = find(it->second);
-      }
-    std::size_t fans = 0;
-    for (std::size_t c = 0; c < around.size(); ++c) fans += find(c) == c;
-    pinched += fans > 1;
-  }
+  for (const auto& around : corners)
+    if (around.size() >= 2) pinched += detail::fans_around(around) > 1;
   result.closed = boundary == 0;
   result.manifold = overused == 0 && pinched == 0;
   if (!result.closed)
@@ -283,7 +250,7 @@ MeshValidity check_validity(const PolygonMesh& mesh, double planarity_tolerance)
   std::size_t degenerate = 0;
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
     const auto& face = mesh.faces[f];
-    const Vec normal = newell_normal(mesh, face);
+    const Vec normal = detail::newell_normal(mesh.vertices, face);
     const double length = std::sqrt(dot(normal, normal));
     if (!(length > 0.0)) {
       ++degenerate;

@@ -25,6 +25,8 @@
 
 #include "city3d/error.hpp"
 #include "city3d/evaluation.hpp"
+#include "core/mesh_faces.hpp"
+#include "core/vec.hpp"
 #include "evaluation/validity_shared.hpp"
 
 namespace city3d {
@@ -107,15 +109,7 @@ Frame fit_plane(const std::vector<Point3>& vertices, const SolidPolygon& polygon
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(cov);
   const Eigen::Vector3d n = solver.eigenvectors().col(0);  // smallest eigenvalue
   f.normal = {n.x(), n.y(), n.z()};
-  Vec newell{0, 0, 0};
-  const Ring& outer = polygon.front();
-  for (std::size_t k = 0; k < outer.size(); ++k) {
-    const Point3& a = vertices[outer[k]];
-    const Point3& b = vertices[outer[(k + 1) % outer.size()]];
-    newell.x += (a.y - b.y) * (a.z + b.z);
-    newell.y += (a.z - b.z) * (a.x + b.x);
-    newell.z += (a.x - b.x) * (a.y + b.y);
-  }
+  const Vec newell = detail::newell_normal(vertices, polygon.front());
   if (dot(newell, f.normal) < 0) f.normal = {-f.normal.x, -f.normal.y, -f.normal.z};
   // u, v: a right-handed basis with the normal, so the exterior ring comes out counter-clockwise.
   const Vec helper = std::fabs(f.normal.z) < 0.9 ? Vec{0, 0, 1} : Vec{1, 0, 0};
@@ -386,23 +380,7 @@ ShellResult check_shell(const std::vector<Point3>& v, const std::vector<SolidPol
         for (std::size_t k = 0; k < r.size(); ++k)
           corners[r[k]].push_back({r[(k + r.size() - 1) % r.size()], r[(k + 1) % r.size()]});
     std::size_t pinched = 0;
-    for (const auto& [vertex, around] : corners) {
-      std::vector<std::size_t> up(around.size());
-      std::iota(up.begin(), up.end(), std::size_t{0});
-      const auto root = [&up](std::size_t i) {
-        while (up[i] != i) i = up[i] = up[up[i]];
-        return i;
-      };
-      std::map<std::uint32_t, std::size_t> with;
-      for (std::size_t c = 0; c < around.size(); ++c)
-        for (std::uint32_t w : {around[c].first, around[c].second}) {
-          const auto [it, fresh] = with.emplace(w, c);
-          if (!fresh) up[root(c)] = root(it->second);
-        }
-      std::size_t fans = 0;
-      for (std::size_t c = 0; c < around.size(); ++c) fans += root(c) == c;
-      pinched += fans > 1;
-    }
+    for (const auto& [vertex, around] : corners) pinched += detail::fans_around(around) > 1;
     if (pinched) report(303, -1, std::to_string(pinched) + " vertices whose polygons form more than one umbrella");
   }
   if (same_direction) report(307, first_flipped_face, std::to_string(same_direction) + " edges used twice in the same direction");
@@ -684,37 +662,22 @@ std::vector<ValidityError> validate_solid(const SolidGeometry& solid, const Vali
 }
 
 std::vector<PolygonMesh> mesh_parts(const PolygonMesh& mesh) {
-  std::vector<std::size_t> parent(mesh.faces.size());
-  std::iota(parent.begin(), parent.end(), std::size_t{0});
-  const auto find = [&parent](std::size_t f) {
-    while (parent[f] != f) f = parent[f] = parent[parent[f]];
-    return f;
-  };
-  std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> first_face_of_edge;
-  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
-    const auto& face = mesh.faces[f];
-    for (std::size_t k = 0; k < face.size(); ++k) {
-      const auto [it, fresh] = first_face_of_edge.emplace(std::minmax(face[k], face[(k + 1) % face.size()]), f);
-      if (!fresh) parent[find(f)] = find(it->second);
-    }
-  }
+  const std::vector<std::size_t> part_of = detail::edge_connected_parts(mesh.faces);
   std::vector<PolygonMesh> parts;
-  std::map<std::size_t, std::size_t> part_of_root;
   std::vector<std::map<std::uint32_t, std::uint32_t>> local;
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
-    const auto [it, fresh] = part_of_root.emplace(find(f), parts.size());
-    if (fresh) {
+    if (part_of[f] == parts.size()) {  // the part's first face
       parts.emplace_back();
       local.emplace_back();
     }
-    PolygonMesh& part = parts[it->second];
+    PolygonMesh& part = parts[part_of[f]];
     std::vector<std::uint32_t> face;
     for (std::uint32_t i : mesh.faces[f]) {
       if (i >= mesh.vertices.size()) {
         face.push_back(i);  // left for the validator to report
         continue;
       }
-      const auto [vit, vfresh] = local[it->second].emplace(i, static_cast<std::uint32_t>(part.vertices.size()));
+      const auto [vit, vfresh] = local[part_of[f]].emplace(i, static_cast<std::uint32_t>(part.vertices.size()));
       if (vfresh) part.vertices.push_back(mesh.vertices[i]);
       face.push_back(vit->second);
     }

@@ -17,6 +17,8 @@
 
 #include "city3d/error.hpp"
 #include "city3d/mesh_check.hpp"
+#include "core/mesh_faces.hpp"
+#include "core/vec.hpp"
 
 namespace city3d {
 
@@ -37,34 +39,19 @@ using EdgeKey = std::pair<std::uint32_t, std::uint32_t>;
 
 EdgeKey undirected(std::uint32_t a, std::uint32_t b) { return a < b ? EdgeKey{a, b} : EdgeKey{b, a}; }
 
-struct Vec3 {
-  double x, y, z;
-};
-Vec3 sub(const Point3& a, const Point3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-double dot(const Vec3& a, const Vec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
-
-Vec3 newell(const std::vector<Point3>& vs, const Loop& loop) {
-  Vec3 n{0, 0, 0};
-  for (std::size_t i = 0; i < loop.size(); ++i) {
-    const Point3& p = vs[loop[i]];
-    const Point3& q = vs[loop[(i + 1) % loop.size()]];
-    n.x += (p.y - q.y) * (p.z + q.z);
-    n.y += (p.z - q.z) * (p.x + q.x);
-    n.z += (p.x - q.x) * (p.y + q.y);
-  }
-  return n;
-}
+using detail::cross;
+using detail::dot;
+using detail::newell_normal;
+using detail::norm;
+using detail::sub;
+using detail::Vec;
 
 // Largest distance of a loop's vertices from the plane through their mean with Newell's normal.
 double planarity_error(const std::vector<Point3>& vs, const Loop& loop) {
-  const Vec3 n = newell(vs, loop);
+  const Vec n = newell_normal(vs, loop);
   const double length = norm(n);
   if (!(length > 0.0)) return std::numeric_limits<double>::infinity();
-  Vec3 mean{0, 0, 0};
+  Vec mean{0, 0, 0};
   for (auto v : loop) mean = {mean.x + vs[v].x, mean.y + vs[v].y, mean.z + vs[v].z};
   const double k = 1.0 / static_cast<double>(loop.size());
   const Point3 c{mean.x * k, mean.y * k, mean.z * k};
@@ -83,7 +70,7 @@ double signed_volume(const std::vector<Point3>& vs, const std::vector<Loop>& loo
   double volume = 0.0;
   for (const Loop& loop : loops) {
     for (std::size_t i = 1; i + 1 < loop.size(); ++i) {
-      const Vec3 a = sub(vs[loop[0]], ref), b = sub(vs[loop[i]], ref), c = sub(vs[loop[i + 1]], ref);
+      const Vec a = sub(vs[loop[0]], ref), b = sub(vs[loop[i]], ref), c = sub(vs[loop[i + 1]], ref);
       volume += dot(a, cross(b, c)) / 6.0;
     }
   }
@@ -93,7 +80,7 @@ double signed_volume(const std::vector<Point3>& vs, const std::vector<Loop>& loo
 // Chains the directed boundary edges of a merged region into loops. At a vertex with several
 // outgoing edges the leftmost turn (seen along `normal`) is taken, which keeps regions that only
 // touch at a vertex in separate loops.
-std::vector<Loop> chain_loops(const std::vector<Point3>& vs, std::vector<EdgeKey> directed, const Vec3& normal) {
+std::vector<Loop> chain_loops(const std::vector<Point3>& vs, std::vector<EdgeKey> directed, const Vec& normal) {
   std::sort(directed.begin(), directed.end());
   std::vector<bool> used(directed.size(), false);
   auto outgoing = [&](std::uint32_t v) {
@@ -119,10 +106,10 @@ std::vector<Loop> chain_loops(const std::vector<Point3>& vs, std::vector<EdgeKey
       if (out.empty()) return {};  // open chain: the caller keeps the original faces
       std::size_t best = out[0];
       if (out.size() > 1) {
-        const Vec3 in = sub(vs[v], vs[directed[cur].first]);
+        const Vec in = sub(vs[v], vs[directed[cur].first]);
         double best_angle = -std::numeric_limits<double>::infinity();
         for (std::size_t i : out) {
-          const Vec3 o = sub(vs[directed[i].second], vs[v]);
+          const Vec o = sub(vs[directed[i].second], vs[v]);
           const double angle = std::atan2(dot(cross(in, o), normal), dot(in, o));
           if (angle > best_angle) {
             best_angle = angle;
@@ -243,10 +230,10 @@ PolygonMesh assemble_model(const CandidateFaces& candidates, const std::vector<b
         continue;
       }
       std::map<EdgeKey, int> count;  // directed edges; an interior edge appears once each way
-      Vec3 normal{0, 0, 0};
+      Vec normal{0, 0, 0};
       for (std::size_t f : group) {
         const Loop& l = model[f].loop;
-        const Vec3 n = newell(vs, l);
+        const Vec n = newell_normal(vs, l);
         normal = {normal.x + n.x, normal.y + n.y, normal.z + n.z};
         for (std::size_t i = 0; i < l.size(); ++i) ++count[{l[i], l[(i + 1) % l.size()]}];
       }
@@ -300,7 +287,7 @@ PolygonMesh assemble_model(const CandidateFaces& candidates, const std::vector<b
       const Point3& a = vs[list[0]];
       const Point3& b = vs[list[1]];
       const Point3& p = vs[v];
-      const Vec3 ab = sub(b, a), ap = sub(p, a);
+      const Vec ab = sub(b, a), ap = sub(p, a);
       const double len = norm(ab);
       if (len <= 0.0) return false;
       const double t = dot(ap, ab) / (len * len);

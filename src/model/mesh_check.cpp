@@ -9,17 +9,17 @@
 #include <tuple>
 #include <vector>
 
+#include "core/mesh_faces.hpp"
+#include "core/vec.hpp"
+
 namespace city3d {
 namespace {
 
-struct Vec {
-  double x, y, z;
-};
-Vec sub(const Point3& a, const Point3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-Vec cross(const Vec& a, const Vec& b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-double dot(const Vec& a, const Vec& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+using detail::cross;
+using detail::dot;
+using detail::indices_in_range;
+using detail::sub;
+using detail::Vec;
 
 std::uint64_t key(std::uint32_t a, std::uint32_t b) { return (std::uint64_t{a} << 32) | b; }
 
@@ -52,9 +52,7 @@ MeshCheck check_mesh(const PolygonMesh& mesh) {
   std::vector<std::pair<std::uint64_t, std::size_t>> directed;
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
     const auto& face = mesh.faces[f];
-    const bool in_range =
-        std::all_of(face.begin(), face.end(), [&](std::uint32_t v) { return v < vertices.size(); });
-    if (!in_range) {
+    if (!indices_in_range(face, vertices)) {
       ++check.degenerate_faces;
       continue;
     }
@@ -62,15 +60,8 @@ MeshCheck check_mesh(const PolygonMesh& mesh) {
     std::sort(sorted.begin(), sorted.end());
     const bool repeated = std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end();
 
-    Vec normal{0.0, 0.0, 0.0};  // Newell's normal: twice the vector area
-    for (std::size_t k = 0; k < face.size(); ++k) {
-      const Point3& a = vertices[face[k]];
-      const Point3& b = vertices[face[(k + 1) % face.size()]];
-      normal.x += (a.y - b.y) * (a.z + b.z);
-      normal.y += (a.z - b.z) * (a.x + b.x);
-      normal.z += (a.x - b.x) * (a.y + b.y);
-      directed.push_back({key(face[k], face[(k + 1) % face.size()]), f});
-    }
+    const Vec normal = detail::newell_normal(vertices, face);  // twice the vector area
+    for (std::size_t k = 0; k < face.size(); ++k) directed.push_back({key(face[k], face[(k + 1) % face.size()]), f});
     const double area = 0.5 * std::sqrt(dot(normal, normal));
     check.area += area;
     if (face.size() < 3 || repeated || area <= min_area) ++check.degenerate_faces;
@@ -125,9 +116,7 @@ MeshCheck check_mesh(const PolygonMesh& mesh) {
   };
   std::vector<Corner> corners;
   for (const auto& face : mesh.faces) {
-    if (face.size() < 3 ||
-        !std::all_of(face.begin(), face.end(), [&](std::uint32_t v) { return v < vertices.size(); }))
-      continue;
+    if (face.size() < 3 || !indices_in_range(face, vertices)) continue;
     for (std::size_t k = 0; k < face.size(); ++k)
       corners.push_back({face[k], face[(k + face.size() - 1) % face.size()], face[(k + 1) % face.size()]});
   }

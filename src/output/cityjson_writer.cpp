@@ -16,32 +16,15 @@
 
 #include "city3d/error.hpp"
 #include "city3d/model_io.hpp"
+#include "core/json_text.hpp"
+#include "core/mesh_faces.hpp"
 #include "files/atomic_file.hpp"
 
 namespace city3d {
 namespace {
 
-void append_json_string(std::string& out, const std::string& s) {
-  out += '"';
-  for (unsigned char c : s) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\r': out += "\\r"; break;
-      case '\t': out += "\\t"; break;
-      default:
-        if (c < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof buf, "\\u%04x", c);
-          out += buf;
-        } else {
-          out += static_cast<char>(c);
-        }
-    }
-  }
-  out += '"';
-}
+using detail::append_json_string;
+using detail::JsonEscapes;
 
 void append_number(std::string& out, double v) {
   if (!std::isfinite(v)) {
@@ -59,7 +42,7 @@ void append_value(std::string& out, const AttributeValue& v) {
   else if (const std::int64_t* i = std::get_if<std::int64_t>(&v)) out += std::to_string(*i);
   else if (const double* d = std::get_if<double>(&v)) append_number(out, *d);
   else if (const AttributeList* l = std::get_if<AttributeList>(&v)) out += l->json;
-  else append_json_string(out, std::get<std::string>(v));
+  else append_json_string(out, std::get<std::string>(v), JsonEscapes::short_controls);
 }
 
 // "EPSG:7415" -> the OGC URL CityJSON 2.0 expects; "EPSG:28992+5709" (a compound without a code of
@@ -82,41 +65,18 @@ int scale_decimals(double scale) {
 }
 
 void append_world(std::string& out, double quantised, double scale, double translate) {
-  char buf[48];
-  std::snprintf(buf, sizeof buf, "%.*f", scale_decimals(scale), translate + quantised * scale);
-  std::string s = buf;
-  if (s.find('.') != std::string::npos) {
-    while (s.back() == '0') s.pop_back();
-    if (s.back() == '.') s.pop_back();
-  }
-  if (s == "-0") s = "0";
-  out += s;
+  detail::append_trimmed_number(out, translate + quantised * scale, scale_decimals(scale));
 }
 
 using Quantised = std::tuple<std::int64_t, std::int64_t, std::int64_t>;
 
 // The faces of a model grouped into edge-connected parts, parts in order of their first face.
 std::vector<std::vector<std::size_t>> model_parts(const BuildingModel& m) {
-  std::vector<std::size_t> parent(m.mesh.faces.size());
-  for (std::size_t f = 0; f < parent.size(); ++f) parent[f] = f;
-  const auto find = [&parent](std::size_t f) {
-    while (parent[f] != f) f = parent[f] = parent[parent[f]];
-    return f;
-  };
-  std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> first_face_of_edge;
-  for (std::size_t f = 0; f < m.mesh.faces.size(); ++f) {
-    const auto& face = m.mesh.faces[f];
-    for (std::size_t k = 0; k < face.size(); ++k) {
-      const auto [it, fresh] = first_face_of_edge.emplace(std::minmax(face[k], face[(k + 1) % face.size()]), f);
-      if (!fresh) parent[find(f)] = find(it->second);
-    }
-  }
+  const std::vector<std::size_t> part_of = detail::edge_connected_parts(m.mesh.faces);
   std::vector<std::vector<std::size_t>> parts;
-  std::map<std::size_t, std::size_t> part_of_root;
-  for (std::size_t f = 0; f < m.mesh.faces.size(); ++f) {
-    const auto [it, fresh] = part_of_root.emplace(find(f), parts.size());
-    if (fresh) parts.emplace_back();
-    parts[it->second].push_back(f);
+  for (std::size_t f = 0; f < part_of.size(); ++f) {
+    if (part_of[f] == parts.size()) parts.emplace_back();  // the part's first face
+    parts[part_of[f]].push_back(f);
   }
   return parts;
 }
@@ -134,7 +94,7 @@ void append_solid(std::string& out, const CityGeometry& g, const std::vector<std
   for (int t = 0; t < 3; ++t)
     if (used[t]) surface_index[t] = n_surfaces++;
   out += "{\"type\":\"Solid\",\"lod\":";
-  append_json_string(out, g.lod);
+  append_json_string(out, g.lod, JsonEscapes::short_controls);
   out += ",\"boundaries\":[[";
   for (std::size_t i = 0; i < faces.size(); ++i) {
     if (i) out += ',';
@@ -202,11 +162,11 @@ void append_city_object(std::string& out, const CityObject& object, const Point3
       parts.emplace_back(object.id + "-" + g.lod + "-" + std::to_string(k + 1), std::move(solid));
     }
   }
-  append_json_string(out, object.id);
+  append_json_string(out, object.id, JsonEscapes::short_controls);
   out += ":{\"type\":\"Building\",\"attributes\":{";
   for (std::size_t a = 0; a < object.attributes.size(); ++a) {
     if (a) out += ',';
-    append_json_string(out, object.attributes[a].first);
+    append_json_string(out, object.attributes[a].first, JsonEscapes::short_controls);
     out += ':';
     append_value(out, object.attributes[a].second);
   }
@@ -215,16 +175,16 @@ void append_city_object(std::string& out, const CityObject& object, const Point3
     out += ",\"children\":[";
     for (std::size_t k = 0; k < parts.size(); ++k) {
       if (k) out += ',';
-      append_json_string(out, parts[k].first);
+      append_json_string(out, parts[k].first, JsonEscapes::short_controls);
     }
     out += ']';
   }
   out += '}';
   for (const auto& [id, solid] : parts) {
     out += ',';
-    append_json_string(out, id);
+    append_json_string(out, id, JsonEscapes::short_controls);
     out += ":{\"type\":\"BuildingPart\",\"parents\":[";
-    append_json_string(out, object.id);
+    append_json_string(out, object.id, JsonEscapes::short_controls);
     out += "],\"geometry\":[" + solid + "]}";
   }
 }
@@ -264,13 +224,13 @@ void append_header_fields(std::string& out, const CityJsonOptions& options, cons
   bool any = false;
   if (const std::string url = crs_url(options.crs); !url.empty()) {
     out += "\"referenceSystem\":";
-    append_json_string(out, url);
+    append_json_string(out, url, JsonEscapes::short_controls);
     any = true;
   }
   if (!options.reference_date.empty()) {
     if (any) out += ',';
     out += "\"referenceDate\":";
-    append_json_string(out, options.reference_date);
+    append_json_string(out, options.reference_date, JsonEscapes::short_controls);
     any = true;
   }
   if (extent && !extent->empty()) {
@@ -314,14 +274,7 @@ std::vector<SurfaceType> surface_types(const BuildingModel& model) {
   types.reserve(model.mesh.faces.size());
   for (const auto& face : model.mesh.faces) {
     // Newell's normal: robust for any planar (or nearly planar) polygon.
-    double nx = 0, ny = 0, nz = 0;
-    for (std::size_t i = 0; i < face.size(); ++i) {
-      const Point3& a = model.mesh.vertices[face[i]];
-      const Point3& b = model.mesh.vertices[face[(i + 1) % face.size()]];
-      nx += (a.y - b.y) * (a.z + b.z);
-      ny += (a.z - b.z) * (a.x + b.x);
-      nz += (a.x - b.x) * (a.y + b.y);
-    }
+    const auto [nx, ny, nz] = detail::newell_normal(model.mesh.vertices, face);
     const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
     const double cz = len > 0 ? nz / len : 0.0;
     // |cos| below 0.1 (more than ~84 degrees from horizontal) counts as a wall.
@@ -396,7 +349,7 @@ void CityJsonSeqWriter::close() {
 std::string cityjson_feature(const CityObject& object, const CityJsonOptions& options, const Point3& translate) {
   check_options(options, object.id);
   std::string line = "{\"type\":\"CityJSONFeature\",\"id\":";
-  append_json_string(line, object.id);
+  append_json_string(line, object.id, JsonEscapes::short_controls);
   line += ",\"CityObjects\":{";
   std::vector<Quantised> vertices;
   append_city_object(line, object, translate, options.scale, vertices);
@@ -663,19 +616,39 @@ std::FILE* open_spool(const std::string& what, const std::string& path) {
   return f;
 }
 
-}  // namespace
-
-struct CityJsonAssembler::Impl {
+// What both assemblers hold: the file, created at once so that a path that cannot be written fails
+// before the first feature; its options and translation; and the extent of the quantised vertices,
+// which the header needs and only the last feature completes (so the rest is spooled until close()).
+struct AssembledFile {
+  AssembledFile(const std::string& path, const CityJsonOptions& options, const Point3& translate)
+      : path(path), options(options), translate(translate) {
+    check_options(options, path);
+    file = std::make_unique<detail::AtomicFile>(path);
+  }
+  void check_open() const {
+    if (!file) throw IoError("cityjson: " + path + " is already closed");
+  }
+  // The file under its name (detail::AtomicFile::commit); closed for good.
+  void commit() {
+    file->commit();
+    file.reset();
+  }
   std::string path;
   CityJsonOptions options;
   Point3 translate;
   std::unique_ptr<detail::AtomicFile> file;
+  Box3 extent;  // of the quantised vertices
+};
+
+}  // namespace
+
+struct CityJsonAssembler::Impl : AssembledFile {
+  using AssembledFile::AssembledFile;
   std::FILE* objects = nullptr;   // the CityObjects members, spooled to an anonymous temporary file
   std::FILE* vertices = nullptr;  // the vertex list, likewise
   std::uint64_t vertex_count = 0;
   std::size_t features = 0;
   bool any_object = false;
-  Box3 extent;                    // of the quantised vertices
   ~Impl() {
     if (objects) std::fclose(objects);
     if (vertices) std::fclose(vertices);
@@ -684,12 +657,7 @@ struct CityJsonAssembler::Impl {
 
 CityJsonAssembler::CityJsonAssembler(const std::string& path, const CityJsonOptions& options,
                                      const Point3& translate)
-    : impl_(new Impl) {
-  check_options(options, path);
-  impl_->path = path;
-  impl_->options = options;
-  impl_->translate = translate;
-  impl_->file = std::make_unique<detail::AtomicFile>(path);
+    : impl_(new Impl(path, options, translate)) {
   impl_->objects = open_spool("city objects", path);
   impl_->vertices = open_spool("vertices", path);
 }
@@ -697,7 +665,7 @@ CityJsonAssembler::CityJsonAssembler(const std::string& path, const CityJsonOpti
 CityJsonAssembler::~CityJsonAssembler() = default;
 
 void CityJsonAssembler::add(const std::string& feature) {
-  if (!impl_->file) throw IoError("cityjson: " + impl_->path + " is already closed");
+  impl_->check_open();
   std::string objects, vertices;
   FeatureSplicer splicer(feature, ++impl_->features, impl_->vertex_count);
   const std::uint64_t n = splicer.split(objects, vertices, impl_->extent);
@@ -724,18 +692,13 @@ void CityJsonAssembler::close() {
   write_all(out, "},\"vertices\":[");
   copy_spool(impl_->vertices, out, impl_->path);
   write_all(out, "]}\n");
-  impl_->file->commit();
-  impl_->file.reset();
+  impl_->commit();
 }
 
-struct CityJsonSeqAssembler::Impl {
-  std::string path;
-  CityJsonOptions options;
-  Point3 translate;
-  std::unique_ptr<detail::AtomicFile> file;
+struct CityJsonSeqAssembler::Impl : AssembledFile {
+  using AssembledFile::AssembledFile;
   std::FILE* features = nullptr;  // the feature lines, spooled until the extent is known
   std::size_t count = 0;
-  Box3 extent;
   ~Impl() {
     if (features) std::fclose(features);
   }
@@ -743,19 +706,14 @@ struct CityJsonSeqAssembler::Impl {
 
 CityJsonSeqAssembler::CityJsonSeqAssembler(const std::string& path, const CityJsonOptions& options,
                                            const Point3& translate)
-    : impl_(new Impl) {
-  check_options(options, path);
-  impl_->path = path;
-  impl_->options = options;
-  impl_->translate = translate;
-  impl_->file = std::make_unique<detail::AtomicFile>(path);
+    : impl_(new Impl(path, options, translate)) {
   impl_->features = open_spool("features", path);
 }
 
 CityJsonSeqAssembler::~CityJsonSeqAssembler() = default;
 
 void CityJsonSeqAssembler::add(const std::string& feature) {
-  if (!impl_->file) throw IoError("cityjson: " + impl_->path + " is already closed");
+  impl_->check_open();
   // Only the extent is taken from the feature; the line is written as it is.
   std::string objects, vertices;
   FeatureSplicer(feature, ++impl_->count, 0).split(objects, vertices, impl_->extent);
@@ -768,8 +726,7 @@ void CityJsonSeqAssembler::close() {
   std::FILE* out = impl_->file->file();
   write_all(out, cityjson_seq_header(impl_->options, impl_->translate, &impl_->extent) + "\n");
   copy_spool(impl_->features, out, impl_->path);
-  impl_->file->commit();
-  impl_->file.reset();
+  impl_->commit();
 }
 
 }  // namespace city3d

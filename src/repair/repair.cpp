@@ -8,12 +8,13 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
-#include <numeric>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "city3d/evaluation.hpp"
+#include "core/mesh_faces.hpp"
+#include "core/vec.hpp"
 #include "evaluation/validity_shared.hpp"
 
 namespace city3d {
@@ -121,24 +122,11 @@ void round_to_grid(BuildingModel& model, double grid) {
   // Vertices that round to the same grid point become one, within each edge-connected part only:
   // detached parts (the blocks of a multipolygon touching at a corner) are separate Solids in
   // CityJSON and must stay separate here.
-  std::vector<std::size_t> parent(model.mesh.faces.size());
-  std::iota(parent.begin(), parent.end(), std::size_t{0});
-  const auto find = [&parent](std::size_t f) {
-    while (parent[f] != f) f = parent[f] = parent[parent[f]];
-    return f;
-  };
-  std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> first_face_of_edge;
-  for (std::size_t f = 0; f < model.mesh.faces.size(); ++f) {
-    const auto& face = model.mesh.faces[f];
-    for (std::size_t k = 0; k < face.size(); ++k) {
-      const auto [it, fresh] = first_face_of_edge.emplace(std::minmax(face[k], face[(k + 1) % face.size()]), f);
-      if (!fresh) parent[find(f)] = find(it->second);
-    }
-  }
+  const std::vector<std::size_t> part_of = detail::edge_connected_parts(model.mesh.faces);
   std::map<std::pair<std::size_t, std::array<long long, 3>>, std::uint32_t> index_of;
   std::vector<Point3> vertices;
   for (std::size_t f = 0; f < model.mesh.faces.size(); ++f) {
-    const std::size_t part = find(f);
+    const std::size_t part = part_of[f];
     for (std::uint32_t& i : model.mesh.faces[f]) {
       if (i >= model.mesh.vertices.size()) continue;
       const Point3& p = model.mesh.vertices[i];

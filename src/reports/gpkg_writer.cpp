@@ -18,6 +18,7 @@
 
 #include "city3d/error.hpp"
 #include "city3d/run_outputs.hpp"
+#include "core/mesh_faces.hpp"
 #include "reports/report.hpp"
 
 namespace city3d {
@@ -108,14 +109,11 @@ struct RoofPart {
 
 RoofPart roof_part(const BuildingModel& m, const std::vector<std::uint32_t>& face) {
   RoofPart p;
-  double nx = 0, ny = 0, nz = 0, sum = 0;
+  const auto [nx, ny, nz] = detail::newell_normal(m.mesh.vertices, face);
+  double sum = 0;
   OGRLinearRing ring;
   for (std::size_t k = 0; k < face.size(); ++k) {
     const Point3& a = m.mesh.vertices[face[k]];
-    const Point3& b = m.mesh.vertices[face[(k + 1) % face.size()]];
-    nx += (a.y - b.y) * (a.z + b.z);
-    ny += (a.z - b.z) * (a.x + b.x);
-    nz += (a.x - b.x) * (a.y + b.y);
     const double z = a.z + m.origin.z;
     p.lowest = std::min(p.lowest, z), p.highest = std::max(p.highest, z), sum += z;
     ring.addPoint(a.x + m.origin.x, a.y + m.origin.y);

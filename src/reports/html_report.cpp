@@ -13,45 +13,22 @@
 
 #include "city3d/error.hpp"
 #include "city3d/run_outputs.hpp"
+#include "core/json_text.hpp"
 #include "files/atomic_file.hpp"
 #include "reports/report_page.hpp"
 
 namespace city3d {
 namespace {
 
-// JSON text, safe inside a <script> element ('<' escaped, so no "</script>" can appear).
-void json_string(std::string& out, const std::string& s) {
-  out += '"';
-  for (unsigned char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += static_cast<char>(c);
-    } else if (c < 0x20 || c == '<' || c == '>' || c == '&') {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      out += buf;
-    } else {
-      out += static_cast<char>(c);
-    }
-  }
-  out += '"';
-}
+using detail::append_json_string;
+using detail::JsonEscapes;
 
 void json_number(std::string& out, double v, int decimals) {
   if (!std::isfinite(v)) {
     out += "null";
     return;
   }
-  char buf[48];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  // Trim trailing zeros to keep the page small ("12.50" -> "12.5", "3.000" -> "3").
-  std::string s = buf;
-  if (s.find('.') != std::string::npos) {
-    while (s.back() == '0') s.pop_back();
-    if (s.back() == '.') s.pop_back();
-  }
-  if (s == "-0") s = "0";
-  out += s;
+  detail::append_trimmed_number(out, v, decimals);  // trailing zeros trimmed: a smaller page
 }
 
 // The outline a model stands on, in plan (world coordinates): its ground faces' rings. For a
@@ -166,7 +143,7 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
     const Point3 c{(box.min.x + box.max.x) / 2, (box.min.y + box.max.y) / 2, box.min.z};
     if (model_count) models += ',';
     models += "{\"lod\":";
-    json_string(models, r.lods.back().lod);
+    append_json_string(models, r.lods.back().lod, JsonEscapes::html_script);
     models += ",\"v\":[";
     for (std::size_t k = 0; k < m.mesh.vertices.size(); ++k) {
       const Point3& p = m.mesh.vertices[k];
@@ -197,9 +174,9 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
   std::FILE* out = file.file();
   std::fputs(detail::kReportPageHead, out);
   std::string data = "{\"crs\":";
-  json_string(data, crs);
+  append_json_string(data, crs, JsonEscapes::html_script);
   data += ",\"crs_source\":";
-  json_string(data, run.crs_source);
+  append_json_string(data, run.crs_source, JsonEscapes::html_script);
   // The inputs and parameters are JSON objects already (made by nlohmann in the pipeline): only '<'
   // must not reach the page as it is, so that no "</script>" can appear.
   const auto safe = [](const std::string& json) {
@@ -210,7 +187,7 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
   data += ",\"inputs\":" + safe(run.inputs) + ",\"parameters\":" + safe(run.parameters);
   data += ",\"inferred\":" + std::string(inferred ? "true" : "false");
   data += ",\"version\":";
-  json_string(data, CITY3D_VERSION);
+  append_json_string(data, CITY3D_VERSION, JsonEscapes::html_script);
   data += ",\"buildings\":[";
   std::fputs(data.c_str(), out);
   std::size_t placed = 0;  // inferred outlines laid out so far
@@ -221,19 +198,19 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
     data.clear();
     if (i) data += ',';
     data += "\n{\"id\":";
-    json_string(data, b.id);
+    append_json_string(data, b.id, JsonEscapes::html_script);
     data += ",\"s\":";
-    json_string(data, to_string(b.status));
+    append_json_string(data, to_string(b.status), JsonEscapes::html_script);
     data += ",\"l\":";
-    json_string(data, to_string(b.level));
+    append_json_string(data, to_string(b.level), JsonEscapes::html_script);
     data += ",\"r\":";
-    json_string(data, b.reason);
+    append_json_string(data, b.reason, JsonEscapes::html_script);
     data += ",\"n\":";
-    json_string(data, b.note);
+    append_json_string(data, b.note, JsonEscapes::html_script);
     data += ",\"lods\":";
-    json_string(data, b.lods);
+    append_json_string(data, b.lods, JsonEscapes::html_script);
     data += ",\"rt\":";
-    json_string(data, b.roof_type);
+    append_json_string(data, b.roof_type, JsonEscapes::html_script);
     data += ",\"rmse\":";
     json_number(data, b.rmse >= 0 ? b.rmse : NAN, 4);
     data += ",\"us\":";

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/json_text.hpp"
 #include "files/atomic_file.hpp"
 
 namespace city3d::detail {
@@ -22,22 +23,8 @@ std::string csv_field(const std::string& s) {
   return out + "\"";
 }
 
-std::string json_string(const std::string& s) {
-  std::string out = "\"";
-  for (unsigned char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += static_cast<char>(c);
-    } else if (c < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      out += buf;
-    } else {
-      out += static_cast<char>(c);
-    }
-  }
-  return out + "\"";
-}
+// A JSON string as report.json writes it: every control character as \u00XX (json_text.hpp).
+std::string json_quoted(const std::string& s) { return json_string(s, JsonEscapes::unicode_controls); }
 
 // Rounded as the building attributes round (rounded() below: half away from zero on v x 10^d),
 // then printed: printf alone rounds the exact binary value, and 6.5215 (a median between two
@@ -107,7 +94,8 @@ std::string csv_extras(const BuildingReport& r) {
 std::string json_extras(const BuildingReport& r) {
   std::string extra;
   for (const Extra& e : kExtras)
-    extra += std::string(", \"") + e.name + "\": " + (e.text ? json_string(r.*e.text) : json_number(r.*e.number, e.decimals));
+    extra += std::string(", \"") + e.name + "\": " +
+             (e.text ? json_quoted(r.*e.text) : json_number(r.*e.number, e.decimals));
   return extra;
 }
 
@@ -132,11 +120,11 @@ std::string report_csv_row(const BuildingReport& r) {
 }
 
 std::string report_json_row(const BuildingReport& r) {
-  return "{\"id\": " + json_string(r.id) + ", \"status\": \"" + to_string(r.status) + "\", \"level\": \"" +
-         to_string(r.level) + "\", \"stage\": " + json_string(r.stage) + ", \"reason\": " + json_string(r.reason) +
-         ", \"note\": " + json_string(r.note) + ", \"points\": " + std::to_string(r.points) +
+  return "{\"id\": " + json_quoted(r.id) + ", \"status\": \"" + to_string(r.status) + "\", \"level\": \"" +
+         to_string(r.level) + "\", \"stage\": " + json_quoted(r.stage) + ", \"reason\": " + json_quoted(r.reason) +
+         ", \"note\": " + json_quoted(r.note) + ", \"points\": " + std::to_string(r.points) +
          ", \"ground_points\": " + std::to_string(r.ground_points) + ", \"ground_z\": " + fixed(r.ground_z, 3) +
-         ", \"ground_method\": " + json_string(r.ground_method) + ", \"roof_z\": " + fixed(r.roof_z, 3) +
+         ", \"ground_method\": " + json_quoted(r.ground_method) + ", \"roof_z\": " + fixed(r.roof_z, 3) +
          ", \"planes\": " + std::to_string(r.planes) + ", \"walls\": " + std::to_string(r.walls) +
          ", \"candidate_faces\": " + std::to_string(r.candidate_faces) + ", \"faces\": " + std::to_string(r.faces) +
          ", \"rmse\": " + (r.rmse >= 0 ? fixed(r.rmse, 4) : "null") + ", \"valid\": " + (r.valid ? "true" : "false") +
