@@ -32,8 +32,8 @@ using city3d::PlaneParams;
 using city3d::StepLineParams;
 using city3d::Point2;
 using city3d::Point3;
+using city3d::kPi;
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDensity = 15.0;  // points/m2, AHN3
 constexpr double kNoise = 0.03;    // metres
 

@@ -24,7 +24,6 @@ using namespace city3d;
 namespace {
 
 constexpr double kR = 0.2;  // pixel size, metres
-constexpr double kPi = 3.14159265358979323846;
 
 using Line = std::pair<Point2, Point2>;
 

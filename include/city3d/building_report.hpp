@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -32,8 +33,11 @@ enum class ModelLevel {
   lod12,                  ///< LoD1 block: footprint extruded to a robust roof height
 };
 
-const char* to_string(BuildingStatus status);
-const char* to_string(ModelLevel level);
+const char* status_name(BuildingStatus status);
+const char* level_name(ModelLevel level);
+/// The status or level a name gives (status_name(), level_name()); nothing for another text.
+std::optional<BuildingStatus> status_from_name(const std::string& name);
+std::optional<ModelLevel> level_from_name(const std::string& name);
 /// CityJSON LoD string of a level ("2.2", "1.2"; empty for none).
 const char* cityjson_lod(ModelLevel level);
 

@@ -24,6 +24,10 @@ class ConfigError : public Error {
   using Error::Error;
 };
 
+/// Throws ConfigError "<module>: invalid parameters:<problems>" when `problems` (each "<name> must be
+/// ...;", a space before each) is not empty: the end of a parameter struct's validate().
+void throw_if_invalid(const std::string& module, const std::string& problems);
+
 /// The stage of a building's reconstruction an error comes from, as the report's `stage` column names it
 /// (stage_name()).
 enum class ReconstructionStage {

@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "city3d/types.hpp"
@@ -67,6 +68,9 @@ double automatic_resolution(double points_per_m2);
 /// Points must be in a local metric frame. Throws ConfigError (invalid params) or
 /// ReconstructionError (fewer than 3 distinct xy, no triangle short enough, non-finite
 /// coordinates, or a raster above 50 million pixels).
+/// Lowest and highest data height of a heightmap; {+inf, -inf} when it has none.
+std::pair<float, float> height_range(const Heightmap& map);
+
 Heightmap rasterise_tin(const std::vector<Point3>& local_points, const HeightmapParams& params);
 
 /// Canny edge pixels of the height field: the height steps between roof parts and the building's

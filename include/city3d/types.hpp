@@ -12,6 +12,8 @@
 
 namespace city3d {
 
+constexpr double kPi = 3.14159265358979323846;
+
 /// A building identifier as it comes from the footprint source (or the file name for single clouds).
 using BuildingId = std::string;
 

@@ -110,7 +110,7 @@ RunDescription run_description(const RunLayout& layout) {
 // outside the tiles, before any fallback's: one key for all of them.
 std::string problem_key(BuildingStatus status, const std::string& reason) {
   if (status == BuildingStatus::partial) return "partial: partly covered by the tiles given";
-  std::string key = std::string(to_string(status)) + ": ";
+  std::string key = std::string(status_name(status)) + ": ";
   int depth = 0;
   bool digits = false;
   for (char c : reason.substr(0, reason.find(';'))) {

@@ -45,12 +45,8 @@ std::optional<std::string> checked_text(const std::string& line) {
   return text;
 }
 
-const char* status_name(BuildingStatus s) { return to_string(s); }
-
 BuildingStatus parse_status(const std::string& s) {
-  for (BuildingStatus v : {BuildingStatus::ok, BuildingStatus::fallback, BuildingStatus::skipped, BuildingStatus::failed,
-                           BuildingStatus::partial})
-    if (s == to_string(v)) return v;
+  if (const std::optional<BuildingStatus> status = status_from_name(s)) return *status;
   throw std::runtime_error("unknown status " + s);
 }
 

@@ -3,7 +3,7 @@
 
 namespace city3d {
 
-const char* to_string(BuildingStatus status) {
+const char* status_name(BuildingStatus status) {
   switch (status) {
     case BuildingStatus::ok: return "ok";
     case BuildingStatus::fallback: return "fallback";
@@ -14,7 +14,7 @@ const char* to_string(BuildingStatus status) {
   return "failed";
 }
 
-const char* to_string(ModelLevel level) {
+const char* level_name(ModelLevel level) {
   switch (level) {
     case ModelLevel::none: return "none";
     case ModelLevel::lod22: return "LoD2.2";
@@ -32,6 +32,19 @@ const char* cityjson_lod(ModelLevel level) {
     case ModelLevel::none: return "";
   }
   return "";
+}
+
+std::optional<BuildingStatus> status_from_name(const std::string& name) {
+  for (BuildingStatus s : {BuildingStatus::ok, BuildingStatus::fallback, BuildingStatus::skipped, BuildingStatus::failed,
+                           BuildingStatus::partial})
+    if (name == status_name(s)) return s;
+  return std::nullopt;
+}
+
+std::optional<ModelLevel> level_from_name(const std::string& name) {
+  for (ModelLevel l : {ModelLevel::none, ModelLevel::lod22, ModelLevel::lod22_footprint_walls, ModelLevel::lod12})
+    if (name == level_name(l)) return l;
+  return std::nullopt;
 }
 
 void add_note(BuildingReport& report, const std::string& note) {

@@ -3,6 +3,10 @@
 
 namespace city3d {
 
+void throw_if_invalid(const std::string& module, const std::string& problems) {
+  if (!problems.empty()) throw ConfigError(module + ": invalid parameters:" + problems);
+}
+
 const char* stage_name(ReconstructionStage stage) {
   switch (stage) {
     case ReconstructionStage::footprint: return "footprint";

@@ -23,17 +23,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// Lowest and highest data height; {+inf, -inf} when there is none.
-std::pair<float, float> height_range(const Heightmap& map) {
-  float lowest = std::numeric_limits<float>::infinity();
-  float highest = -std::numeric_limits<float>::infinity();
-  for (float z : map.z) {
-    if (std::isnan(z)) continue;
-    lowest = std::min(lowest, z);
-    highest = std::max(highest, z);
-  }
-  return {lowest, highest};
-}
 
 /// Grey image, north up: 0 no data, 1..255 lowest..highest.
 cv::Mat grey_image(const Heightmap& map) {

@@ -74,15 +74,8 @@ using P3 = Kernel::Point_3;
 using Ring = std::vector<std::uint32_t>;
 using Triangle = std::array<std::uint32_t, 3>;
 
-constexpr double kPi = 3.14159265358979323846;
 
-using detail::cross;
-using detail::dot;
-using detail::format;
-using detail::norm;
-using detail::snap_vertices;
-using detail::sub;
-using detail::Vec;
+using namespace detail;  // the helpers of validity_shared.hpp and core/vec.hpp
 
 // The least-squares plane of a polygon's vertices: centroid, unit normal (oriented like the Newell
 // normal of the exterior ring) and two in-plane axes.

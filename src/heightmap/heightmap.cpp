@@ -58,7 +58,11 @@ cv::Mat filled_image(const Heightmap& map, float fill) {
   return image;
 }
 
-/// Lowest and highest data height; {+inf, -inf} when there is none.
+
+}  // namespace
+}  // namespace detail
+
+// Lowest and highest data height; {+inf, -inf} when there is none.
 std::pair<float, float> height_range(const Heightmap& map) {
   float lowest = std::numeric_limits<float>::infinity();
   float highest = -std::numeric_limits<float>::infinity();
@@ -69,9 +73,6 @@ std::pair<float, float> height_range(const Heightmap& map) {
   }
   return {lowest, highest};
 }
-
-}  // namespace
-}  // namespace detail
 
 void HeightmapParams::validate() const {
   std::vector<std::string> problems;

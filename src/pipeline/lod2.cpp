@@ -293,7 +293,7 @@ BuildingModel checked_model(const ReconstructionParams& params, ModelLevel level
   const StageTimer stage(Stage::validity);
   const WrittenValidity validity = validate_as_written(model, params.output_grid, params.validity);
   if (!validity.found.empty()) {
-    const std::string found = std::string(to_string(level)) + ": " + validity_codes(validity.found);
+    const std::string found = std::string(level_name(level)) + ": " + validity_codes(validity.found);
     r.validity_found += (r.validity_found.empty() ? "" : "; ") + found;
   }
   if (!validity.remaining.empty()) {

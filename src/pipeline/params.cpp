@@ -130,7 +130,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("validity.snap_tolerance", p.validity.snap_tolerance);
   put("validity.planarity_distance", p.validity.planarity_distance);
   put("validity.planarity_normals", p.validity.planarity_normals);
-  put("max_level", to_string(p.max_level));
+  put("max_level", level_name(p.max_level));
   put("max_footprint_vertices", p.max_footprint_vertices);
   put("retry_unexplained_share", p.retry_unexplained_share);
   put("retry_unsupported_area", p.retry_unsupported_area);

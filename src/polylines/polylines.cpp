@@ -86,8 +86,7 @@ void PolylineParams::validate() const {
   if (!(link_pixels >= 1.0)) problems << " link_pixels must be >= 1 (got " << link_pixels << ");";
   if (!(min_polyline_length >= 0.0))
     problems << " min_polyline_length must be >= 0 (got " << min_polyline_length << ");";
-  const std::string text = problems.str();
-  if (!text.empty()) throw ConfigError("polylines: invalid parameters:" + text);
+  throw_if_invalid("polylines", problems.str());
 }
 
 namespace detail {

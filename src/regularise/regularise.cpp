@@ -33,14 +33,12 @@ void RegulariseParams::validate() const {
     problems << " min_footprint_edge must be >= 0 (got " << min_footprint_edge << ");";
   if (!(min_segment_length >= 0.0))
     problems << " min_segment_length must be >= 0 (got " << min_segment_length << ");";
-  const std::string text = problems.str();
-  if (!text.empty()) throw ConfigError("regularise: invalid parameters:" + text);
+  throw_if_invalid("regularise", problems.str());
 }
 
 namespace detail {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 double deg2rad(double d) { return d * kPi / 180.0; }
 
@@ -315,7 +313,6 @@ Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold, dou
   const Ring2& ring = polygon.outer;
   const std::size_t n = ring.size();
   if (n < 4) return polygon;
-  constexpr double kPi = 3.14159265358979323846;
   const double threshold = angle_threshold * kPi / 180.0;
   std::vector<double> angle(n), length(n);
   for (std::size_t i = 0; i < n; ++i) {

@@ -20,13 +20,7 @@
 namespace city3d {
 namespace {
 
-using detail::cross;
-using detail::dot;
-using detail::format;
-using detail::norm;
-using detail::snap_vertices;
-using detail::sub;
-using detail::Vec;
+using namespace detail;  // the helpers of validity_shared.hpp and core/vec.hpp
 
 // Drops repeated consecutive vertices and faces of fewer than three, then unused vertices.
 void clean_model(BuildingModel& model) {

@@ -24,7 +24,6 @@
 namespace city3d {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // The field type that holds every value a name takes: integers stay 64-bit integers, integers
 // mixed with numbers become reals, anything mixed with text becomes text.
@@ -300,7 +299,7 @@ void write_gpkg(const std::string& path, const OverviewSource& records, const st
       surfaces += "]";
       OGRFeature feature(level->solid->GetLayerDefn());
       feature.SetField(0, r.report.id.c_str());
-      feature.SetField(1, to_string(r.report.status));
+      feature.SetField(1, status_name(r.report.status));
       set_rounded(feature, 2, ground, 1000);
       set_rounded(feature, 3, top, 1000);
       const bool lod12 = g.lod == "1.2", lod13 = g.lod == "1.3";

@@ -200,9 +200,9 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
     data += "\n{\"id\":";
     append_json_string(data, b.id, JsonEscapes::html_script);
     data += ",\"s\":";
-    append_json_string(data, to_string(b.status), JsonEscapes::html_script);
+    append_json_string(data, status_name(b.status), JsonEscapes::html_script);
     data += ",\"l\":";
-    append_json_string(data, to_string(b.level), JsonEscapes::html_script);
+    append_json_string(data, level_name(b.level), JsonEscapes::html_script);
     data += ",\"r\":";
     append_json_string(data, b.reason, JsonEscapes::html_script);
     data += ",\"n\":";

@@ -32,18 +32,9 @@ std::size_t count_of(const json& o, const char* key) {
   return it != o.end() && it->is_number_unsigned() ? it->get<std::size_t>() : 0;
 }
 
-BuildingStatus status_of(const std::string& s) {
-  for (BuildingStatus b : {BuildingStatus::ok, BuildingStatus::fallback, BuildingStatus::skipped, BuildingStatus::failed,
-                           BuildingStatus::partial})
-    if (s == to_string(b)) return b;
-  return BuildingStatus::failed;
-}
+BuildingStatus status_of(const std::string& s) { return status_from_name(s).value_or(BuildingStatus::failed); }
 
-ModelLevel level_of(const std::string& s) {
-  for (ModelLevel l : {ModelLevel::lod22, ModelLevel::lod22_footprint_walls, ModelLevel::lod12})
-    if (s == to_string(l)) return l;
-  return ModelLevel::none;
-}
+ModelLevel level_of(const std::string& s) { return level_from_name(s).value_or(ModelLevel::none); }
 
 // A report row as report_json_row() wrote it (report.cpp).
 BuildingReport parse_report(const std::string& text, std::size_t position) {

@@ -110,7 +110,7 @@ std::string report_csv_header() {
 }
 
 std::string report_csv_row(const BuildingReport& r) {
-  return csv_field(r.id) + "," + to_string(r.status) + "," + to_string(r.level) + "," + csv_field(r.stage) + "," +
+  return csv_field(r.id) + "," + status_name(r.status) + "," + level_name(r.level) + "," + csv_field(r.stage) + "," +
          csv_field(r.reason) + "," + csv_field(r.note) + "," + std::to_string(r.points) + "," +
          std::to_string(r.ground_points) + "," + fixed(r.ground_z, 3) + "," + csv_field(r.ground_method) + "," +
          fixed(r.roof_z, 3) + "," + std::to_string(r.planes) + "," + std::to_string(r.walls) + "," +
@@ -120,8 +120,8 @@ std::string report_csv_row(const BuildingReport& r) {
 }
 
 std::string report_json_row(const BuildingReport& r) {
-  return "{\"id\": " + json_quoted(r.id) + ", \"status\": \"" + to_string(r.status) + "\", \"level\": \"" +
-         to_string(r.level) + "\", \"stage\": " + json_quoted(r.stage) + ", \"reason\": " + json_quoted(r.reason) +
+  return "{\"id\": " + json_quoted(r.id) + ", \"status\": \"" + status_name(r.status) + "\", \"level\": \"" +
+         level_name(r.level) + "\", \"stage\": " + json_quoted(r.stage) + ", \"reason\": " + json_quoted(r.reason) +
          ", \"note\": " + json_quoted(r.note) + ", \"points\": " + std::to_string(r.points) +
          ", \"ground_points\": " + std::to_string(r.ground_points) + ", \"ground_z\": " + fixed(r.ground_z, 3) +
          ", \"ground_method\": " + json_quoted(r.ground_method) + ", \"roof_z\": " + fixed(r.roof_z, 3) +
@@ -172,8 +172,8 @@ Attributes building_attributes(const BuildingReport& r, bool timings) {
     return written && r.lods.find(lod) != std::string::npos ? AttributeValue{AttributeList{"[]"}} : AttributeValue{};
   };
   Attributes a = {
-      {"status", std::string(to_string(r.status))},
-      {"level", std::string(to_string(r.level))},
+      {"status", std::string(status_name(r.status))},
+      {"level", std::string(level_name(r.level))},
       {"reason", text_or_null(r.reason)},
       {"note", text_or_null(r.note)},
       {"lods", text_or_null(r.lods)},

@@ -52,7 +52,6 @@ namespace {
 namespace fs = std::filesystem;
 using ordered_json = nlohmann::ordered_json;
 
-constexpr double kPi = 3.14159265358979323846;
 
 // The quadtree: a cell of more buildings than this is split, unless it is already this small.
 // 64 LoD2.2 buildings of the Delft block make a tile of about 0.4 MB.

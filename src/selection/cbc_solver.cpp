@@ -107,14 +107,8 @@ MipSolution solve_here(const MipModel& model, const MipLimits& limits) {
     const std::string why = secondary == 3 ? "node limit " + nodes + " reached"
                                            : "stopped (status " + std::to_string(cbc.status()) + "/" +
                                                  std::to_string(secondary) + ")";
-    if (best != nullptr) {
-      solution.status = MipStatus::feasible;
-      take_values();
-      solution.message = "cbc: " + why + "; best feasible solution returned";
-    } else {
-      solution.status = MipStatus::no_solution;
-      solution.message = "cbc: " + why + " before any feasible solution";
-    }
+    stopped_by_limit(solution, "cbc", why, best != nullptr);
+    if (best != nullptr) take_values();
   }
   return solution;
 }

@@ -212,14 +212,9 @@ MipSolution solve_with_glpk(const MipModel& model, const MipLimits& limits) {
                                   ? "time limit " + std::to_string(limits.time_limit) + " s reached"
                               : budget.hit ? "node limit " + std::to_string(limits.node_limit) + " reached"
                                            : "stopped";
-      if (mip_status == GLP_FEAS || mip_status == GLP_OPT) {
-        solution.status = MipStatus::feasible;
-        take_values();
-        solution.message = "glpk: " + why + "; best feasible solution returned";
-      } else {
-        solution.status = MipStatus::no_solution;
-        solution.message = "glpk: " + why + " before any feasible solution";
-      }
+      const bool has_best = mip_status == GLP_FEAS || mip_status == GLP_OPT;
+      stopped_by_limit(solution, "glpk", why, has_best);
+      if (has_best) take_values();
       return solution;
     }
     default:

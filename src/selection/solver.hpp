@@ -59,6 +59,14 @@ MipSolution solve_with_glpk(const MipModel& model, const MipLimits& limits);
 /// (CBC's MIP start: its incumbent before the search, so every bound prunes from the first node). Each
 /// call runs in a child process of its own (solver_process.hpp): CbcMain1 in 2.10.8 is not thread-safe,
 /// and an assertion inside Clp aborts the process it runs in. A crash or the wall-clock limit gives
+/// A backend stopped by a limit (`why`): feasible with its best solution when it has one, else
+/// no_solution; the message says which ("cbc: node limit 200000 reached; best feasible solution
+/// returned").
+inline void stopped_by_limit(MipSolution& solution, const std::string& backend, const std::string& why, bool has_best) {
+  solution.status = has_best ? MipStatus::feasible : MipStatus::no_solution;
+  solution.message = backend + ": " + why + (has_best ? "; best feasible solution returned" : " before any feasible solution");
+}
+
 /// MipStatus::failed or no_solution with the reason; the calling process goes on.
 MipSolution solve_with_cbc(const MipModel& model, const MipLimits& limits);
 

@@ -23,14 +23,12 @@ void WallParams::validate() const {
     problems << " min_detected_lines must be >= 0 (got " << min_detected_lines << ");";
   if (!(detected_length_ratio >= 0.0))
     problems << " detected_length_ratio must be >= 0 (got " << detected_length_ratio << ");";
-  const std::string text = problems.str();
-  if (!text.empty()) throw ConfigError("walls: invalid parameters:" + text);
+  throw_if_invalid("walls", problems.str());
 }
 
 namespace detail {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kSampleStep = 0.1;           // metres between samples along a line (inner-wall clipping)
 constexpr double kCollinearTolerance = 1e-3;  // metres: footprint vertices this close to the line are dropped
 
