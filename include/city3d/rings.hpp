@@ -3,6 +3,8 @@
 // so that two modules measuring the same ring get the same bits.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "city3d/types.hpp"
@@ -27,6 +29,14 @@ double twice_signed_area(const Ring2& ring);
 
 /// Whether `p` lies inside `ring` (even-odd crossing rule; a point on an edge is either).
 bool inside_ring(const Ring2& ring, const Point2& p);
+
+/// Whether two rings come closer than `gap` anywhere: one inside the other, a vertex near the other's
+/// edge, or crossing edges.
+bool rings_near(const Ring2& a, const Ring2& b, double gap);
+
+/// How many of the points `indices` names lie inside `ring` in plan view.
+std::size_t points_inside(const Ring2& ring, const std::vector<std::uint32_t>& indices,
+                          const std::vector<Point3>& points);
 
 /// The distance from `p` to the segment from `a` to `b`, metres.
 double segment_distance(const Point2& p, const Point2& a, const Point2& b);

@@ -47,6 +47,32 @@ bool inside_ring(const Ring2& ring, const Point2& p) {
   return in;
 }
 
+bool rings_near(const Ring2& a, const Ring2& b, double gap) {
+  if (inside_ring(b, a.front()) || inside_ring(a, b.front())) return true;
+  for (const auto& [p, q] : {std::pair{&a, &b}, std::pair{&b, &a}})
+    for (const Point2& v : *p)
+      for (std::size_t k = 0; k < q->size(); ++k)
+        if (segment_distance(v, (*q)[k], (*q)[(k + 1) % q->size()]) < gap) return true;
+  // Crossing edges without a vertex near the other ring cannot happen at this gap unless an edge
+  // passes through; test the crossings too.
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (std::size_t j = 0; j < b.size(); ++j) {
+      const Point2 &p = a[i], &p2 = a[(i + 1) % a.size()], &q = b[j], &q2 = b[(j + 1) % b.size()];
+      const auto side = [](const Point2& o, const Point2& u, const Point2& w) {
+        return (u.x - o.x) * (w.y - o.y) - (u.y - o.y) * (w.x - o.x);
+      };
+      if (side(p, p2, q) * side(p, p2, q2) < 0 && side(q, q2, p) * side(q, q2, p2) < 0) return true;
+    }
+  return false;
+}
+
+std::size_t points_inside(const Ring2& ring, const std::vector<std::uint32_t>& indices,
+                          const std::vector<Point3>& points) {
+  std::size_t in = 0;
+  for (std::uint32_t i : indices) in += inside_ring(ring, {points[i].x, points[i].y});
+  return in;
+}
+
 double segment_distance(const Point2& p, const Point2& a, const Point2& b) {
   const double dx = b.x - a.x, dy = b.y - a.y, len2 = dx * dx + dy * dy;
   const double t = len2 > 0 ? std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / len2, 0.0, 1.0) : 0.0;

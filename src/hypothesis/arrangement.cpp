@@ -20,7 +20,6 @@
 
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
-#include "city3d/rings.hpp"
 #include "hypothesis/steps.hpp"
 
 namespace city3d::detail {
@@ -332,7 +331,13 @@ PlainArrangement build_arrangement(std::vector<InputCurve> curves, double min_ce
                              static_cast<int>(e.u) == he->source()->data());
       cell.polygon.push_back(out.vertices[static_cast<std::size_t>(he->source()->data())]);
     } while (++he != first);
-    cell.area = signed_area(cell.polygon);
+    double area = 0.0;
+    for (std::size_t i = 0; i < cell.polygon.size(); ++i) {
+      const auto& p = cell.polygon[i];
+      const auto& q = cell.polygon[(i + 1) % cell.polygon.size()];
+      area += p.x * q.y - q.x * p.y;
+    }
+    cell.area = 0.5 * area;
     out.cells.push_back(std::move(cell));
   }
   return out;

@@ -23,26 +23,6 @@ constexpr double kMinOutlineRegionArea = 2.0;
 // Gaps in the points that the inferred outline closes, in point spacings (infer_outline).
 constexpr double kOutlineGapSpacings = 1.5;
 
-// Two rings closer than `gap` anywhere (crossing, one inside the other, or a vertex near an edge).
-bool rings_near(const Ring2& a, const Ring2& b, double gap) {
-  if (inside_ring(b, a.front()) || inside_ring(a, b.front())) return true;
-  for (const auto& [p, q] : {std::pair{&a, &b}, std::pair{&b, &a}})
-    for (const Point2& v : *p)
-      for (std::size_t k = 0; k < q->size(); ++k)
-        if (segment_distance(v, (*q)[k], (*q)[(k + 1) % q->size()]) < gap) return true;
-  // Crossing edges without a vertex near the other ring cannot happen at this gap unless an edge
-  // passes through; test the crossings too.
-  for (std::size_t i = 0; i < a.size(); ++i)
-    for (std::size_t j = 0; j < b.size(); ++j) {
-      const Point2 &p = a[i], &p2 = a[(i + 1) % a.size()], &q = b[j], &q2 = b[(j + 1) % b.size()];
-      const auto side = [](const Point2& o, const Point2& u, const Point2& w) {
-        return (u.x - o.x) * (w.y - o.y) - (u.y - o.y) * (w.x - o.x);
-      };
-      if (side(p, p2, q) * side(p, p2, q2) < 0 && side(q, q2, p) * side(q, q2, p2) < 0) return true;
-    }
-  return false;
-}
-
 // The parts of an inferred outline to model (largest first): the largest, and every further part of
 // kMinExtraPartArea or more that holds most of the points of some roof plane and keeps clear of the
 // parts already kept (fitting an outline to its points can push two parts into each other: then the
@@ -61,9 +41,7 @@ std::vector<Polygon2> separate_parts(const std::vector<Polygon2>& parts, const s
   for (std::size_t k = 1; k < parts.size(); ++k) {
     if (ring_area(parts[k].outer) < kMinExtraPartArea) continue;
     const bool has_plane = std::any_of(roofs.begin(), roofs.end(), [&](const PlanarSegment& s) {
-      std::size_t in = 0;
-      for (std::uint32_t i : s.points) in += inside_ring(parts[k].outer, {points[i].x, points[i].y});
-      return 2 * in > s.points.size();
+      return 2 * points_inside(parts[k].outer, s.points, points) > s.points.size();
     });
     if (!has_plane) continue;
     // The part as regularised and fitted to its points; else as inferred (the regions of the
@@ -139,9 +117,7 @@ std::vector<PlanarSegment> roofs_of_part(const std::vector<PlanarSegment>& roofs
                                          const std::vector<Point3>& points) {
   std::vector<PlanarSegment> held;
   for (const PlanarSegment& s : roofs) {
-    std::size_t in = 0;
-    for (std::uint32_t i : s.points) in += inside_ring(part.outer, {points[i].x, points[i].y});
-    if (4 * in >= s.points.size()) held.push_back(s);
+    if (4 * points_inside(part.outer, s.points, points) >= s.points.size()) held.push_back(s);
   }
   return held;
 }
