@@ -1,27 +1,23 @@
 // The names of a building's status and model level, as the reports write them.
 #include "city3d/building_report.hpp"
 
+#include <cstddef>
+#include <iterator>
+
 namespace city3d {
 
 const char* status_name(BuildingStatus status) {
-  switch (status) {
-    case BuildingStatus::ok: return "ok";
-    case BuildingStatus::fallback: return "fallback";
-    case BuildingStatus::skipped: return "skipped";
-    case BuildingStatus::failed: return "failed";
-    case BuildingStatus::partial: return "partial";
-  }
-  return "failed";
+  // In the enum's order.
+  static constexpr const char* kNames[] = {"ok", "fallback", "skipped", "failed", "partial"};
+  const auto k = static_cast<std::size_t>(status);
+  return k < std::size(kNames) ? kNames[k] : "failed";
 }
 
 const char* level_name(ModelLevel level) {
-  switch (level) {
-    case ModelLevel::none: return "none";
-    case ModelLevel::lod22: return "LoD2.2";
-    case ModelLevel::lod22_footprint_walls: return "LoD2.2 footprint walls";
-    case ModelLevel::lod12: return "LoD1.2";
-  }
-  return "none";
+  // In the enum's order.
+  static constexpr const char* kNames[] = {"none", "LoD2.2", "LoD2.2 footprint walls", "LoD1.2"};
+  const auto k = static_cast<std::size_t>(level);
+  return k < std::size(kNames) ? kNames[k] : "none";
 }
 
 const char* cityjson_lod(ModelLevel level) {

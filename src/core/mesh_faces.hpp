@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <numeric>
 #include <utility>
 #include <vector>
 
@@ -32,6 +33,24 @@ inline Vec newell_normal(const std::vector<Point3>& vertices, const std::vector<
   }
   return n;
 }
+
+/// Union-find over 0 .. n-1 (with path halving): faces or corners joined into parts.
+class UnionFind {
+ public:
+  explicit UnionFind(std::size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), std::size_t{0}); }
+  /// The root of i's part: i itself for the one root of each part.
+  std::size_t find(std::size_t i) {
+    while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
+    return i;
+  }
+  void join(std::size_t a, std::size_t b) {
+    const std::size_t root = find(b);
+    parent_[find(a)] = root;
+  }
+
+ private:
+  std::vector<std::size_t> parent_;
+};
 
 /// The edge-connected part of each face: faces that share an edge (either direction) are in one part.
 /// Parts are numbered 0, 1, ... in order of their first face. Indices need not be in range.

@@ -349,19 +349,14 @@ ShellResult check_shell(const std::vector<Point3>& v, const std::vector<SolidPol
   if (overused) report(304, first_overused_face, std::to_string(overused) + " edges used by more than two polygons");
 
   // Connected components over shared edges (either direction).
-  std::vector<std::size_t> parent(shell.size());
-  std::iota(parent.begin(), parent.end(), std::size_t{0});
-  const auto find = [&parent](std::size_t i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
+  UnionFind parts(shell.size());
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> first_of;
   for (const auto& [e, faces] : directed) {
     const auto [it, fresh] = first_of.emplace(std::minmax(e.first, e.second), faces.front());
-    for (std::size_t f : faces) parent[find(f)] = find(it->second);
+    for (std::size_t f : faces) parts.join(f, it->second);
   }
   std::size_t components = 0;
-  for (std::size_t f = 0; f < shell.size(); ++f) components += find(f) == f;
+  for (std::size_t f = 0; f < shell.size(); ++f) components += parts.find(f) == f;
   if (components > 1) report(305, -1, std::to_string(components) + " parts joined by no edge");
 
   // Vertex manifoldness: the polygons around a vertex must form one umbrella (connected through

@@ -331,13 +331,7 @@ PlainArrangement build_arrangement(std::vector<InputCurve> curves, double min_ce
                              static_cast<int>(e.u) == he->source()->data());
       cell.polygon.push_back(out.vertices[static_cast<std::size_t>(he->source()->data())]);
     } while (++he != first);
-    double area = 0.0;
-    for (std::size_t i = 0; i < cell.polygon.size(); ++i) {
-      const auto& p = cell.polygon[i];
-      const auto& q = cell.polygon[(i + 1) % cell.polygon.size()];
-      area += p.x * q.y - q.x * p.y;
-    }
-    cell.area = 0.5 * area;
+    cell.area = loop_area(cell.polygon);
     out.cells.push_back(std::move(cell));
   }
   return out;

@@ -118,13 +118,7 @@ PlainArrangement contract_short_edges(const PlainArrangement& in, double min_len
       cell.loop.emplace_back(it->second, a == edge.u);
       cell.polygon.push_back(out.vertices[a]);
     }
-    double area = 0.0;
-    for (std::size_t i = 0; i < cell.polygon.size(); ++i) {
-      const auto& p = cell.polygon[i];
-      const auto& q = cell.polygon[(i + 1) % cell.polygon.size()];
-      area += p.x * q.y - q.x * p.y;
-    }
-    cell.area = 0.5 * area;
+    cell.area = loop_area(cell.polygon);
     out.cells.push_back(std::move(cell));
   }
   // Edges are numbered in cell order; renumber them by (u, w) as build_arrangement does.

@@ -234,6 +234,18 @@ struct GpsTimeState {
   }
 };
 
+// A time given in full: its upper 32 bits predicted from the last time's, the lower read raw; it starts
+// the next of the four sequences.
+inline void decode_full_gps_time(ArithmeticDecoder& dec, IntegerDecompressor& ic, GpsTimeState& s) {
+  s.next = (s.next + 1) & 3;
+  const auto high =
+      static_cast<std::uint32_t>(ic.decompress(static_cast<std::int32_t>(s.time[s.last] >> 32), 8));
+  s.time[s.next] = (static_cast<std::uint64_t>(high) << 32) | dec.read_int();
+  s.last = s.next;
+  s.diff[s.last] = 0;
+  s.extreme_count[s.last] = 0;
+}
+
 /// Decodes one GPS time with the multiplier scheme shared by GPSTIME11 v2 and POINT14 v3. The two
 /// versions number their symbols differently: `v3` drops the "unchanged" symbol of the multi model
 /// (v3 codes "unchanged" in the changed-values bits) and shifts the zero-diff model by one.
@@ -250,13 +262,7 @@ inline void decode_gps_time(ArithmeticDecoder& dec, SymbolModel& multi_model, Sy
         s.time[s.last] += static_cast<std::uint64_t>(static_cast<std::int64_t>(s.diff[s.last]));
         s.extreme_count[s.last] = 0;
       } else if (multi == zero_diff_base + 1) {  // full value: upper 32 bits predicted, lower raw
-        s.next = (s.next + 1) & 3;
-        const auto high =
-            static_cast<std::uint32_t>(ic.decompress(static_cast<std::int32_t>(s.time[s.last] >> 32), 8));
-        s.time[s.next] = (static_cast<std::uint64_t>(high) << 32) | dec.read_int();
-        s.last = s.next;
-        s.diff[s.last] = 0;
-        s.extreme_count[s.last] = 0;
+        decode_full_gps_time(dec, ic, s);
       } else if (multi > zero_diff_base + 1) {  // switch to another sequence, then decode again
         s.last = (s.last + static_cast<std::uint32_t>(multi - zero_diff_base - 1)) & 3;
         continue;
@@ -303,13 +309,7 @@ inline void decode_gps_time(ArithmeticDecoder& dec, SymbolModel& multi_model, Sy
     }
     if (!v3 && multi == unchanged) return;
     if (multi == code_full) {
-      s.next = (s.next + 1) & 3;
-      const auto high =
-          static_cast<std::uint32_t>(ic.decompress(static_cast<std::int32_t>(s.time[s.last] >> 32), 8));
-      s.time[s.next] = (static_cast<std::uint64_t>(high) << 32) | dec.read_int();
-      s.last = s.next;
-      s.diff[s.last] = 0;
-      s.extreme_count[s.last] = 0;
+      decode_full_gps_time(dec, ic, s);
       return;
     }
     s.last = (s.last + static_cast<std::uint32_t>(multi - code_full)) & 3;  // switch sequence
