@@ -164,7 +164,7 @@ enum class FaceKind : std::uint8_t { roof, wall, floor };
 /// simple, planar, counter-clockwise seen from outside where that is meaningful (roofs face up,
 /// floors down, walls on the footprint boundary outwards; inner walls face the right side of their
 /// arrangement edge).
-/// Every field is compared by same_hypothesis() (src/pipeline/pipeline.cpp): a field added here must be
+/// Every field is compared by same_hypothesis() (src/pipeline/rebuild.cpp): a field added here must be
 /// compared there too.
 struct CandidateFace {
   FaceKind kind = FaceKind::roof;

@@ -32,7 +32,7 @@
 namespace city3d {
 
 /// The integer program of one building, built by the hypothesis module.
-/// Every field is compared by same_hypothesis() (src/pipeline/pipeline.cpp), which lets the rebuilds skip
+/// Every field is compared by same_hypothesis() (src/pipeline/rebuild.cpp), which lets the rebuilds skip
 /// a hypothesis already selected over: a field added here must be compared there too.
 struct SelectionProblem {
   std::size_t face_count = 0;                 ///< |F|, candidate faces 0..face_count-1
