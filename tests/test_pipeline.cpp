@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +18,7 @@
 
 #include "city3d/batch.hpp"
 #include "city3d/crop.hpp"
+#include "city3d/error.hpp"
 #include "city3d/evaluation.hpp"
 #include "city3d/footprint_io.hpp"
 #include "city3d/mesh_check.hpp"
@@ -511,6 +513,13 @@ TEST(Smoke, rebuild_variants_over_the_work_limit_are_not_selected_and_said) {
   ASSERT_FALSE(rebuild.over_limit.empty()) << r.report.note;
   EXPECT_TRUE(rebuild.over_limit.front().first.smaller_planes);
   EXPECT_GT(rebuild.over_limit.front().second, 3000u);
+
+  // The work limit is a parameter (RebuildParams::max_candidate_faces): under it, no rebuild at all.
+  ReconstructionParams small_limit;
+  small_limit.rebuild.max_candidate_faces = 100;
+  const BuildingResult limited = reconstruct_building(building_from_cloud("13894", cloud.points), small_limit);
+  EXPECT_EQ(limited.report.rebuild.result, RebuildOutcome::Result::too_large) << limited.report.note;
+  EXPECT_NE(limited.report.note.find("more than 100)"), std::string::npos) << limited.report.note;
 }
 
 // Left-out points in no plane, grouped by plan and height, become horizontal roof levels.
@@ -537,7 +546,7 @@ TEST(LeftOut, points_in_no_plane_become_a_roof_level_per_group) {
   for (int k = 0; k < 6; ++k) add(20.0 + 0.2 * k, 0.0, 3.0, true);
   for (int k = 0; k < 12; ++k) add(10.0 + 0.2 * (k % 4), 0.2 * (k / 4), 3.0, false);
 
-  const std::vector<PlanarSegment> levels = detail::left_out_levels(points, {plane}, unexplained, 0.2, 10);
+  const std::vector<PlanarSegment> levels = detail::left_out_levels(points, {plane}, unexplained, 0.2, 10, RebuildParams{});
   ASSERT_EQ(levels.size(), 2u);
   EXPECT_EQ(levels[0].points.size(), 15u);
   EXPECT_EQ(levels[0].points.front(), 30u);
@@ -556,7 +565,7 @@ TEST(LeftOut, points_in_no_plane_become_a_roof_level_per_group) {
   EXPECT_NEAR(-levels[1].plane.d, 5.06, 1e-12);
   // Linked in plan only within 3 spacings: at a spacing of 0.05 m (radius 0.15 m) the 0.2 m grid
   // falls apart into single points, none a level.
-  EXPECT_TRUE(detail::left_out_levels(points, {plane}, unexplained, 0.05, 10).empty());
+  EXPECT_TRUE(detail::left_out_levels(points, {plane}, unexplained, 0.05, 10, RebuildParams{}).empty());
 }
 
 // A plane whose points are mostly left out gets the rectangle around them, parallel to the outline.
@@ -590,7 +599,7 @@ TEST(LeftOut, a_plane_mostly_left_out_gets_a_rectangle_parallel_to_the_outline) 
     points.push_back({p.x, p.y, 4.0});
     unexplained.push_back(true);
   }
-  const std::vector<Segment2> lines = detail::left_out_plane_lines(points, {strip, roof, row}, unexplained, {square});
+  const std::vector<Segment2> lines = detail::left_out_plane_lines(points, {strip, roof, row}, unexplained, {square}, RebuildParams{});
   ASSERT_EQ(lines.size(), 4u);
   // In the outline's frame the rectangle is [2, 5.8] x [1.1, 1.3]: the left-out rows only.
   double u0 = 1e9, u1 = -1e9, v0 = 1e9, v1 = -1e9;
@@ -681,5 +690,52 @@ TEST(EndToEnd, synthetic_box_gable_l_and_step_buildings_reconstruct_to_their_sha
     EXPECT_EQ(r.model->mesh.faces.size(), c.faces);
     EXPECT_NEAR(check.signed_volume, c.volume, 0.03 * c.volume);
     EXPECT_LT(r.report.rmse, 0.05);
+  }
+}
+
+// The roof type (3DBAG's b3_dak_type) takes a roof within RoofTypeParams::flat_angle of horizontal as
+// flat: a shed roof of 5 degrees is slanted at the default 3, horizontal at 10.
+TEST(EndToEnd, the_roof_type_follows_its_flat_angle) {
+  const Ring2 outline{{0, 0}, {10, 0}, {10, 6}, {0, 6}};
+  const double rise = std::tan(5.0 * kPi / 180.0);
+  const BuildingInput input = synthetic_input(outline, [rise](double x, double) { return 4.0 + rise * x; }, 7);
+  const BuildingResult slanted = reconstruct_building(input, {});
+  ASSERT_EQ(slanted.report.level, ModelLevel::lod22) << slanted.report.reason;
+  EXPECT_EQ(slanted.report.roof_type, "slanted");
+  ReconstructionParams params;
+  params.roof_type.flat_angle = 10.0;
+  const BuildingResult flat = reconstruct_building(input, params);
+  ASSERT_EQ(flat.report.level, ModelLevel::lod22) << flat.report.reason;
+  EXPECT_EQ(flat.report.roof_type, "horizontal");
+}
+
+// Every tuning number of the pipeline's own steps is a parameter: checked, and in the parameters'
+// text that a resume compares.
+TEST(Parameters, the_pipelines_own_numbers_are_checked_and_written) {
+  const std::string text = parameters_text({});
+  for (const char* line : {"outline.gap_spacings = 1.5\n", "outline.wide_gap_spacings = 4\n",
+                           "rebuild.max_candidate_faces = 3000\n", "roof_type.flat_angle = 3\n",
+                           "planes.small_min_points = 10\n", "full_rung_time_share = 0.59999999999999998\n",
+                           "walls.min_escaping_rays = 3\n", "heightmap.resolution_per_spacing = 0.775"})
+    EXPECT_NE(text.find(line), std::string::npos) << line;
+  const std::vector<std::pair<std::string, std::function<void(ReconstructionParams&)>>> wrong = {
+      {"outline.min_region_area", [](ReconstructionParams& p) { p.outline.min_region_area = 0; }},
+      {"outline.gap_spacings", [](ReconstructionParams& p) { p.outline.gap_spacings = NAN; }},
+      {"outline.part_gap", [](ReconstructionParams& p) { p.outline.part_gap = -1; }},
+      {"rebuild.level_link_height", [](ReconstructionParams& p) { p.rebuild.level_link_height = -0.5; }},
+      {"roof_type.flat_angle", [](ReconstructionParams& p) { p.roof_type.flat_angle = 91; }},
+      {"full_rung_time_share", [](ReconstructionParams& p) { p.full_rung_time_share = 0; }},
+      {"small_min_points", [](ReconstructionParams& p) { p.planes.small_min_points = 2; }},
+      {"min_escaping_rays", [](ReconstructionParams& p) { p.walls.min_escaping_rays = 16; }},
+  };
+  for (const auto& [name, spoil] : wrong) {
+    ReconstructionParams p;
+    spoil(p);
+    try {
+      p.validate();
+      ADD_FAILURE() << name << " was not rejected";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
   }
 }

@@ -491,6 +491,21 @@ TEST(Heightmap, automatic_resolution_is_about_twenty_centimetres_at_ahn3_density
   EXPECT_THROW(city3d::automatic_resolution(0.0), city3d::ConfigError);
 }
 
+// The automatic resolution's three numbers are parameters: twice the spacings give twice the pixel,
+// and the bounds clamp it.
+TEST(Heightmap, the_automatic_resolution_follows_its_parameters) {
+  city3d::HeightmapParams params;
+  params.resolution_per_spacing = 1.55;
+  EXPECT_NEAR(city3d::automatic_resolution(15.0, params), 0.40, 0.01);
+  params.max_resolution = 0.3;
+  EXPECT_DOUBLE_EQ(city3d::automatic_resolution(15.0, params), 0.3) << "clamped to max_resolution";
+  params.min_resolution = 0.5;
+  EXPECT_THROW(params.validate(), city3d::ConfigError) << "min_resolution above max_resolution";
+  params = {};
+  params.resolution_per_spacing = 0.0;
+  EXPECT_THROW(params.validate(), city3d::ConfigError);
+}
+
 TEST(Heightmap, box_raster_has_automatic_resolution_covers_the_footprint_and_the_roof_height) {
   const auto points = flat_box(20, 12, 6.0, 10);
   const Heightmap map = rasterise_tin(points, HeightmapParams{});

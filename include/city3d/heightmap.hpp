@@ -13,12 +13,17 @@ namespace city3d {
 
 /// Parameters of rasterise_tin() and detect_edges().
 struct HeightmapParams {
-  /// Pixel size r, metres; >= 0. 0 = automatic: r = 0.775 / sqrt(density), density in points/m2
-  /// measured on the TIN (vertices / area of the kept triangles), clamped to [0.05, 2] m. 0.775 is
-  /// the paper's r = 0.20 m at AHN3's ~15 points/m2 (about 0.78 x the mean point spacing
-  /// 1/sqrt(density)); it also gives 0.29 m for Vaihingen (7 pts/m2; paper 0.25) and 0.13 m for
-  /// DALES (35 pts/m2; paper 0.15).
+  /// Pixel size r, metres; >= 0. 0 = automatic: r = resolution_per_spacing / sqrt(density), density
+  /// in points/m2 measured on the TIN (vertices / area of the kept triangles), clamped to
+  /// [min_resolution, max_resolution].
   double resolution = 0.0;
+  /// The automatic resolution in mean point spacings (1/sqrt(density)), > 0. 0.775 is the paper's
+  /// r = 0.20 m at AHN3's ~15 points/m2; it also gives 0.29 m for Vaihingen (7 pts/m2; paper 0.25)
+  /// and 0.13 m for DALES (35 pts/m2; paper 0.15).
+  double resolution_per_spacing = 0.775;
+  /// Bounds of the automatic resolution, metres, 0 < min_resolution <= max_resolution.
+  double min_resolution = 0.05;
+  double max_resolution = 2.0;
   /// Triangles with an edge longer than this (metres, > 0) are not rasterised, so that concave
   /// outlines and courtyards are not filled. 3 m is about 12 point spacings at AHN3 density:
   /// long enough to bridge gaps (dark roofs, occlusion), short enough to keep an L's notch.
@@ -55,9 +60,10 @@ struct Heightmap {
   }
 };
 
-/// The automatic resolution for a point density (points/m2): 0.775 / sqrt(density), clamped to
-/// [0.05, 2] m. Throws ConfigError when density is not positive and finite.
-double automatic_resolution(double points_per_m2);
+/// The automatic resolution for a point density (points/m2): resolution_per_spacing / sqrt(density),
+/// clamped to [min_resolution, max_resolution] (0.775 / sqrt(density) in [0.05, 2] m by default).
+/// Throws ConfigError when density is not positive and finite.
+double automatic_resolution(double points_per_m2, const HeightmapParams& params = {});
 
 /// Rasterises the 2D Delaunay TIN of `local_points` (xy triangulated, z interpolated linearly
 /// inside each triangle at pixel centres). Points with equal xy keep the highest z. Triangles with

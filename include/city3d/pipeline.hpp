@@ -41,6 +41,51 @@ LodSet parse_lod_set(const std::string& text);
 /// "1.2,1.3,2.2" for a set.
 std::string lod_set_text(const LodSet& lods);
 
+/// The outline of a building without footprint (City3D's second mode, pipeline/outline.hpp): inferred
+/// from the occupancy raster of its points, regularised, fitted to the points and cut into the parts
+/// that are modelled.
+struct OutlineParams {
+  /// Smallest region of the occupancy raster kept as an outline part, m2.
+  double min_region_area = 2.0;
+  /// Gaps in the points the outline closes, in point spacings (the radius of the occupancy's closing).
+  double gap_spacings = 1.5;
+  /// Gaps in a roof's returns (dark or wet roofing, glass) that explain_more's wide outline closes,
+  /// in point spacings: the closing with a disc of this radius fills gaps and concavities up to twice
+  /// as wide (about 3 m at AHN3's 8 points per m2) and keeps wider ones.
+  double wide_gap_spacings = 4.0;
+  /// Smallest area of a part other than the largest that is modelled, m2: a garden shed or a silo
+  /// (a part also needs most of the points of a roof plane).
+  double min_extra_part_area = 4.0;
+  /// Parts nearer to each other than this are taken to touch, metres (a part is kept apart or left out).
+  double part_gap = 0.1;
+};
+
+/// The rebuilds of a LoD2 model that leaves points unexplained or carries surface no point supports
+/// (explain_more, pipeline/rebuild.hpp), beyond the two thresholds that start them
+/// (ReconstructionParams::retry_unexplained_share and retry_unsupported_area).
+struct RebuildParams {
+  /// A variant hypothesis of more candidate faces than this is not selected (a work limit: the
+  /// program of each variant grows with them); the report's note says which were not tried.
+  std::size_t max_candidate_faces = 3000;
+  /// A roof level of left-out points (pipeline/left_out.hpp) links points within this many point
+  /// spacings of each other in plan (the step lines' search radius)...
+  double level_link_spacings = 3.0;
+  /// ...and within this of each other in height, metres (the step lines' min_step: a larger difference
+  /// is a step between two levels). Links chain: a level can span more height than this.
+  double level_link_height = 0.5;
+  /// A left-out plane's rectangle thinner than this is no cell of its own (a row of returns), metres.
+  double min_left_out_width = 0.1;
+};
+
+/// The roof type of a LoD2.2 model as 3DBAG names it (b3_dak_type): "horizontal", "multiple
+/// horizontal" or "slanted".
+struct RoofTypeParams {
+  /// A roof face within this many degrees of horizontal is flat.
+  double flat_angle = 3.0;
+  /// Flat roof faces whose mean heights differ by more than this are on different levels, metres.
+  double level_gap = 0.3;
+};
+
 /// Parameters of every per-building stage.
 struct ReconstructionParams {
   PlaneParams planes;
@@ -53,6 +98,9 @@ struct ReconstructionParams {
   SelectionParams selection;
   AssembleParams assemble;
   Lod1Params lod1;
+  OutlineParams outline;
+  RebuildParams rebuild;
+  RoofTypeParams roof_type;
   /// Every model is rounded to this grid (metres) as the CityJSON transform and the OBJ/PLY
   /// writers write it (0.0001 = 0.1 mm, the writers' default), and checked for validity as rounded.
   double output_grid = 0.0001;
@@ -83,11 +131,13 @@ struct ReconstructionParams {
   /// ways (see explain_more()). A large value: never rebuilt for it.
   double retry_unsupported_area = 1.0;
   /// Opt-in wall-clock safety net for one building's LoD2 attempts, seconds; 0 (the default): none.
-  /// The full rung gets 60% of it, the footprint-walls rung the rest, and each selection what is
-  /// left of its rung's share. When it fires the output depends on the machine's speed and load;
+  /// The full rung gets full_rung_time_share of it, the footprint-walls rung the rest, and each
+  /// selection what is left of its rung's share. When it fires the output depends on the machine's speed and load;
   /// without it, every limit counts work (nodes, faces, points) and the output is a function of
   /// the inputs and parameters alone.
   double time_limit = 0.0;
+  /// The full LoD2 rung's share of time_limit, in (0, 1].
+  double full_rung_time_share = 0.6;
   /// When not empty: per-building intermediate results (heightmap and edge PNGs, polylines before
   /// and after regularisation, walls, planes, candidate faces) are written into <debug_dir>/<id>/.
   std::string debug_dir;

@@ -30,6 +30,9 @@ struct PlaneParams {
   /// is sin(9.8 deg): the normal is more than 80.2 deg away from vertical, i.e. the plane is within
   /// 9.8 deg of vertical. Everything else (flat and sloped roofs up to ~80 deg) is a roof.
   double wall_max_normal_z = 0.17;
+  /// Fewest points of a plane when a building is retried with smaller planes (a shed or a garage of
+  /// fewer than min_points in all) and in explain_more's rebuilds, >= 3.
+  int small_min_points = 10;
 
   /// Throws ConfigError listing every invalid field ("planes: invalid parameters: ...; ...").
   void validate() const;

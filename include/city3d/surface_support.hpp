@@ -31,6 +31,12 @@ struct SurfaceSupportParams {
   double sample_spacing = 0.25;  ///< largest distance between neighbouring samples of a face, > 0
   double radius = 1.5;           ///< plan distance of the points that make a sample's local top, > 0
   double tolerance = 1.0;        ///< height above the local top from which a sample is unsupported, >= 0
+  /// An unsupported sample or column is measured again at 1/refine of the spacing (refine^2 samples in
+  /// its square, refine columns in its width), odd (the middle one stands where the sample stood) and
+  /// >= 1: a gap in the points narrower than the spacing, next to a wall, then counts for its own width,
+  /// not for the spacing's (Delft b112715ef: a 0.25 m column 4.5 m high over one such gap was 1.1 m2 of
+  /// a 1.4 m2 total). Only unsupported samples are refined: the cost stays with them.
+  int refine = 5;
   /// Throws ConfigError listing every invalid field.
   void validate() const;
 };

@@ -44,6 +44,12 @@ struct WallParams {
   /// lines.
   int min_detected_lines = 3;
   double detected_length_ratio = 0.5;  ///< >= 0
+  /// Inner lines are sampled this far apart to tell their parts inside the footprint and away from
+  /// its boundary, metres, > 0.
+  double sample_step = 0.1;
+  /// Without a footprint, a line is an outer wall when at least this many of the 15 rays cast from
+  /// one of its sides escape past every other line (and more than from its other side), in [1, 15].
+  int min_escaping_rays = 3;
 
   /// Throws ConfigError listing every invalid field.
   void validate() const;

@@ -83,6 +83,7 @@ void SurfaceSupportParams::validate() const {
   if (!(sample_spacing > 0.0) || !std::isfinite(sample_spacing)) add("sample_spacing must be > 0 (metres)");
   if (!(radius > 0.0) || !std::isfinite(radius)) add("radius must be > 0 (metres)");
   if (!(tolerance >= 0.0) || !std::isfinite(tolerance)) add("tolerance must be >= 0 (metres)");
+  if (refine < 1 || refine % 2 == 0) add("refine must be odd and >= 1");
   if (!problems.empty()) throw ConfigError("surface support: " + problems);
 }
 
@@ -353,12 +354,6 @@ double sample_polygon_axes(const std::vector<Point3>& face, double spacing, std:
   return area / static_cast<double>(samples.size());
 }
 
-// An unsupported sample or column is measured again at a fifth of the spacing (25 samples in its
-// square, 5 columns in its width): a gap in the points narrower than the spacing, next to a wall, then
-// counts for its own width, not for the spacing's (Delft b112715ef: a 0.25 m column 4.5 m high over one
-// such gap was 1.1 m2 of a 1.4 m2 total). Only unsupported samples are refined: the cost stays with them.
-constexpr int kRefine = 5;
-
 }  // namespace
 
 double sample_polygon(const std::vector<Point3>& face, double spacing, std::vector<Point3>& out) {
@@ -402,7 +397,7 @@ SurfaceSupport surface_support(const PolygonMesh& mesh, const std::vector<Surfac
         const double top = local_top.at(column.at.x, column.at.y);
         if (std::isnan(top) || !(highest - top > params.tolerance)) continue;
         const std::pair<double, double> range{column.u - 0.5 * column.width, column.u + 0.5 * column.width};
-        vertical_columns(polygon, column.width / kRefine, narrow, &range);
+        vertical_columns(polygon, column.width / params.refine, narrow, &range);
         for (const Column& part : narrow) unsupported += measure(part);
       }
       out.face_unsupported_area[f] = unsupported;
@@ -411,7 +406,7 @@ SurfaceSupport surface_support(const PolygonMesh& mesh, const std::vector<Surfac
     }
     SampleAxes axes;
     const double area = sample_polygon_axes(polygon, params.sample_spacing, samples, &axes);
-    const double step = params.sample_spacing / kRefine;
+    const double step = params.sample_spacing / params.refine;
     // Whether a finer sample lies inside the face (even-odd, in the grid's axes): those beyond its edge
     // are not of it. The face in those axes is made on the first unsupported sample.
     std::vector<std::pair<double, double>> plane;
@@ -439,15 +434,15 @@ SurfaceSupport surface_support(const PolygonMesh& mesh, const std::vector<Surfac
         continue;
       }
       if (!(p.z - top > params.tolerance)) continue;
-      for (int i = 0; i < kRefine; ++i) {
-        for (int j = 0; j < kRefine; ++j) {
-          const double du = (i - kRefine / 2) * step, dv = (j - kRefine / 2) * step;
+      for (int i = 0; i < params.refine; ++i) {
+        for (int j = 0; j < params.refine; ++j) {
+          const double du = (i - params.refine / 2) * step, dv = (j - params.refine / 2) * step;
           const Point3 q{p.x + du * axes.u.x + dv * axes.v.x, p.y + du * axes.u.y + dv * axes.v.y,
                          p.z + du * axes.u.z + dv * axes.v.z};
           if (!(q.z - local_top.lower_bound(q.x, q.y) > params.tolerance) || !inside(q)) continue;
           const double sub_top = local_top.at(q.x, q.y);
           if (std::isnan(sub_top) || !(q.z - sub_top > params.tolerance)) continue;
-          unsupported += area / (kRefine * kRefine);
+          unsupported += area / (params.refine * params.refine);
           out.height_excess = std::max(out.height_excess, q.z - sub_top);
           out.unsupported_samples.push_back(q);
         }

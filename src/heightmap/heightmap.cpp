@@ -24,9 +24,6 @@ namespace city3d {
 namespace detail {
 namespace {
 
-constexpr double kResolutionPerSpacing = 0.775;  // r = 0.775 / sqrt(density): 0.20 m at 15 pts/m2
-constexpr double kMinResolution = 0.05;          // metres
-constexpr double kMaxResolution = 2.0;           // metres
 constexpr std::size_t kMaxPixels = 50'000'000;   // ~200 MB of float; a building never needs this
 constexpr int kMarginPixels = 1;                 // empty border so the outline is an edge
 constexpr double kMinOutlineDrop = 5.0;          // metres below the lowest data outside the outline
@@ -78,6 +75,11 @@ void HeightmapParams::validate() const {
   std::vector<std::string> problems;
   if (!(resolution >= 0.0) || !std::isfinite(resolution))
     problems.push_back("resolution = " + detail::format_number(resolution) + " m, need >= 0 (0 = automatic)");
+  if (!(resolution_per_spacing > 0.0) || !std::isfinite(resolution_per_spacing))
+    problems.push_back("resolution_per_spacing = " + detail::format_number(resolution_per_spacing) + ", need > 0");
+  if (!(min_resolution > 0.0) || !(max_resolution >= min_resolution) || !std::isfinite(max_resolution))
+    problems.push_back("min_resolution = " + detail::format_number(min_resolution) + " m, max_resolution = " +
+                       detail::format_number(max_resolution) + " m, need 0 < min <= max");
   if (!(max_edge_length > 0.0) || !std::isfinite(max_edge_length))
     problems.push_back("max_edge_length = " + detail::format_number(max_edge_length) + " m, need > 0");
   if (closing_size < 0 || (closing_size > 0 && closing_size % 2 == 0))
@@ -92,12 +94,12 @@ void HeightmapParams::validate() const {
   throw ConfigError(message);
 }
 
-double automatic_resolution(double points_per_m2) {
+double automatic_resolution(double points_per_m2, const HeightmapParams& params) {
   if (!(points_per_m2 > 0.0) || !std::isfinite(points_per_m2))
     throw ConfigError("heightmap: point density " + detail::format_number(points_per_m2) +
                       " points/m2, need > 0");
-  return std::clamp(detail::kResolutionPerSpacing / std::sqrt(points_per_m2), detail::kMinResolution,
-                    detail::kMaxResolution);
+  return std::clamp(params.resolution_per_spacing / std::sqrt(points_per_m2), params.min_resolution,
+                    params.max_resolution);
 }
 
 Heightmap rasterise_tin(const std::vector<Point3>& local_points, const HeightmapParams& params) {
@@ -160,7 +162,7 @@ Heightmap rasterise_tin(const std::vector<Point3>& local_points, const Heightmap
                               format_number(params.max_edge_length) + " m");
 
   const double density = static_cast<double>(used_vertices.size()) / area;
-  const double r = params.resolution > 0.0 ? params.resolution : automatic_resolution(density);
+  const double r = params.resolution > 0.0 ? params.resolution : automatic_resolution(density, params);
 
   double min_x = std::numeric_limits<double>::infinity(), min_y = min_x;
   double max_x = -min_x, max_y = -min_x;

@@ -14,7 +14,7 @@ namespace city3d::detail {
 
 std::vector<PlanarSegment> left_out_levels(const std::vector<Point3>& points, const std::vector<PlanarSegment>& segments,
                                            const std::vector<bool>& unexplained, double spacing,
-                                           std::size_t min_points) {
+                                           std::size_t min_points, const RebuildParams& params) {
   std::vector<PlanarSegment> levels;
   std::vector<bool> segmented(points.size());
   for (const PlanarSegment& s : segments)
@@ -22,7 +22,7 @@ std::vector<PlanarSegment> left_out_levels(const std::vector<Point3>& points, co
   std::vector<std::uint32_t> loose;  // ascending
   for (std::uint32_t i = 0; i < points.size(); ++i)
     if (unexplained[i] && !segmented[i]) loose.push_back(i);
-  const double radius = kLevelLinkSpacings * spacing;
+  const double radius = params.level_link_spacings * spacing;
   if (loose.size() < min_points || !(radius > 0)) return levels;
 
   // Union-find over the loose points; neighbours from a grid of radius-sized cells.
@@ -47,7 +47,7 @@ std::vector<PlanarSegment> left_out_levels(const std::vector<Point3>& points, co
         for (std::uint32_t j : it->second) {
           if (j <= k) continue;
           const Point3& q = points[loose[j]];
-          if (std::hypot(p.x - q.x, p.y - q.y) <= radius && std::fabs(p.z - q.z) <= kLevelLinkHeight) {
+          if (std::hypot(p.x - q.x, p.y - q.y) <= radius && std::fabs(p.z - q.z) <= params.level_link_height) {
             const std::uint32_t a = root(k), b = root(j);
             if (a != b) parent[std::max(a, b)] = std::min(a, b);
           }
@@ -77,7 +77,8 @@ std::vector<PlanarSegment> left_out_levels(const std::vector<Point3>& points, co
 }
 
 std::vector<Segment2> left_out_plane_lines(const std::vector<Point3>& points, const std::vector<PlanarSegment>& roofs,
-                                           const std::vector<bool>& unexplained, const std::vector<Polygon2>& outline) {
+                                           const std::vector<bool>& unexplained, const std::vector<Polygon2>& outline,
+                                           const RebuildParams& params) {
   std::vector<Point2> directions;  // unit, one per outline edge
   const auto add_directions = [&directions](const Ring2& ring) {
     for (std::size_t k = 0; k < ring.size(); ++k) {
@@ -107,7 +108,7 @@ std::vector<Segment2> left_out_plane_lines(const std::vector<Point3>& points, co
         u0 = std::min(u0, pu), u1 = std::max(u1, pu), v0 = std::min(v0, pv), v1 = std::max(v1, pv);
       }
       const double area = (u1 - u0) * (v1 - v0);
-      if (std::min(u1 - u0, v1 - v0) < kMinLeftOutWidth || !(area < best)) continue;
+      if (std::min(u1 - u0, v1 - v0) < params.min_left_out_width || !(area < best)) continue;
       best = area;
       const auto at = [&u](double pu, double pv) { return Point2{pu * u.x - pv * u.y, pu * u.y + pv * u.x}; };
       corners = {at(u0, v0), at(u1, v0), at(u1, v1), at(u0, v1)};

@@ -15,37 +15,30 @@
 #include <cstddef>
 #include <vector>
 
+#include "city3d/pipeline.hpp"
 #include "city3d/planes.hpp"
 #include "city3d/regularise.hpp"
 #include "city3d/types.hpp"
 
 namespace city3d::detail {
 
-/// A group of left-out points links points within this many point spacings of each other in plan
-/// (the step lines' search radius)...
-constexpr double kLevelLinkSpacings = 3.0;
-/// ...and within this of each other in height, metres (the step lines' min_step: a larger difference
-/// is a step between two levels). Links chain: a group can span more height than this (a crown of
-/// scattered returns), and is one level all the same; the selection and the rebuilds' keep rule
-/// decide whether it explains the points.
-constexpr double kLevelLinkHeight = 0.5;
-/// Rectangles thinner than this are no area (a row of returns), metres.
-constexpr double kMinLeftOutWidth = 0.1;
-
 /// The horizontal roof levels of the left-out points (`unexplained[i]`) that are in no segment:
-/// points linked in plan (kLevelLinkSpacings x `spacing`) and height (kLevelLinkHeight) form a group;
-/// each group of at least `min_points` is a roof segment at the median height of its points (the
-/// upper median of an even count).
+/// points linked in plan (`params.level_link_spacings` x `spacing`) and height
+/// (`params.level_link_height`) form a group; links chain, so a group can span more height than that
+/// (a crown of scattered returns) and is one level all the same: the selection and the rebuilds' keep
+/// rule decide whether it explains the points. Each group of at least `min_points` is a roof segment
+/// at the median height of its points (the upper median of an even count).
 /// Ordered by the groups' smallest point index. Deterministic.
 std::vector<PlanarSegment> left_out_levels(const std::vector<Point3>& points, const std::vector<PlanarSegment>& segments,
                                            const std::vector<bool>& unexplained, double spacing,
-                                           std::size_t min_points);
+                                           std::size_t min_points, const RebuildParams& params);
 
 /// The lines of a cell of its own for every roof plane of which at least half the points are
 /// left out: the four sides of the rectangle around those points, in the direction of an outline edge
 /// (parallel or orthogonal to the walls) for which it is smallest. Planes with fewer than 3 such
-/// points, or whose rectangle is thinner than kMinLeftOutWidth, get none.
+/// points, or whose rectangle is thinner than `params.min_left_out_width`, get none.
 std::vector<Segment2> left_out_plane_lines(const std::vector<Point3>& points, const std::vector<PlanarSegment>& roofs,
-                                           const std::vector<bool>& unexplained, const std::vector<Polygon2>& outline);
+                                           const std::vector<bool>& unexplained, const std::vector<Polygon2>& outline,
+                                           const RebuildParams& params);
 
 }  // namespace city3d::detail

@@ -16,16 +16,10 @@
 namespace city3d::detail {
 namespace {
 
-// A roof face within this many degrees of horizontal is flat (roof_type_of).
-constexpr double kFlatRoofAngle = 3.0;
-
-// Flat roof faces whose mean heights differ by more than this are on different levels, metres.
-constexpr double kRoofLevelGap = 0.3;
-
-// Roof type of an LoD2.2 model as 3DBAG names them: every roof face within kFlatRoofAngle of
-// horizontal and all at one height (within kRoofLevelGap): "horizontal"; horizontal at several heights: "multiple
+// Roof type of an LoD2.2 model as 3DBAG names them: every roof face within flat_angle of horizontal
+// and all at one height (within level_gap): "horizontal"; horizontal at several heights: "multiple
 // horizontal"; otherwise "slanted".
-std::string roof_type_of(const BuildingModel& model) {
+std::string roof_type_of(const BuildingModel& model, const RoofTypeParams& params) {
   const std::vector<SurfaceType> types = surface_types(model);
   std::vector<double> heights;
   bool slanted = false;
@@ -43,14 +37,14 @@ std::string roof_type_of(const BuildingModel& model) {
     }
     const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
     if (!(len > 0)) continue;
-    if (nz / len < std::cos(kFlatRoofAngle * 3.14159265358979 / 180.0)) slanted = true;
+    if (nz / len < std::cos(params.flat_angle * kPi / 180.0)) slanted = true;
     heights.push_back(zsum / face.size());
   }
   if (heights.empty()) return "could not be detected";
   if (slanted) return "slanted";
   std::sort(heights.begin(), heights.end());
   for (std::size_t k = 1; k < heights.size(); ++k)
-    if (heights[k] - heights[k - 1] > kRoofLevelGap) return "multiple horizontal";
+    if (heights[k] - heights[k - 1] > params.level_gap) return "multiple horizontal";
   return "horizontal";
 }
 
@@ -123,7 +117,7 @@ void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams
     for (std::size_t f = 0; f < primary.mesh.faces.size(); ++f)
       if (types[f] == SurfaceType::roof)
         for (std::uint32_t v : primary.mesh.faces[f]) r.h_ridge = std::max(r.h_ridge, primary.mesh.vertices[v].z + primary.origin.z);
-    r.roof_type = roof_type_of(primary);
+    r.roof_type = roof_type_of(primary, params.roof_type);
   } else {
     made.push_back({"1.2", primary});
     real.push_back("1.2");

@@ -34,14 +34,14 @@ struct BuildingPlanes {
 BuildingPlanes building_planes(const std::vector<Point3>& points, const ReconstructionParams& params,
                                const PlaneDetector& detector, DebugTrace* trace, BuildingReport& report) {
   std::vector<PlanarSegment> segments = detector.detect(params.planes);
-  if (!has_roof(segments) && points.size() >= kMinPointsForSmallRoof) {
+  const int fewest = params.planes.small_min_points;
+  if (!has_roof(segments) && points.size() >= static_cast<std::size_t>(fewest)) {
     // A shed or a garage can hold fewer points than min_points in all: rather than a block, try
     // one more time with planes of half min_points, or a third of its points when that is fewer
-    // (at least kMinPointsForSmallRoof).
+    // (at least small_min_points).
     PlaneParams small = params.planes;
     small.min_points =
-        std::max<int>(kMinPointsForSmallRoof,
-                      std::min<int>(params.planes.min_points / 2, static_cast<int>(points.size() / 3)));
+        std::max<int>(fewest, std::min<int>(params.planes.min_points / 2, static_cast<int>(points.size() / 3)));
     if (small.min_points < params.planes.min_points) {
       segments = detector.detect(small);
       const std::string note = "small building: planes of at least " + std::to_string(small.min_points) + " points";
@@ -100,7 +100,7 @@ RegularisationResult vertical_lines(const BuildingInput& input, const std::vecto
   if (unexplained) {
     // Their cells, after the regularisation, which would merge a narrow part's lines into the wall
     // beside it.
-    const std::vector<Segment2> left_out = left_out_plane_lines(points, roofs, *unexplained, outline);
+    const std::vector<Segment2> left_out = left_out_plane_lines(points, roofs, *unexplained, outline, params.rebuild);
     lines.segments.insert(lines.segments.end(), left_out.begin(), left_out.end());
     lines.segments_after = lines.segments.size();
   }
@@ -196,9 +196,10 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
   if (variant.unexplained) {
     // explain_more's variant for left-out points (pipeline/left_out.hpp): their roof levels.
     const std::size_t min_points =
-        static_cast<std::size_t>(std::max<int>(kMinPointsForSmallRoof, params.planes.min_points / 2));
+        static_cast<std::size_t>(std::max<int>(params.planes.small_min_points, params.planes.min_points / 2));
     const std::vector<PlanarSegment> levels = left_out_levels(points, planes.segments, *variant.unexplained,
-                                                              point_spacing(outline, points.size()), min_points);
+                                                              point_spacing(outline, points.size()), min_points,
+                                                              params.rebuild);
     planes.roofs.insert(planes.roofs.end(), levels.begin(), levels.end());
     report.planes = planes.roofs.size();
   }

@@ -18,9 +18,6 @@ namespace city3d::detail {
 
 using Clock = std::chrono::steady_clock;
 
-/// Fewest points a roof plane may have on the retry for small buildings and in the rebuilds.
-constexpr std::size_t kMinPointsForSmallRoof = 10;
-
 /// Throws ReconstructionError when the rung's time is used up after `stage`, so the ladder moves on
 /// (only with the opt-in --time-limit; without it the deadline is time_point::max()).
 void check_time(Clock::time_point deadline, ReconstructionStage stage);
@@ -51,8 +48,8 @@ struct Lod2Hypothesis {
 struct Lod2Variant {
   /// The second rung: the footprint's walls only, no inferred inner walls.
   bool footprint_walls_only = false;
-  /// Without a footprint, the outline is inferred closing gaps of kWideGapSpacings point spacings
-  /// instead of 1.5 (for roofs whose returns have gaps).
+  /// Without a footprint, the outline is inferred closing gaps of OutlineParams::wide_gap_spacings
+  /// point spacings instead of gap_spacings (for roofs whose returns have gaps).
   bool wide_outline = false;
   /// When given, the points a model of this rung left farther than 1 m: they get roof levels, and on
   /// the full rung cells of their own (pipeline/left_out.hpp).

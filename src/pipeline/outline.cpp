@@ -13,33 +13,23 @@
 namespace city3d::detail {
 namespace {
 
-// Smallest area of an inferred outline part other than the largest that is modelled, m2: a garden
-// shed or a silo (infer_outline keeps regions of 2 m2 and more, but a part needs a roof plane).
-constexpr double kMinExtraPartArea = 4.0;
-
-// Smallest area of a region of the occupancy raster that infer_outline keeps, m2.
-constexpr double kMinOutlineRegionArea = 2.0;
-
-// Gaps in the points that the inferred outline closes, in point spacings (infer_outline).
-constexpr double kOutlineGapSpacings = 1.5;
-
 // The parts of an inferred outline to model (largest first): the largest, and every further part of
-// kMinExtraPartArea or more that holds most of the points of some roof plane and keeps clear of the
-// parts already kept (fitting an outline to its points can push two parts into each other: then the
+// min_extra_part_area or more that holds most of the points of some roof plane and keeps clear (by
+// part_gap) of the parts already kept (fitting an outline to its points can push two parts into each other: then the
 // part as inferred, and if that touches too, it is left out rather than made to touch). Leaving a part out shows in unexplained_points.
 std::vector<Polygon2> separate_parts(const std::vector<Polygon2>& parts, const std::vector<Polygon2>& as_inferred,
-                                     const std::vector<PlanarSegment>& roofs, const std::vector<Point3>& points) {
-  constexpr double kGap = 0.1;  // metres between kept parts
+                                     const std::vector<PlanarSegment>& roofs, const std::vector<Point3>& points,
+                                     const OutlineParams& params) {
   std::vector<std::size_t> kept_index{0};
   std::vector<Polygon2> kept{parts.front()};
   const auto near_kept = [&](const Polygon2& part) {
     std::vector<std::size_t> near;
     for (std::size_t j = 0; j < kept.size(); ++j)
-      if (rings_near(part.outer, kept[j].outer, kGap)) near.push_back(j);
+      if (rings_near(part.outer, kept[j].outer, params.part_gap)) near.push_back(j);
     return near;
   };
   for (std::size_t k = 1; k < parts.size(); ++k) {
-    if (ring_area(parts[k].outer) < kMinExtraPartArea) continue;
+    if (ring_area(parts[k].outer) < params.min_extra_part_area) continue;
     const bool has_plane = std::any_of(roofs.begin(), roofs.end(), [&](const PlanarSegment& s) {
       return 2 * points_inside(parts[k].outer, s.points, points) > s.points.size();
     });
@@ -57,9 +47,9 @@ std::vector<Polygon2> separate_parts(const std::vector<Polygon2>& parts, const s
     for (std::size_t j : near) trial[j] = as_inferred[kept_index[j]];
     bool clear = true;
     for (std::size_t i = 0; i < trial.size() && clear; ++i) {
-      clear = !rings_near(as_inferred[k].outer, trial[i].outer, kGap);
+      clear = !rings_near(as_inferred[k].outer, trial[i].outer, params.part_gap);
       for (std::size_t j : near)
-        if (j != i && rings_near(trial[j].outer, trial[i].outer, kGap)) clear = false;
+        if (j != i && rings_near(trial[j].outer, trial[i].outer, params.part_gap)) clear = false;
     }
     if (!clear) continue;
     kept = std::move(trial);
@@ -79,18 +69,18 @@ std::vector<Polygon2> building_outline(const BuildingInput& input, const Heightm
   const std::vector<Point3>& points = input.points;
   std::vector<Polygon2> outline;
   const std::vector<Polygon2> inferred =
-      infer_outline(heightmap, points, params.polylines.max_hausdorff, kMinOutlineRegionArea,
-                    wide_outline ? kWideGapSpacings : kOutlineGapSpacings);
+      infer_outline(heightmap, points, params.polylines.max_hausdorff, params.outline.min_region_area,
+                    wide_outline ? params.outline.wide_gap_spacings : params.outline.gap_spacings);
   for (const Polygon2& p : inferred)
     outline.push_back(fit_outline_to_points(regularise_outline(p, params.regularise.angle_threshold), points));
   if (outline.empty() && !input.footprint.polygons.empty()) {
-    // Too small for the heightmap to hold an outline (under infer_outline's 2 m2): the convex
+    // Too small for the heightmap to hold an outline (under min_region_area): the convex
     // hull of the points (building_from_cloud), regularised like an inferred outline.
     outline.push_back(regularise_outline(input.footprint.polygons.front(), params.regularise.angle_threshold));
     add_note(report, "outline: convex hull of the points");
   }
   if (outline.empty()) throw ReconstructionError(ReconstructionStage::walls, "no outline could be inferred from the points");
-  if (outline.size() > 1) outline = separate_parts(outline, inferred, roofs, points);
+  if (outline.size() > 1) outline = separate_parts(outline, inferred, roofs, points, params.outline);
   if (outline.size() > 1) add_note(report, "outline: " + std::to_string(outline.size()) + " parts");
   return outline;
 }

@@ -11,15 +11,10 @@
 
 namespace city3d::detail {
 
-/// Gaps in a roof's returns (dark or wet roofing, glass) that explain_more's wide outline closes: the
-/// occupancy is closed with a disc of this many point spacings in radius, which fills gaps and
-/// concavities up to twice as wide (about 3 m at AHN3's 8 points per m2) and keeps wider ones.
-constexpr double kWideGapSpacings = 4.0;
-
 /// The outline of a building without footprint, inferred from the heightmap of its points
-/// (infer_outline, closing gaps of `wide_outline` ? kWideGapSpacings : 1.5 point spacings),
-/// regularised and fitted to the points, and cut into the parts that are modelled (separate parts of
-/// kMinExtraPartArea or more that hold most of a roof plane's points). The footprint's polygons when
+/// (infer_outline, closing gaps of `params.outline`'s `wide_outline` ? wide_gap_spacings : gap_spacings
+/// point spacings), regularised and fitted to the points, and cut into the parts that are modelled
+/// (separate parts of min_extra_part_area or more that hold most of a roof plane's points). The footprint's polygons when
 /// the input has a footprint. Notes what it did in `report`; throws ReconstructionError when no
 /// outline can be inferred.
 std::vector<Polygon2> building_outline(const BuildingInput& input, const Heightmap& heightmap,

@@ -29,6 +29,26 @@ void ReconstructionParams::validate() const {
   check([&] { assemble.validate(); });
   check([&] { lod1.validate(); });
   check([&] { validity.validate(); });
+  // The pipeline's own numbers (outline, rebuild, roof type), each named as parameters_text names it.
+  const auto need = [&](bool ok, const char* what) {
+    if (!ok) problems += (problems.empty() ? "" : "; ") + std::string(what);
+  };
+  need(outline.min_region_area > 0 && std::isfinite(outline.min_region_area), "outline.min_region_area must be > 0 (m2)");
+  need(outline.gap_spacings > 0 && std::isfinite(outline.gap_spacings), "outline.gap_spacings must be > 0");
+  need(outline.wide_gap_spacings > 0 && std::isfinite(outline.wide_gap_spacings),
+       "outline.wide_gap_spacings must be > 0");
+  need(outline.min_extra_part_area >= 0 && std::isfinite(outline.min_extra_part_area),
+       "outline.min_extra_part_area must be >= 0 (m2)");
+  need(outline.part_gap >= 0 && std::isfinite(outline.part_gap), "outline.part_gap must be >= 0 (metres)");
+  need(rebuild.level_link_spacings > 0 && std::isfinite(rebuild.level_link_spacings),
+       "rebuild.level_link_spacings must be > 0");
+  need(rebuild.level_link_height >= 0 && std::isfinite(rebuild.level_link_height),
+       "rebuild.level_link_height must be >= 0 (metres)");
+  need(rebuild.min_left_out_width >= 0 && std::isfinite(rebuild.min_left_out_width),
+       "rebuild.min_left_out_width must be >= 0 (metres)");
+  need(roof_type.flat_angle >= 0 && roof_type.flat_angle <= 90, "roof_type.flat_angle must be in [0, 90] (degrees)");
+  need(roof_type.level_gap >= 0 && std::isfinite(roof_type.level_gap), "roof_type.level_gap must be >= 0 (metres)");
+  need(full_rung_time_share > 0 && full_rung_time_share <= 1, "full_rung_time_share must be in (0, 1]");
   if (!lods.any()) problems += (problems.empty() ? "" : "; ") + std::string("lods: no level of detail asked for");
   if (!(lod13_step_height > 0)) problems += (problems.empty() ? "" : "; ") + std::string("lod13_step_height must be > 0 (metres)");
   if (!(output_grid >= 0) || !std::isfinite(output_grid))
@@ -54,7 +74,11 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("planes.max_angle", p.planes.max_angle);
   put("planes.absorb_rounds", p.planes.absorb_rounds);
   put("planes.wall_max_normal_z", p.planes.wall_max_normal_z);
+  put("planes.small_min_points", p.planes.small_min_points);
   put("heightmap.resolution", p.heightmap.resolution);
+  put("heightmap.resolution_per_spacing", p.heightmap.resolution_per_spacing);
+  put("heightmap.min_resolution", p.heightmap.min_resolution);
+  put("heightmap.max_resolution", p.heightmap.max_resolution);
   put("heightmap.max_edge_length", p.heightmap.max_edge_length);
   put("heightmap.closing_size", p.heightmap.closing_size);
   put("heightmap.canny_low", p.heightmap.canny_low);
@@ -77,6 +101,8 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("walls.footprint_margin", p.walls.footprint_margin);
   put("walls.min_detected_lines", p.walls.min_detected_lines);
   put("walls.detected_length_ratio", p.walls.detected_length_ratio);
+  put("walls.sample_step", p.walls.sample_step);
+  put("walls.min_escaping_rays", p.walls.min_escaping_rays);
   put("step_lines.enabled", p.step_lines.enabled);
   put("step_lines.min_step", p.step_lines.min_step);
   put("step_lines.search_spacings", p.step_lines.search_spacings);
@@ -108,6 +134,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("hypothesis.surface_support.sample_spacing", p.hypothesis.surface_support.sample_spacing);
   put("hypothesis.surface_support.radius", p.hypothesis.surface_support.radius);
   put("hypothesis.surface_support.tolerance", p.hypothesis.surface_support.tolerance);
+  put("hypothesis.surface_support.refine", p.hypothesis.surface_support.refine);
   put("selection.lambda_data", p.selection.lambda_data);
   put("selection.lambda_complexity", p.selection.lambda_complexity);
   put("selection.lambda_roof", p.selection.lambda_roof);
@@ -124,6 +151,17 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("assemble.merge_coplanar", p.assemble.merge_coplanar);
   put("lod1.roof_percentile", p.lod1.roof_percentile);
   put("lod1.min_height", p.lod1.min_height);
+  put("outline.min_region_area", p.outline.min_region_area);
+  put("outline.gap_spacings", p.outline.gap_spacings);
+  put("outline.wide_gap_spacings", p.outline.wide_gap_spacings);
+  put("outline.min_extra_part_area", p.outline.min_extra_part_area);
+  put("outline.part_gap", p.outline.part_gap);
+  put("rebuild.max_candidate_faces", p.rebuild.max_candidate_faces);
+  put("rebuild.level_link_spacings", p.rebuild.level_link_spacings);
+  put("rebuild.level_link_height", p.rebuild.level_link_height);
+  put("rebuild.min_left_out_width", p.rebuild.min_left_out_width);
+  put("roof_type.flat_angle", p.roof_type.flat_angle);
+  put("roof_type.level_gap", p.roof_type.level_gap);
   put("output_grid", p.output_grid);
   put("lods", lod_set_text(p.lods));
   put("lod13_step_height", p.lod13_step_height);
@@ -135,6 +173,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("retry_unexplained_share", p.retry_unexplained_share);
   put("retry_unsupported_area", p.retry_unsupported_area);
   put("time_limit", p.time_limit);
+  put("full_rung_time_share", p.full_rung_time_share);
   return s.str();
 }
 

@@ -24,9 +24,6 @@ namespace {
 
 using detail::Clock;
 
-// Share of a building's time limit the full LoD2 rung may use; the second rung gets the rest.
-constexpr double kFullRungShare = 0.6;
-
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
@@ -137,7 +134,7 @@ BuildingModel rung_model(const BuildingInput& input, const ReconstructionParams&
 
 // The fallback ladder: full LoD2 -> LoD2 with footprint walls only -> LoD1 block, from the level
 // asked for down. The first rung that gives a closed, 2-manifold, outward model wins; the report keeps
-// the first failure. With --time-limit, the full rung may use kFullRungShare of the building's time,
+// the first failure. With --time-limit, the full rung may use full_rung_time_share of the building's time,
 // the footprint-walls rung the rest.
 std::optional<BuildingModel> walk_ladder(const BuildingInput& input, const ReconstructionParams& params,
                                          Clock::time_point start, BuildingReport& r,
@@ -158,7 +155,7 @@ std::optional<BuildingModel> walk_ladder(const BuildingInput& input, const Recon
     if (rung.level == requested) started = true;
     if (!started) continue;
     try {
-      const double share = rung.level == ModelLevel::lod22 ? kFullRungShare : 1.0;
+      const double share = rung.level == ModelLevel::lod22 ? params.full_rung_time_share : 1.0;
       const auto deadline = params.time_limit > 0
                                 ? start + std::chrono::duration_cast<Clock::duration>(
                                               std::chrono::duration<double>(share * params.time_limit))

@@ -23,13 +23,12 @@ std::string percent(std::size_t part, std::size_t whole) {
   return s.str();
 }
 
-// A work limit of explain_more: a building whose hypothesis has more candidate faces than this is not
-// rebuilt, and a variant hypothesis with more is not selected. Each rebuild is a selection at least as
-// large as the rung's, and the smaller planes make larger programs: the two 40,000-point clouds of
-// city3d_dev (8,312 and 13,874 candidate faces) took 521 s and 110 s with their rebuilds, against 14 s
-// and 10 s without, and AHN3/13894's smaller planes turned 1,933 candidate faces into 5,852 and 1 s
-// into 38 s (docs/BENCHMARKS.md).
-constexpr std::size_t kMaxRebuildFaces = 3000;
+// A parameter's value as the notes name it: 4 for 4.0, 4.5 for 4.5.
+std::string number_text(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
 
 // Whether two hypotheses give the same model under the same selection parameters: the same
 // candidate faces (vertices, faces) and the same selection problem, exactly. explain_more's variants
@@ -127,14 +126,21 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
   outcome.unsupported = unsupported;
   outcome.far_before = outcome.far_after = best.far;
   outcome.unsupported_before = outcome.unsupported_after = best.support.unsupported_area;
-  if (faces > kMaxRebuildFaces) {
+  // A work limit (RebuildParams::max_candidate_faces): a building whose hypothesis has more candidate
+  // faces is not rebuilt, and a variant hypothesis with more is not selected. Each rebuild is a
+  // selection at least as large as the rung's, and the smaller planes make larger programs: the two
+  // 40,000-point clouds of city3d_dev (8,312 and 13,874 candidate faces) took 521 s and 110 s with
+  // their rebuilds, against 14 s and 10 s without, and AHN3/13894's smaller planes turned 1,933
+  // candidate faces into 5,852 and 1 s into 38 s (docs/BENCHMARKS.md).
+  const std::size_t max_faces = params.rebuild.max_candidate_faces;
+  if (faces > max_faces) {
     outcome.result = RebuildOutcome::Result::too_large;
     r.rebuild = outcome;
     add_note(r, what(best) + ": not rebuilt (" + std::to_string(faces) + " candidate faces, more than " +
-                    std::to_string(kMaxRebuildFaces) + ")");
+                    std::to_string(max_faces) + ")");
     return best;
   }
-  const int small_points = std::max<int>(kMinPointsForSmallRoof, params.planes.min_points / 2);
+  const int small_points = std::max<int>(params.planes.small_min_points, params.planes.min_points / 2);
   struct HypothesisVariant {
     bool smaller_planes;
     bool wide_outline;
@@ -161,7 +167,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
     if (h.smaller_planes) add("roof planes of at least " + std::to_string(small_points) + " points");
     if (h.left_out) add("roofs for the points left out");
     if (h.wide_outline)
-      add("an outline closing gaps of " + std::to_string(static_cast<int>(kWideGapSpacings)) + " point spacings");
+      add("an outline closing gaps of " + number_text(params.outline.wide_gap_spacings) + " point spacings");
     if (v.without_prior) add("without the face prior");
     if (v.half_complexity) add("half the complexity weight");
     return text;
@@ -170,7 +176,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
   std::vector<Lod2Hypothesis> tried;  // the variant hypotheses selected over (the rung's own is `hypothesis`)
   const Explained before = best;
   std::string kept;
-  std::string over_limit;  // variant hypotheses not selected: more than kMaxRebuildFaces candidate faces
+  std::string over_limit;  // variant hypotheses not selected: more than max_faces candidate faces
   BuildingReport kept_report;
   // The opt-in --time-limit bounds the rebuilds too: once it is used up no further variant is begun,
   // and the best model so far is kept.
@@ -192,7 +198,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
         log_debug("explain: building " + input.id + ": " + name(h, {}) + ": " + e.what());
         continue;
       }
-      if (candidate_faces(*built) > kMaxRebuildFaces) {
+      if (candidate_faces(*built) > max_faces) {
         over_limit += (over_limit.empty() ? "" : ", ") + name(h, {}) + ": " + std::to_string(candidate_faces(*built));
         outcome.over_limit.emplace_back(variant_of(h, {}), candidate_faces(*built));
         continue;
@@ -260,7 +266,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
     add_note(r, what(before) + ": no rebuild explained more");
   }
   if (!over_limit.empty())
-    add_note(r, "not tried (more than " + std::to_string(kMaxRebuildFaces) + " candidate faces): " + over_limit);
+    add_note(r, "not tried (more than " + std::to_string(max_faces) + " candidate faces): " + over_limit);
   if (stopped) add_note(r, "rebuilds stopped at the time limit");
   r.rebuild = std::move(outcome);
   return best;

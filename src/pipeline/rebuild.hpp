@@ -60,7 +60,7 @@ struct Lod2Rung {
 /// misrepresented all the same). Hypotheses:
 ///  - roof planes of half min_points: an upper part or a small tier whose few points form no plane of
 ///    min_points is otherwise covered by the roof below it;
-///  - without a footprint, an outline closing wider gaps (kWideGapSpacings): a roof whose returns have
+///  - without a footprint, an outline closing wider gaps (OutlineParams::wide_gap_spacings): a roof whose returns have
 ///    gaps (dark or wet roofing, glass) is otherwise cut at the gap, and a changed outline changes
 ///    the lines regularised against it; and both;
 ///  - roofs for the points left out (pipeline/left_out.hpp): a horizontal level for each group of

@@ -38,6 +38,8 @@ void PlaneParams::validate() const {
     problems.push_back("max_angle = " + std::to_string(max_angle) + " deg, need in (0, 90]");
   if (absorb_rounds < 0)
     problems.push_back("absorb_rounds = " + std::to_string(absorb_rounds) + ", need >= 0");
+  if (small_min_points < 3)
+    problems.push_back("small_min_points = " + std::to_string(small_min_points) + ", need >= 3");
   if (!(wall_max_normal_z >= 0.0 && wall_max_normal_z < 1.0))
     problems.push_back("wall_max_normal_z = " + std::to_string(wall_max_normal_z) +
                        ", need in [0, 1)");

@@ -19,6 +19,10 @@ void WallParams::validate() const {
   if (!(min_wall_length >= 0.0)) problems << " min_wall_length must be >= 0 (got " << min_wall_length << ");";
   if (!(footprint_margin >= 0.0))
     problems << " footprint_margin must be >= 0 (got " << footprint_margin << ");";
+  if (!(sample_step > 0.0) || !std::isfinite(sample_step))
+    problems << " sample_step must be > 0 (got " << sample_step << ");";
+  if (min_escaping_rays < 1 || min_escaping_rays > 15)
+    problems << " min_escaping_rays must be in [1, 15] (got " << min_escaping_rays << ");";
   if (min_detected_lines < 0)
     problems << " min_detected_lines must be >= 0 (got " << min_detected_lines << ");";
   if (!(detected_length_ratio >= 0.0))
@@ -29,7 +33,6 @@ void WallParams::validate() const {
 namespace detail {
 namespace {
 
-constexpr double kSampleStep = 0.1;           // metres between samples along a line (inner-wall clipping)
 constexpr double kCollinearTolerance = 1e-3;  // metres: footprint vertices this close to the line are dropped
 
 double length(const Point2& a, const Point2& b) { return std::hypot(b.x - a.x, b.y - a.y); }
@@ -145,7 +148,7 @@ void inner_walls(const FootprintShape& shape, const std::vector<std::pair<Point2
     const auto [a, b] = canonical(a0, b0);
     const double len = length(a, b);
     if (len <= 0) continue;
-    const int steps = std::max(1, static_cast<int>(std::ceil(len / kSampleStep)));
+    const int steps = std::max(1, static_cast<int>(std::ceil(len / params.sample_step)));
     const double step = len / steps;
     int run_start = -1, interior = 0;
     auto flush = [&](int first, int last) {  // samples first..last inside
@@ -199,7 +202,6 @@ void outline_walls(const std::vector<std::pair<Point2, Point2>>& all_lines, cons
   for (const auto& [a, b] : all_lines)
     if (length(a, b) >= std::max(params.min_wall_length, 1e-9)) lines.push_back(canonical(a, b));
   const double fan[] = {0.0, -kPi / 6, kPi / 6, -kPi / 3, kPi / 3};
-  constexpr int kMinEscapes = 3;  // of 15 rays per side
   for (std::size_t i = 0; i < lines.size(); ++i) {
     const Point2 a = lines[i].first, b = lines[i].second;
     const Point2 n = left_normal(a, b);
@@ -216,7 +218,7 @@ void outline_walls(const std::vector<std::pair<Point2, Point2>>& all_lines, cons
       }
     }
     const int best = escapes[0] >= escapes[1] ? 0 : 1;
-    const bool outer = escapes[best] >= kMinEscapes && escapes[best] > escapes[1 - best];
+    const bool outer = escapes[best] >= params.min_escaping_rays && escapes[best] > escapes[1 - best];
     const Point2 normal = outer && best == 1 ? Point2{-n.x, -n.y} : n;
     out.push_back(make_plane(a, b, normal, outer, source));
   }
