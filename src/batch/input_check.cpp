@@ -248,9 +248,19 @@ RunCrs resolve_run_crs(const std::string& given, const std::string& points_crs, 
     return std::string("give --crs ") + (f.horizontal.rfind("EPSG:", 0) == 0 ? f.horizontal : "HORIZONTAL") +
            "+VERTICAL, VERTICAL the EPSG code of the heights' datum";
   };
-  RunCrs run;
-  if (!given.empty()) {
-    const CrsFacts facts = crs_facts(given);
+  // The CRS the run takes: --crs, else what the point clouds record, else the footprints'.
+  const bool from_flag = !given.empty(), from_points = !from_flag && !points_crs.empty();
+  const std::string& stated = from_flag ? given : from_points ? points_crs : footprints_srs;
+  if (stated.empty()) {
+    if (!footprints_path.empty())
+      log_warning("input: neither the point clouds nor the footprints " + footprints_path +
+                  " record a CRS: the outputs carry none (give --crs)");
+    else
+      log_info("crs: the point clouds record none: the outputs carry none (give --crs when they are in one)");
+    return {};
+  }
+  const CrsFacts facts = crs_facts(stated);
+  if (from_flag) {
     if (facts.geographic)
       throw ConfigError("crs: " + described(facts) + " is geographic (degrees); city3d needs projected coordinates in "
                         "metres");
@@ -264,32 +274,17 @@ RunCrs resolve_run_crs(const std::string& given, const std::string& points_crs, 
         throw IoError("input: --crs " + given + " is " + described(facts) + " but the point clouds record " +
                       short_crs(points_crs) + ": give the CRS they are in, or none to take theirs");
     }
-    run = {facts.name.empty() ? given : facts.name, "--crs"};
-    log_info("crs: " + described(facts) + ", from --crs" +
-             (facts.vertical ? "" : "; its heights have no stated vertical datum (" + how_to_state(facts) + ")"));
-    return run;
   }
-  if (!points_crs.empty()) {
-    const CrsFacts facts = crs_facts(points_crs);
-    run = {facts.name.empty() ? points_crs : facts.name, "point clouds"};
-    log_info("crs: " + described(facts) + ", as the point clouds record it" +
+  const RunCrs run = {facts.name.empty() ? stated : facts.name,
+                      from_flag ? "--crs" : from_points ? "point clouds" : "footprints"};
+  if (from_flag || from_points)
+    log_info("crs: " + described(facts) + (from_flag ? ", from --crs" : ", as the point clouds record it") +
              (facts.vertical ? "" : "; its heights have no stated vertical datum (" + how_to_state(facts) + ")"));
-    return run;
-  }
-  if (!footprints_srs.empty()) {
-    const CrsFacts facts = crs_facts(footprints_srs);
-    run = {facts.name.empty() ? footprints_srs : facts.name, "footprints"};
+  else
     log_warning("input: the point clouds record no CRS: the run takes " + described(facts) + " from the footprints " +
                 footprints_path +
                 (facts.vertical ? std::string(" (say so with --crs)")
                                 : "; the heights then have no stated vertical datum (" + how_to_state(facts) + ")"));
-    return run;
-  }
-  if (!footprints_path.empty())
-    log_warning("input: neither the point clouds nor the footprints " + footprints_path +
-                " record a CRS: the outputs carry none (give --crs)");
-  else
-    log_info("crs: the point clouds record none: the outputs carry none (give --crs when they are in one)");
   return run;
 }
 

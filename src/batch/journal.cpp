@@ -187,16 +187,22 @@ json record_json(const BuildingRecord& r) {
   return j;
 }
 
-BuildingRecord parse_record(const json& j) {
-  BuildingRecord r;
+// The fields a BuildingRecord and its RecordRef share, read from the record's line.
+template <class Record>
+void parse_record_summary(const json& j, Record& r) {
   r.index = j.at("index").get<std::uint64_t>();
   r.id = j.at("id").get<std::string>();
   r.status = parse_status(j.at("status").get<std::string>());
+  r.model_file = j.at("model").get<std::string>();
+  r.model_hash = j.at("model_hash").get<std::string>();
+}
+
+BuildingRecord parse_record(const json& j) {
+  BuildingRecord r;
+  parse_record_summary(j, r);
   r.report_csv = j.at("csv").get<std::string>();
   r.report_json = j.at("json").get<std::string>();
   r.feature = j.at("feature").get<std::string>();
-  r.model_file = j.at("model").get<std::string>();
-  r.model_hash = j.at("model_hash").get<std::string>();
   if (const auto it = j.find("mesh"); it != j.end()) {
     BuildingModel m;
     m.id = r.id;
@@ -329,11 +335,7 @@ JournalReader::JournalReader(std::string path) : path_(std::move(path)) {
       try {
         const json j = json::parse(*text);
         RecordRef ref;
-        ref.index = j.at("index").get<std::uint64_t>();
-        ref.id = j.at("id").get<std::string>();
-        ref.status = parse_status(j.at("status").get<std::string>());
-        ref.model_file = j.at("model").get<std::string>();
-        ref.model_hash = j.at("model_hash").get<std::string>();
+        parse_record_summary(j, ref);
         ref.offset = line_offset;
         ref.length = line.size();
         const auto [it, fresh] = position_of_index.emplace(ref.index, records_.size());

@@ -135,17 +135,13 @@ std::vector<ConfigEntry> read_table(const toml::table& table, const std::string&
         }
         break;
       case ValueType::number:
-        expected = "a number";
-        ok = scalar_text(node, true, false, text);
-        break;
       case ValueType::string:
-        expected = "a string";
-        ok = scalar_text(node, false, true, text);
+      case ValueType::number_or_string: {
+        const bool numbers = type != ValueType::string, strings = type != ValueType::number;
+        expected = !strings ? "a number" : !numbers ? "a string" : "a number or a string";
+        ok = scalar_text(node, numbers, strings, text);
         break;
-      case ValueType::number_or_string:
-        expected = "a number or a string";
-        ok = scalar_text(node, true, true, text);
-        break;
+      }
     }
     if (!ok) {
       problems.emplace_back(line, where + key + " must be " + expected + ", not " + type_name(node));

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -14,6 +15,8 @@
 #include <fstream>
 #include <limits>
 #include <system_error>
+#include <tuple>
+#include <type_traits>
 
 #include "city3d/error.hpp"
 #include "city3d/model_io.hpp"
@@ -49,6 +52,27 @@ void write_png(const cv::Mat& image, const std::string& path) {
     throw IoError("debug: cannot write " + path + ": " + e.what());
   }
   if (!written) throw IoError("debug: cannot write " + path);
+}
+
+// An OBJ file drawing each of `items` as one element over corners of its own: `element` is 'l' (a
+// polyline) or 'f' (a face), `corners` gives an item's corners as a std::array. `stage` names the
+// module in messages, `what` the items in the header line.
+template <class Item, class Corners>
+void write_items_obj(const std::string& path, const char* stage, const char* what,
+                     const std::vector<Item>& items, char element, Corners corners) {
+  constexpr std::size_t n = std::tuple_size_v<std::invoke_result_t<Corners, const Item&>>;
+  std::ofstream out(path);
+  if (!out) throw IoError(std::string(stage) + ": cannot open " + path + " for writing");
+  out.precision(17);
+  out << "# city3d " << what << ": " << items.size() << "\n";
+  for (const Item& item : items)
+    for (const Point3& c : corners(item)) out << "v " << c.x << ' ' << c.y << ' ' << c.z << "\n";
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    out << element;
+    for (std::size_t k = 1; k <= n; ++k) out << ' ' << n * i + k;
+    out << "\n";
+  }
+  if (!out) throw IoError(std::string(stage) + ": write failed for " + path);
 }
 
 // The height of the walls drawn above the floor, metres.
@@ -126,32 +150,16 @@ void write_polylines_obj(const std::string& path, const std::vector<Polyline2>& 
 }
 
 void write_segments_obj(const std::string& path, const std::vector<Segment2>& segments, double z) {
-  std::ofstream out(path);
-  if (!out) throw IoError("regularise: cannot open " + path + " for writing");
-  out.precision(17);
-  out << "# city3d segments: " << segments.size() << "\n";
-  for (const auto& s : segments) {
-    out << "v " << s.a.x << ' ' << s.a.y << ' ' << z << "\n";
-    out << "v " << s.b.x << ' ' << s.b.y << ' ' << z << "\n";
-  }
-  for (std::size_t i = 0; i < segments.size(); ++i) out << "l " << 2 * i + 1 << ' ' << 2 * i + 2 << "\n";
-  if (!out) throw IoError("regularise: write failed for " + path);
+  write_items_obj(path, "regularise", "segments", segments, 'l', [z](const Segment2& s) {
+    return std::array<Point3, 2>{{{s.a.x, s.a.y, z}, {s.b.x, s.b.y, z}}};
+  });
 }
 
 void write_walls_obj(const std::string& path, const std::vector<VerticalPlane>& walls, double z0, double z1) {
-  std::ofstream out(path);
-  if (!out) throw IoError("walls: cannot open " + path + " for writing");
-  out.precision(17);
-  out << "# city3d walls: " << walls.size() << "\n";
-  for (const auto& w : walls) {
-    out << "v " << w.a.x << ' ' << w.a.y << ' ' << z0 << "\n";
-    out << "v " << w.b.x << ' ' << w.b.y << ' ' << z0 << "\n";
-    out << "v " << w.b.x << ' ' << w.b.y << ' ' << z1 << "\n";
-    out << "v " << w.a.x << ' ' << w.a.y << ' ' << z1 << "\n";
-  }
-  for (std::size_t i = 0; i < walls.size(); ++i)
-    out << "f " << 4 * i + 1 << ' ' << 4 * i + 2 << ' ' << 4 * i + 3 << ' ' << 4 * i + 4 << "\n";
-  if (!out) throw IoError("walls: write failed for " + path);
+  write_items_obj(path, "walls", "walls", walls, 'f', [z0, z1](const VerticalPlane& w) {
+    return std::array<Point3, 4>{
+        {{w.a.x, w.a.y, z0}, {w.b.x, w.b.y, z0}, {w.b.x, w.b.y, z1}, {w.a.x, w.a.y, z1}}};
+  });
 }
 
 void write_candidates_obj(const std::string& path, const CandidateFaces& candidates) {

@@ -15,31 +15,42 @@
 namespace city3d {
 
 void HypothesisParams::validate() const {
-  std::vector<std::string> problems;
-  auto need = [&](bool ok, const std::string& what) {
-    if (!ok) problems.push_back(what);
+  // Each number with its lower bound, in the order the problems are listed; a strict bound is itself
+  // refused. The negated comparison refuses NaN too.
+  struct LowerBound {
+    const char* name;
+    double value;
+    int bound;
+    bool strict;
   };
-  need(support_distance > 0.0, "support_distance must be > 0");
-  need(min_face_area >= 0.0, "min_face_area must be >= 0");
-  need(line_support_margin > 0.0, "line_support_margin must be > 0");
-  need(cell_support_margin >= 0.0, "cell_support_margin must be >= 0");
-  need(min_support_points >= 1, "min_support_points must be >= 1");
-  need(vertex_merge_tolerance > 0.0, "vertex_merge_tolerance must be > 0");
-  need(parallel_tolerance > 0.0, "parallel_tolerance must be > 0");
-  need(max_planes_per_cell >= 1, "max_planes_per_cell must be >= 1");
-  need(floor_clearance > 0.0, "floor_clearance must be > 0");
-  need(unmeasured_floor_drop >= 0.0, "unmeasured_floor_drop must be >= 0");
-  need(min_part_area >= 0.0, "min_part_area must be >= 0");
-  need(min_edge_length >= 0.0, "min_edge_length must be >= 0");
-  need(min_cell_width >= 0.0, "min_cell_width must be >= 0");
-  need(min_line_overlap >= 0.0, "min_line_overlap must be >= 0");
-  need(line_merge_distance >= 0.0, "line_merge_distance must be >= 0");
-  need(max_unsupported_area >= 0.0, "max_unsupported_area must be >= 0");
-  need(support_cut_height >= 0.0, "support_cut_height must be >= 0");
-  need(support_cut_rise >= 0.0, "support_cut_rise must be >= 0");
-  need(support_cut_area >= 0.0, "support_cut_area must be >= 0");
-  need(large_cell_count >= 0, "large_cell_count must be >= 0");
-  need(max_planes_per_large_cell >= 1, "max_planes_per_large_cell must be >= 1");
+  const LowerBound bounds[] = {
+      {"support_distance", support_distance, 0, true},
+      {"min_face_area", min_face_area, 0, false},
+      {"line_support_margin", line_support_margin, 0, true},
+      {"cell_support_margin", cell_support_margin, 0, false},
+      {"min_support_points", static_cast<double>(min_support_points), 1, false},
+      {"vertex_merge_tolerance", vertex_merge_tolerance, 0, true},
+      {"parallel_tolerance", parallel_tolerance, 0, true},
+      {"max_planes_per_cell", static_cast<double>(max_planes_per_cell), 1, false},
+      {"floor_clearance", floor_clearance, 0, true},
+      {"unmeasured_floor_drop", unmeasured_floor_drop, 0, false},
+      {"min_part_area", min_part_area, 0, false},
+      {"min_edge_length", min_edge_length, 0, false},
+      {"min_cell_width", min_cell_width, 0, false},
+      {"min_line_overlap", min_line_overlap, 0, false},
+      {"line_merge_distance", line_merge_distance, 0, false},
+      {"max_unsupported_area", max_unsupported_area, 0, false},
+      {"support_cut_height", support_cut_height, 0, false},
+      {"support_cut_rise", support_cut_rise, 0, false},
+      {"support_cut_area", support_cut_area, 0, false},
+      {"large_cell_count", static_cast<double>(large_cell_count), 0, false},
+      {"max_planes_per_large_cell", static_cast<double>(max_planes_per_large_cell), 1, false},
+  };
+  std::vector<std::string> problems;
+  for (const LowerBound& b : bounds)
+    if (!(b.strict ? b.value > b.bound : b.value >= b.bound))
+      problems.push_back(std::string(b.name) + (b.strict ? " must be > " : " must be >= ") +
+                         std::to_string(b.bound));
   try {
     surface_support.validate();
   } catch (const ConfigError& e) {

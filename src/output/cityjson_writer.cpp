@@ -388,8 +388,7 @@ class FeatureSplicer {
     expect('{');
     skip_ws();
     if (peek() == '}') fail("no CityObjects");
-    for (;;) {
-      skip_ws();
+    each_element('}', nullptr, [&] {
       const std::string key = read_key();
       skip_ws();
       expect(':');
@@ -401,35 +400,16 @@ class FeatureSplicer {
       } else if (key == "vertices") {
         seen_vertices = true;
         expect('[');
-        skip_ws();
-        if (peek() == ']') {
-          ++p_;
-        } else {
-          for (;;) {
-            skip_ws();
-            const std::size_t begin = p_;
-            extent.add(read_vertex());
-            vertices.append(s_, begin, p_ - begin);
-            ++count;
-            skip_ws();
-            if (peek() == ']') {
-              ++p_;
-              break;
-            }
-            expect(',');
-            vertices += ',';
-          }
-        }
+        each_element(']', &vertices, [&] {
+          const std::size_t begin = p_;
+          extent.add(read_vertex());
+          vertices.append(s_, begin, p_ - begin);
+          ++count;
+        });
       } else {
         skip_value(0);
       }
-      skip_ws();
-      if (peek() == '}') {
-        ++p_;
-        break;
-      }
-      expect(',');
-    }
+    });
     skip_ws();
     if (p_ != s_.size()) fail("text after the feature");
     if (!seen_objects || !seen_vertices) fail(seen_objects ? "no vertices" : "no CityObjects");
@@ -464,6 +444,28 @@ class FeatureSplicer {
     return raw;
   }
   std::string read_key() { return read_string_raw(); }
+  // The elements of an array or object whose opening bracket has been consumed, up to and including
+  // `close`: `element` reads one from its first non-blank character, and the commas between them are
+  // copied to `commas` unless it is null.
+  template <class Element>
+  void each_element(char close, std::string* commas, Element element) {
+    skip_ws();
+    if (peek() == close) {
+      ++p_;
+      return;
+    }
+    for (;;) {
+      skip_ws();
+      element();
+      skip_ws();
+      if (peek() == close) {
+        ++p_;
+        return;
+      }
+      expect(',');
+      if (commas) *commas += ',';
+    }
+  }
   // One vertex "[x,y,z]" of integers.
   Point3 read_vertex() {
     double q[3];
@@ -493,15 +495,8 @@ class FeatureSplicer {
     if (c == '"') {
       read_string_raw();
     } else if (c == '{' || c == '[') {
-      const char close = c == '{' ? '}' : ']';
       ++p_;
-      skip_ws();
-      if (peek() == close) {
-        ++p_;
-        return;
-      }
-      for (;;) {
-        skip_ws();
+      each_element(c == '{' ? '}' : ']', nullptr, [&] {
         if (c == '{') {
           read_string_raw();
           skip_ws();
@@ -509,13 +504,7 @@ class FeatureSplicer {
           skip_ws();
         }
         skip_value(depth + 1);
-        skip_ws();
-        if (peek() == close) {
-          ++p_;
-          return;
-        }
-        expect(',');
-      }
+      });
     } else if (s_.compare(p_, 4, "true") == 0 || s_.compare(p_, 4, "null") == 0) {
       p_ += 4;
     } else if (s_.compare(p_, 5, "false") == 0) {
@@ -536,24 +525,8 @@ class FeatureSplicer {
     } else if (c == '[') {
       ++p_;
       out += '[';
-      skip_ws();
-      if (peek() == ']') {
-        ++p_;
-        out += ']';
-        return;
-      }
-      for (;;) {
-        skip_ws();
-        copy_value(out, shift, depth + 1);
-        skip_ws();
-        if (peek() == ']') {
-          ++p_;
-          out += ']';
-          return;
-        }
-        expect(',');
-        out += ',';
-      }
+      each_element(']', &out, [&] { copy_value(out, shift, depth + 1); });
+      out += ']';
     } else if (shift && ((c >= '0' && c <= '9'))) {
       const std::size_t begin = p_;
       skip_number();
@@ -570,13 +543,7 @@ class FeatureSplicer {
   // Copies the members of an object whose '{' has been consumed, up to and including its '}'
   // (which is not copied).
   void copy_members(std::string& out, bool shift, int depth = 1) {
-    skip_ws();
-    if (peek() == '}') {
-      ++p_;
-      return;
-    }
-    for (;;) {
-      skip_ws();
+    each_element('}', &out, [&] {
       const std::size_t begin = p_;
       const std::string key = read_key();
       out.append(s_, begin, p_ - begin);
@@ -585,14 +552,7 @@ class FeatureSplicer {
       out += ':';
       skip_ws();
       copy_value(out, shift || key == "boundaries", depth + 1);
-      skip_ws();
-      if (peek() == '}') {
-        ++p_;
-        return;
-      }
-      expect(',');
-      out += ',';
-    }
+    });
   }
 
   const std::string& s_;
