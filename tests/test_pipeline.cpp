@@ -716,7 +716,9 @@ TEST(Parameters, the_pipelines_own_numbers_are_checked_and_written) {
   for (const char* line : {"outline.gap_spacings = 1.5\n", "outline.wide_gap_spacings = 4\n",
                            "rebuild.max_candidate_faces = 3000\n", "roof_type.flat_angle = 3\n",
                            "planes.small_min_points = 10\n", "full_rung_time_share = 0.59999999999999998\n",
-                           "walls.min_escaping_rays = 3\n", "heightmap.resolution_per_spacing = 0.775"})
+                           "walls.min_escaping_rays = 3\n", "heightmap.resolution_per_spacing = 0.775",
+                           "hypothesis.support_cut_mixed = 0.050000000000000003\n",
+                           "hypothesis.surface_support.refine = 5\n"})
     EXPECT_NE(text.find(line), std::string::npos) << line;
   const std::vector<std::pair<std::string, std::function<void(ReconstructionParams&)>>> wrong = {
       {"outline.min_region_area", [](ReconstructionParams& p) { p.outline.min_region_area = 0; }},
@@ -727,6 +729,8 @@ TEST(Parameters, the_pipelines_own_numbers_are_checked_and_written) {
       {"full_rung_time_share", [](ReconstructionParams& p) { p.full_rung_time_share = 0; }},
       {"small_min_points", [](ReconstructionParams& p) { p.planes.small_min_points = 2; }},
       {"min_escaping_rays", [](ReconstructionParams& p) { p.walls.min_escaping_rays = 16; }},
+      {"support_cut_mixed", [](ReconstructionParams& p) { p.hypothesis.support_cut_mixed = 1; }},
+      {"refine must be odd", [](ReconstructionParams& p) { p.hypothesis.surface_support.refine = 4; }},
   };
   for (const auto& [name, spoil] : wrong) {
     ReconstructionParams p;

@@ -149,6 +149,9 @@ struct HypothesisParams {
   /// without rising beyond its points) is cut along the line, in a direction of the cell's edges, that
   /// separates its points in the cell from that part (see 2), >= 0
   double support_cut_area = 1.0;
+  /// That line is drawn only when it leaves at most this share of either set on the wrong side (the
+  /// two are otherwise interleaved: no line ends the face where its points end), in [0, 1)
+  double support_cut_mixed = 0.05;
   /// The measure of surface no point supports: each candidate face's unsupported area (E_u of
   /// selection.hpp) and the ranking above.
   SurfaceSupportParams surface_support;

@@ -177,11 +177,10 @@ void add_chords(const std::vector<Point2>& poly, const Point2& n, double t, std:
 // A line that separates a plane's own points in a cell from the part of its face there that rises over
 // no point: among the directions of the cell's edges (a building's lines are few, and mostly parallel or
 // orthogonal), the one along which the two sets overlap least, projected on its normal; the threshold
-// midway across the gap. Returns false when every direction leaves more than kMaxMixed of either set on
-// the wrong side (the two are interleaved: no line ends the face where its points end).
+// midway across the gap. Returns false when every direction leaves more than `max_mixed` of either set
+// on the wrong side (the two are interleaved: no line ends the face where its points end).
 bool separating_line(const std::vector<Point2>& poly, const std::vector<Point2>& own, const std::vector<Point2>& bare,
-                     Point2& normal, double& threshold) {
-  constexpr double kMaxMixed = 0.05;
+                     double max_mixed, Point2& normal, double& threshold) {
   std::vector<Point2> normals;
   for (std::size_t i = 0; i < poly.size(); ++i) {
     const Point2 &p = poly[i], &q = poly[(i + 1) % poly.size()];
@@ -219,7 +218,7 @@ bool separating_line(const std::vector<Point2>& poly, const std::vector<Point2>&
       }
     }
   }
-  return best_mixed <= kMaxMixed;
+  return best_mixed <= max_mixed;
 }
 
 }  // namespace
@@ -287,7 +286,7 @@ std::vector<InputCurve> support_cuts(const std::vector<Point3>& points, const st
         if (inside_polygon(poly, points[i].x, points[i].y)) own.push_back({points[i].x, points[i].y});
       Point2 n;
       double t = 0.0;
-      if (own.size() >= static_cast<std::size_t>(params.min_support_points) && separating_line(poly, own, bare, n, t))
+      if (own.size() >= static_cast<std::size_t>(params.min_support_points) && separating_line(poly, own, bare, params.support_cut_mixed, n, t))
         add_chords(poly, n, t, cuts);
     }
   }

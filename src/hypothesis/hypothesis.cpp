@@ -56,6 +56,7 @@ void HypothesisParams::validate() const {
   } catch (const ConfigError& e) {
     problems.push_back(e.what());
   }
+  if (!(support_cut_mixed >= 0 && support_cut_mixed < 1)) problems.push_back("support_cut_mixed must be in [0, 1)");
   if (problems.empty()) return;
   std::string message = "hypothesis: invalid parameters: ";
   for (std::size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];

@@ -131,6 +131,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("hypothesis.support_cut_height", p.hypothesis.support_cut_height);
   put("hypothesis.support_cut_rise", p.hypothesis.support_cut_rise);
   put("hypothesis.support_cut_area", p.hypothesis.support_cut_area);
+  put("hypothesis.support_cut_mixed", p.hypothesis.support_cut_mixed);
   put("hypothesis.surface_support.sample_spacing", p.hypothesis.surface_support.sample_spacing);
   put("hypothesis.surface_support.radius", p.hypothesis.surface_support.radius);
   put("hypothesis.surface_support.tolerance", p.hypothesis.surface_support.tolerance);
