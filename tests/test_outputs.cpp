@@ -3,7 +3,8 @@
 // CRS, extent, version, parameters), the GeoPackage (opened with ogrinfo: one feature per input
 // footprint, each level's roof parts and MultiPolygonZ models), OBJ groups per semantic surface,
 // run.json, and report.html (rendered by headless Chromium: a screenshot, no console errors, the
-// map's hover and scale bar, inputs and parameters, the outlines inferred for single-building clouds).
+// map's hover and scale bar, inputs and parameters, the outlines inferred for single-building clouds);
+// a row of report.json against its CSV row, and report.html's data against the records it is made of.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -23,6 +24,9 @@
 #include <unistd.h>
 
 #include <nlohmann/json.hpp>
+
+#include "city3d/run_outputs.hpp"
+#include "reports/report.hpp"
 
 namespace {
 
@@ -713,5 +717,130 @@ TEST(OutputsClouds, report_html_of_single_building_clouds_draws_the_outlines_inf
   EXPECT_EQ(m.outlines, 3);
   expect_true_scale_bar(m);
   EXPECT_NE(page.find("Outlines inferred from the points"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+namespace {
+
+std::vector<std::string> split(const std::string& text, char separator) {
+  std::vector<std::string> fields;
+  std::stringstream ss(text);
+  for (std::string field; std::getline(ss, field, separator);) fields.push_back(field);
+  if (!text.empty() && text.back() == separator) fields.emplace_back();
+  return fields;
+}
+
+}  // namespace
+
+// report.json's row is made with nlohmann (issue 26): the CSV's columns as keys, in the CSV's order,
+// and every number the value CSV prints (rounded half away from zero, 6.5215 -> 6.522 as CityJSON
+// rounds it; -0 as 0), counts as integers, null where the CSV cell is empty.
+TEST(ReportRows, a_json_row_has_the_csv_columns_in_order_and_the_values_csv_prints) {
+  city3d::BuildingReport r;
+  r.id = "b1<&>";
+  r.status = city3d::BuildingStatus::ok;
+  r.level = city3d::ModelLevel::lod22;
+  r.note = "a note";
+  r.points = 72;
+  r.ground_z = -0.0004;  // -0 once rounded
+  r.roof_z = 2.39;
+  r.rmse = -1.0;  // no model: null
+  r.valid = true;
+  r.lods = "2.2";  // one level: no comma, so that the CSV row splits at every comma
+  r.footprint_area = 68.845;
+  r.h_roof_50p = 6.5215;  // printf alone writes 6.521
+  r.h_roof_70p = 1e16;    // beyond 1e15: as it is
+  r.unexplained_points = 12;
+  r.coverage = std::nan("");
+  r.cpu_seconds = 0.01234;
+  r.seconds = 0.5;
+  const std::string text = city3d::detail::report_json_row(r);
+  EXPECT_EQ(text.find('\n'), std::string::npos) << text;
+  EXPECT_EQ(text.find("-0"), std::string::npos) << text;
+  const nlohmann::ordered_json row = nlohmann::ordered_json::parse(text);
+  const std::vector<std::string> columns = split(city3d::detail::report_csv_header(), ',');
+  const std::vector<std::string> cells = split(city3d::detail::report_csv_row(r), ',');
+  ASSERT_EQ(cells.size(), columns.size());
+  std::vector<std::string> keys;
+  for (const auto& item : row.items()) keys.push_back(item.key());
+  EXPECT_EQ(keys, columns);
+  for (std::size_t k = 0; k < columns.size() && k < keys.size(); ++k) {
+    const auto& v = row[columns[k]];
+    if (v.is_string()) EXPECT_EQ(v.get<std::string>(), cells[k]) << columns[k];
+    else if (v.is_boolean()) EXPECT_EQ(v.get<bool>() ? "1" : "0", cells[k]) << columns[k];
+    else if (v.is_null()) EXPECT_EQ(cells[k], "") << columns[k];
+    else EXPECT_EQ(v.get<double>(), std::stod(cells[k])) << columns[k] << ": " << cells[k];
+  }
+  EXPECT_EQ(row["h_roof_50p"].get<double>(), 6.522);
+  EXPECT_EQ(row["footprint_area"].get<double>(), 68.85);
+  EXPECT_EQ(row["h_roof_70p"].get<double>(), 1e16);
+  EXPECT_TRUE(row["ground_z"].is_number_float());
+  EXPECT_EQ(row["ground_z"].get<double>(), 0.0);
+  EXPECT_TRUE(row["points"].is_number_unsigned());
+  EXPECT_TRUE(row["unexplained_points"].is_number_integer());
+  EXPECT_EQ(row["unexplained_points"].get<int>(), 12);
+  EXPECT_TRUE(row["rmse"].is_null());
+  EXPECT_TRUE(row["coverage"].is_null());
+  EXPECT_EQ(row["valid"], true);
+  EXPECT_EQ(row["cpu_seconds"].get<double>(), 0.0123);
+}
+
+namespace {
+
+// The records of a run held in memory.
+class HeldRecords : public city3d::OverviewSource {
+ public:
+  explicit HeldRecords(std::vector<city3d::OverviewRecord> records) : records_(std::move(records)) {}
+  std::size_t size() const override { return records_.size(); }
+  city3d::OverviewRecord at(std::size_t k, bool) const override { return records_.at(k); }
+
+ private:
+  std::vector<city3d::OverviewRecord> records_;
+};
+
+}  // namespace
+
+// report.html's data is made with nlohmann (issue 26), then '<', '>' and '&' escaped: texts of the
+// records and of the run that hold "</script>" cannot end the data's <script> element, and the data
+// parses back to what they hold; numbers as the page rounds them (8, not 8.0).
+TEST(ReportPage, its_data_cannot_close_its_script_element_and_parses_back_to_the_records) {
+  const fs::path dir = fs::temp_directory_path() / ("city3d_page_data_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  city3d::OverviewRecord record;
+  record.report.id = "x</script><!--&\"\n";
+  record.report.status = city3d::BuildingStatus::failed;
+  record.report.reason = "a < b & c > d";
+  record.report.seconds = 1.23456;
+  record.report.footprint_area = 24.75;
+  record.footprint = {{{{10.25, 20.5}, {15.75, 20.5}, {15.75, 25}, {10.25, 25}}, {}}};
+  const city3d::RunDescription run{"EPSG:28992", "--crs", R"({"footprints":"a</script>&b.gpkg"})", R"({"lod":["2.2"]})"};
+  const fs::path html = dir / "report.html";
+  city3d::write_report_html(html.string(), HeldRecords({record}), run);
+  const std::string page = read_file(html);
+  const std::string open = "<script id=\"data\" type=\"application/json\">";
+  const auto begin = page.find(open);
+  ASSERT_NE(begin, std::string::npos);
+  const auto end = page.find("</script>", begin);
+  ASSERT_NE(end, std::string::npos);
+  const std::string data = page.substr(begin + open.size(), end - begin - open.size());
+  EXPECT_EQ(data.find_first_of("<>&"), std::string::npos) << data;
+  const json d = json::parse(data);
+  ASSERT_EQ(d["buildings"].size(), 1u);
+  const json& b = d["buildings"][0];
+  EXPECT_EQ(b["id"], record.report.id);
+  EXPECT_EQ(b["s"], "failed");
+  EXPECT_EQ(b["r"], record.report.reason);
+  EXPECT_EQ(b["t"], 1.235);
+  EXPECT_EQ(b["fa"], 24.75);
+  EXPECT_TRUE(b["rmse"].is_null());
+  EXPECT_EQ(b["m"], -1);  // no model shown
+  // The footprint relative to the extent's corner rounded down (10, 20), in metres to the centimetre.
+  EXPECT_EQ(b["fp"].dump(), "[[[0.25,0.5],[5.75,0.5],[5.75,5],[0.25,5]]]");
+  EXPECT_EQ(d["inputs"]["footprints"], "a</script>&b.gpkg");
+  EXPECT_EQ(d["parameters"]["lod"][0], "2.2");
+  EXPECT_EQ(d["crs"], "EPSG:28992");
+  EXPECT_EQ(d["inferred"], false);
+  EXPECT_TRUE(d["models"].empty());
   fs::remove_all(dir);
 }

@@ -81,11 +81,11 @@ std::vector<std::string> lines_of(const std::string& text) {
 // buildings the run that wrote it took from an earlier run's journal ("resumed").
 std::string without_timings(const std::string& report) {
   static const std::regex csv_seconds(R"(,[0-9]+\.[0-9]{4},[0-9]+\.[0-9]{4}\n)");
-  static const std::regex json_seconds(R"("(cpu_)?seconds": [0-9.]+)");
-  static const std::regex json_resumed(R"("resumed": [0-9]+)");
+  static const std::regex json_seconds(R"("(cpu_)?seconds":[0-9.]+)");
+  static const std::regex json_resumed(R"("resumed":[0-9]+)");
   return std::regex_replace(
-      std::regex_replace(std::regex_replace(report, csv_seconds, ",S,S\n"), json_seconds, "\"$1seconds\": S"),
-      json_resumed, "\"resumed\": R");
+      std::regex_replace(std::regex_replace(report, csv_seconds, ",S,S\n"), json_seconds, "\"$1seconds\":S"),
+      json_resumed, "\"resumed\":R");
 }
 
 // report.html without each building's seconds ("t" in the page's data).

@@ -6,17 +6,15 @@
 namespace city3d::detail {
 
 void append_json_string(std::string& out, std::string_view text, JsonEscapes escapes) {
-  const bool short_forms = escapes == JsonEscapes::short_controls || escapes == JsonEscapes::toml;
   out += '"';
   for (const char ch : text) {
     const unsigned char c = static_cast<unsigned char>(ch);
     if (c == '"' || c == '\\') {
       out += '\\';
       out += ch;
-    } else if (short_forms && (c == '\n' || c == '\r' || c == '\t')) {
+    } else if (c == '\n' || c == '\r' || c == '\t') {
       out += c == '\n' ? "\\n" : c == '\r' ? "\\r" : "\\t";
-    } else if (c < 0x20 || (escapes == JsonEscapes::html_script && (c == '<' || c == '>' || c == '&')) ||
-               (escapes == JsonEscapes::toml && c == 0x7f)) {
+    } else if (c < 0x20 || (escapes == JsonEscapes::toml && c == 0x7f)) {
       char buf[8];
       std::snprintf(buf, sizeof buf, "\\u%04x", c);
       out += buf;

@@ -1,6 +1,7 @@
-// The one writer of quoted strings for the JSON the library writes by hand (CityJSON, report.json,
-// report.html's data) and for the TOML of --config's written-back file, whose basic strings escape
-// the same way; and numbers with their trailing zeros trimmed. Private to the library.
+// The one writer of quoted strings for the JSON the library writes by hand (CityJSON, whose byte
+// layout is the point: cityjson_writer.cpp) and for the TOML of --config's written-back file, whose
+// basic strings escape the same way; and numbers with their trailing zeros trimmed. report.json and
+// report.html's data are made with nlohmann. Private to the library.
 #pragma once
 
 #include <string>
@@ -9,17 +10,12 @@
 namespace city3d::detail {
 
 /// What a quoted string escapes beyond '"' and '\\' (always written \" and \\). The outputs differ
-/// and each must stay byte for byte as it was, so every writer names its own: they differ in how a
-/// newline is written (\n or \u000a) and in the few printable characters their context forbids.
+/// and each must stay byte for byte as it was, so every writer names its own: they differ in the
+/// few printable characters their context forbids.
 enum class JsonEscapes {
   /// CityJSON (cityjson_writer.cpp): \n, \r and \t by their short forms, other control characters
   /// (below 0x20) as \u00XX.
   short_controls,
-  /// report.json (reports/report.cpp): every control character as \u00XX.
-  unicode_controls,
-  /// Inside an HTML <script> element (report.html): every control character, '<', '>' and '&' as
-  /// \u00XX, so that the data cannot close the element ("</script>") or open a comment.
-  html_script,
   /// A TOML basic string (cli/config_file.cpp): as short_controls, and DEL (0x7f) as \u007f, which
   /// TOML does not allow as it is.
   toml,

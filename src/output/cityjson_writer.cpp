@@ -1,7 +1,10 @@
 // CityJSON 2.0 and CityJSONSeq writers: Buildings with one Solid per level of detail (BuildingParts
 // for a level whose model has several parts), semantic surfaces, the run's quantising transform and
-// attributes. Output is
-// byte-deterministic (fixed key order, shortest round-trip number formatting).
+// attributes. Output is byte-deterministic (fixed key order, shortest round-trip number formatting).
+// Written by hand, not with nlohmann like the other JSON (issue 26), because the byte layout is the
+// point: the files are compared byte for byte (a run, a resumed run, a merge of shards, two builds),
+// each feature's text is spliced into them as it is (FeatureSplicer), and some numbers take forms
+// nlohmann does not write (the scale as 0.0001, the extent's world coordinates with the scale's decimals).
 #include <algorithm>
 #include <charconv>
 #include <cmath>

@@ -3,8 +3,12 @@
 // buildings with their reason, and a 3D view of a chosen building. The data is embedded as JSON;
 // the page draws itself with plain DOM/SVG/canvas code. The page itself (HTML, CSS, script) is the
 // template src/reports/report_page.html, compiled in (report_page.hpp); this file writes the data into it.
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <map>
 #include <optional>
@@ -13,22 +17,49 @@
 
 #include "city3d/error.hpp"
 #include "city3d/run_outputs.hpp"
-#include "core/json_text.hpp"
 #include "files/atomic_file.hpp"
 #include "reports/report_page.hpp"
 
 namespace city3d {
 namespace {
 
-using detail::append_json_string;
-using detail::JsonEscapes;
+using ordered_json = nlohmann::ordered_json;
 
-void json_number(std::string& out, double v, int decimals) {
-  if (!std::isfinite(v)) {
-    out += "null";
-    return;
+// A number of the page's data: v rounded to `decimals` decimals as printf rounds it, held as the
+// double nearest that decimal, which nlohmann writes in its shortest round-trip form (12.5, not
+// 12.50: a smaller page); a whole number as an integer (8, not 8.0; -0 as 0), null when not finite.
+ordered_json page_number(double v, int decimals) {
+  if (!std::isfinite(v)) return nullptr;
+  char buf[48];
+  const int n = std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  double r = v;
+  std::from_chars(buf, buf + n, r);
+  if (r == std::trunc(r) && std::fabs(r) < 9e15) return static_cast<std::int64_t>(r);
+  return r;
+}
+
+// The page's text of a value: nlohmann's compact form, then '<', '>' and '&' as \u003c, \u003e and
+// \u0026, so that the data cannot close its <script> element ("</script>") or open a comment. They
+// can only be inside JSON strings, where the escapes stand for the same characters. A byte that is
+// not UTF-8 becomes U+FFFD.
+std::string page_json(const ordered_json& value) {
+  const std::string text = value.dump(-1, ' ', false, ordered_json::error_handler_t::replace);
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    if (c == '<') out += "\\u003c";
+    else if (c == '>') out += "\\u003e";
+    else if (c == '&') out += "\\u0026";
+    else out += c;
   }
-  detail::append_trimmed_number(out, v, decimals);  // trailing zeros trimmed: a smaller page
+  return out;
+}
+
+// One of the run's descriptions (inputs, parameters), a JSON object made by nlohmann in the
+// pipeline; an empty object when there is none.
+ordered_json run_object(const std::string& text) {
+  ordered_json j = ordered_json::parse(text, nullptr, false);
+  return j.is_discarded() ? ordered_json::object() : j;
 }
 
 // The outline a model stands on, in plan (world coordinates): its ground faces' rings. For a
@@ -141,30 +172,14 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
     Box3 box;
     for (const Point3& p : m.mesh.vertices) box.add(p);
     const Point3 c{(box.min.x + box.max.x) / 2, (box.min.y + box.max.y) / 2, box.min.z};
-    if (model_count) models += ',';
-    models += "{\"lod\":";
-    append_json_string(models, r.lods.back().lod, JsonEscapes::html_script);
-    models += ",\"v\":[";
-    for (std::size_t k = 0; k < m.mesh.vertices.size(); ++k) {
-      const Point3& p = m.mesh.vertices[k];
-      models += k ? ",[" : "[";
-      json_number(models, p.x - c.x, 2);
-      models += ',';
-      json_number(models, p.y - c.y, 2);
-      models += ',';
-      json_number(models, p.z - c.z, 2);
-      models += ']';
-    }
-    models += "],\"f\":[";
-    for (std::size_t f = 0; f < m.mesh.faces.size(); ++f) {
-      models += f ? ",[" : "[";
-      for (std::size_t k = 0; k < m.mesh.faces[f].size(); ++k) models += (k ? "," : "") + std::to_string(m.mesh.faces[f][k]);
-      models += ']';
-    }
-    models += "],\"s\":[";
-    const std::vector<SurfaceType> types = surface_types(m);
-    for (std::size_t f = 0; f < types.size(); ++f) models += (f ? "," : "") + std::to_string(static_cast<int>(types[f]));
-    models += "]}";
+    ordered_json vertices = ordered_json::array();
+    for (const Point3& p : m.mesh.vertices)
+      vertices.push_back({page_number(p.x - c.x, 2), page_number(p.y - c.y, 2), page_number(p.z - c.z, 2)});
+    ordered_json surfaces = ordered_json::array();
+    for (SurfaceType t : surface_types(m)) surfaces.push_back(static_cast<int>(t));
+    const ordered_json model = {{"lod", r.lods.back().lod}, {"v", std::move(vertices)}, {"f", m.mesh.faces},
+                                {"s", std::move(surfaces)}};
+    models += (model_count ? "," : "") + page_json(model);
     model_of[i] = static_cast<long>(model_count++);
   }
   models += ']';
@@ -173,21 +188,14 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
   detail::AtomicFile file(path);
   std::FILE* out = file.file();
   std::fputs(detail::kReportPageHead, out);
-  std::string data = "{\"crs\":";
-  append_json_string(data, crs, JsonEscapes::html_script);
-  data += ",\"crs_source\":";
-  append_json_string(data, run.crs_source, JsonEscapes::html_script);
-  // The inputs and parameters are JSON objects already (made by nlohmann in the pipeline): only '<'
-  // must not reach the page as it is, so that no "</script>" can appear.
-  const auto safe = [](const std::string& json) {
-    std::string out;
-    for (char c : json) out += c == '<' ? std::string("\\u003c") : std::string(1, c);
-    return out.empty() ? std::string("{}") : out;
-  };
-  data += ",\"inputs\":" + safe(run.inputs) + ",\"parameters\":" + safe(run.parameters);
-  data += ",\"inferred\":" + std::string(inferred ? "true" : "false");
-  data += ",\"version\":";
-  append_json_string(data, CITY3D_VERSION, JsonEscapes::html_script);
+  const ordered_json head = {{"crs", crs},
+                             {"crs_source", run.crs_source},
+                             {"inputs", run_object(run.inputs)},
+                             {"parameters", run_object(run.parameters)},
+                             {"inferred", inferred},
+                             {"version", CITY3D_VERSION}};
+  std::string data = page_json(head);
+  data.pop_back();  // its '}': the buildings and the models follow, each building as it is read
   data += ",\"buildings\":[";
   std::fputs(data.c_str(), out);
   std::size_t placed = 0;  // inferred outlines laid out so far
@@ -195,50 +203,28 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
     OverviewRecord read;
     const OverviewRecord& r = record(i, inferred, read);
     const BuildingReport& b = r.report;
-    data.clear();
-    if (i) data += ',';
-    data += "\n{\"id\":";
-    append_json_string(data, b.id, JsonEscapes::html_script);
-    data += ",\"s\":";
-    append_json_string(data, status_name(b.status), JsonEscapes::html_script);
-    data += ",\"l\":";
-    append_json_string(data, level_name(b.level), JsonEscapes::html_script);
-    data += ",\"r\":";
-    append_json_string(data, b.reason, JsonEscapes::html_script);
-    data += ",\"n\":";
-    append_json_string(data, b.note, JsonEscapes::html_script);
-    data += ",\"lods\":";
-    append_json_string(data, b.lods, JsonEscapes::html_script);
-    data += ",\"rt\":";
-    append_json_string(data, b.roof_type, JsonEscapes::html_script);
-    data += ",\"rmse\":";
-    json_number(data, b.rmse >= 0 ? b.rmse : NAN, 4);
-    data += ",\"us\":";
-    json_number(data, b.unexplained_share, 4);
-    data += ",\"ua\":";
-    json_number(data, b.unsupported_area, 2);
-    data += ",\"he\":";
-    json_number(data, b.height_excess, 2);
-    data += ",\"fa\":";
-    json_number(data, b.footprint_area, 2);
-    data += ",\"f\":" + std::to_string(b.faces) + ",\"p\":" + std::to_string(b.points) + ",\"t\":";
-    json_number(data, b.seconds, 3);
-    data += ",\"h\":";
-    json_number(data, b.h_roof_70p, 2);
-    data += ",\"m\":" + std::to_string(model_of[i]) + ",\"fp\":[";
-    bool first_ring = true;
+    ordered_json row = {{"id", b.id},
+                        {"s", status_name(b.status)},
+                        {"l", level_name(b.level)},
+                        {"r", b.reason},
+                        {"n", b.note},
+                        {"lods", b.lods},
+                        {"rt", b.roof_type},
+                        {"rmse", page_number(b.rmse >= 0 ? b.rmse : NAN, 4)},
+                        {"us", page_number(b.unexplained_share, 4)},
+                        {"ua", page_number(b.unsupported_area, 2)},
+                        {"he", page_number(b.height_excess, 2)},
+                        {"fa", page_number(b.footprint_area, 2)},
+                        {"f", b.faces},
+                        {"p", b.points},
+                        {"t", page_number(b.seconds, 3)},
+                        {"h", page_number(b.h_roof_70p, 2)},
+                        {"m", model_of[i]}};
+    ordered_json rings = ordered_json::array();
     const auto add_ring = [&](const Ring2& ring) {
-      if (!first_ring) data += ',';
-      first_ring = false;
-      data += '[';
-      for (std::size_t k = 0; k < ring.size(); ++k) {
-        data += k ? ",[" : "[";
-        json_number(data, ring[k].x - corner.x, 2);
-        data += ',';
-        json_number(data, ring[k].y - corner.y, 2);
-        data += ']';
-      }
-      data += ']';
+      ordered_json points = ordered_json::array();
+      for (const Point2& v : ring) points.push_back({page_number(v.x - corner.x, 2), page_number(v.y - corner.y, 2)});
+      rings.push_back(std::move(points));
     };
     for (const Polygon2& p : r.footprint) {
       add_ring(p.outer);
@@ -261,8 +247,8 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
         ++placed;
       }
     }
-    data += "]}";
-    std::fputs(data.c_str(), out);
+    row["fp"] = std::move(rings);
+    std::fputs(((i ? ",\n" : "\n") + page_json(row)).c_str(), out);
   }
   std::fputs("],\"models\":", out);
   std::fputs(models.c_str(), out);

@@ -1,17 +1,22 @@
-// Report writers: CSV for spreadsheets and shell tools, JSON for programs. Numbers are printed with
-// fixed precision so that reports of identical runs differ only in their timings.
+// Report writers: CSV for spreadsheets and shell tools, JSON for programs. Numbers are rounded to
+// fixed decimals so that reports of identical runs differ only in their timings. report.json's
+// objects are made with nlohmann (ordered_json: the keys in the columns' order) and written as
+// they come, one building a line.
 #include "reports/report.hpp"
 
-#include <algorithm>
+#include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 
-#include "core/json_text.hpp"
 #include "files/atomic_file.hpp"
 
 namespace city3d::detail {
 namespace {
+
+using ordered_json = nlohmann::ordered_json;
 
 std::string csv_field(const std::string& s) {
   if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
@@ -23,30 +28,46 @@ std::string csv_field(const std::string& s) {
   return out + "\"";
 }
 
-// A JSON string as report.json writes it: every control character as \u00XX (json_text.hpp).
-std::string json_quoted(const std::string& s) { return json_string(s, JsonEscapes::unicode_controls); }
+// v rounded half away from zero to `decimals` decimals, as the double nearest that decimal:
+// round(v x 10^d) is an exact integer and the one division by the exact 10^d rounds once, so
+// shortest round-trip printing writes 0.013 (not 0.013000000000000001) and "%.*f" that decimal.
+double round_decimals(double v, int decimals) {
+  const double f = std::pow(10.0, decimals);
+  return std::round(v * f) / f;
+}
 
-// Rounded as the building attributes round (rounded() below: half away from zero on v x 10^d),
-// then printed: printf alone rounds the exact binary value, and 6.5215 (a median between two
-// millimetres) became 6.521 here but 6.522 in CityJSON (20 of 1,280 values of the Delft block).
+// Rounded as the building attributes round (round_decimals()), then printed: printf alone rounds the
+// exact binary value, and 6.5215 (a median between two millimetres) became 6.521 here but 6.522 in
+// CityJSON (20 of 1,280 values of the Delft block). Beyond 1e15 (no decimals left) v as it is.
 std::string fixed(double v, int decimals) {
   char buf[64];
-  const double scale = std::pow(10.0, decimals);
-  const double r = std::isfinite(v) && std::fabs(v) < 1e15 ? std::round(v * scale) / scale : v;
+  const double r = std::isfinite(v) && std::fabs(v) < 1e15 ? round_decimals(v, decimals) : v;
   std::snprintf(buf, sizeof buf, "%.*f", decimals, r == 0 ? 0.0 : r);
   return buf;
 }
 
-// A number for CSV (empty when unknown) or JSON (null when unknown).
+// A number for CSV, empty when unknown.
 std::string csv_number(double v, int decimals) { return std::isfinite(v) ? fixed(v, decimals) : ""; }
-std::string json_number(double v, int decimals) { return std::isfinite(v) ? fixed(v, decimals) : "null"; }
 
-// The value nearest to v with `decimals` decimals, so that shortest round-trip printing writes
-// 0.013, not 0.013000000000000001; null when not finite.
+// A number for report.json, the value fixed() prints: nlohmann writes the rounded double in its
+// shortest round-trip form, which reads back as that decimal (12.5 for "12.50"). -0 as 0, no
+// decimals as an integer (a count: 12, not 12.0), null when unknown.
+ordered_json json_number(double v, int decimals) {
+  if (!std::isfinite(v)) return nullptr;
+  if (std::fabs(v) >= 1e15) return v;
+  const double r = round_decimals(v, decimals);
+  if (decimals == 0) return static_cast<std::int64_t>(r);
+  return r == 0 ? 0.0 : r;
+}
+
+// report.json's text of an object: nlohmann's compact form; a byte that is not UTF-8 (an id from a
+// footprint file in another encoding) becomes U+FFFD, as the journal keeps it.
+std::string compact_json(const ordered_json& j) { return j.dump(-1, ' ', false, ordered_json::error_handler_t::replace); }
+
+// The value nearest to v with `decimals` decimals (round_decimals()); null when not finite.
 AttributeValue rounded(double v, int decimals) {
   if (!std::isfinite(v)) return AttributeValue{};
-  const double f = std::pow(10.0, decimals);
-  return std::round(v * f) / f;
+  return round_decimals(v, decimals);
 }
 
 AttributeValue text_or_null(const std::string& s) { return s.empty() ? AttributeValue{} : AttributeValue{s}; }
@@ -91,14 +112,6 @@ std::string csv_extras(const BuildingReport& r) {
   return extra;
 }
 
-std::string json_extras(const BuildingReport& r) {
-  std::string extra;
-  for (const Extra& e : kExtras)
-    extra += std::string(", \"") + e.name + "\": " +
-             (e.text ? json_quoted(r.*e.text) : json_number(r.*e.number, e.decimals));
-  return extra;
-}
-
 }  // namespace
 
 std::string report_csv_header() {
@@ -120,15 +133,28 @@ std::string report_csv_row(const BuildingReport& r) {
 }
 
 std::string report_json_row(const BuildingReport& r) {
-  return "{\"id\": " + json_quoted(r.id) + ", \"status\": \"" + status_name(r.status) + "\", \"level\": \"" +
-         level_name(r.level) + "\", \"stage\": " + json_quoted(r.stage) + ", \"reason\": " + json_quoted(r.reason) +
-         ", \"note\": " + json_quoted(r.note) + ", \"points\": " + std::to_string(r.points) +
-         ", \"ground_points\": " + std::to_string(r.ground_points) + ", \"ground_z\": " + fixed(r.ground_z, 3) +
-         ", \"ground_method\": " + json_quoted(r.ground_method) + ", \"roof_z\": " + fixed(r.roof_z, 3) +
-         ", \"planes\": " + std::to_string(r.planes) + ", \"walls\": " + std::to_string(r.walls) +
-         ", \"candidate_faces\": " + std::to_string(r.candidate_faces) + ", \"faces\": " + std::to_string(r.faces) +
-         ", \"rmse\": " + (r.rmse >= 0 ? fixed(r.rmse, 4) : "null") + ", \"valid\": " + (r.valid ? "true" : "false") +
-         json_extras(r) + ", \"cpu_seconds\": " + fixed(r.cpu_seconds, 4) + ", \"seconds\": " + fixed(r.seconds, 4) + "}";
+  ordered_json row;
+  row["id"] = r.id;
+  row["status"] = status_name(r.status);
+  row["level"] = level_name(r.level);
+  row["stage"] = r.stage;
+  row["reason"] = r.reason;
+  row["note"] = r.note;
+  row["points"] = r.points;
+  row["ground_points"] = r.ground_points;
+  row["ground_z"] = json_number(r.ground_z, 3);
+  row["ground_method"] = r.ground_method;
+  row["roof_z"] = json_number(r.roof_z, 3);
+  row["planes"] = r.planes;
+  row["walls"] = r.walls;
+  row["candidate_faces"] = r.candidate_faces;
+  row["faces"] = r.faces;
+  row["rmse"] = r.rmse >= 0 ? json_number(r.rmse, 4) : nullptr;
+  row["valid"] = r.valid;
+  for (const Extra& e : kExtras) row[e.name] = e.text ? ordered_json(r.*e.text) : json_number(r.*e.number, e.decimals);
+  row["cpu_seconds"] = json_number(r.cpu_seconds, 4);  // last: timings, as in CSV
+  row["seconds"] = json_number(r.seconds, 4);
+  return compact_json(row);
 }
 
 struct ReportWriter::Impl {
@@ -141,11 +167,12 @@ struct ReportWriter::Impl {
 ReportWriter::ReportWriter(const std::string& csv_path, const std::string& json_path, const BatchSummary& summary)
     : impl_(new Impl(csv_path, json_path)) {
   std::fputs((report_csv_header() + "\n").c_str(), impl_->csv.file());
-  std::fprintf(impl_->json.file(),
-               "{\n  \"summary\": {\"buildings\": %zu, \"ok\": %zu, \"fallback\": %zu, \"skipped\": %zu, "
-               "\"failed\": %zu, \"partial\": %zu, \"resumed\": %zu, \"seconds\": %s},\n  \"buildings\": [",
-               summary.buildings, summary.ok, summary.fallback, summary.skipped, summary.failed, summary.partial,
-               summary.resumed, fixed(summary.seconds, 3).c_str());
+  const ordered_json counts = {{"buildings", summary.buildings}, {"ok", summary.ok},
+                                {"fallback", summary.fallback}, {"skipped", summary.skipped},
+                                {"failed", summary.failed},     {"partial", summary.partial},
+                                {"resumed", summary.resumed},   {"seconds", json_number(summary.seconds, 3)}};
+  // The frame by hand, the rows streamed into it: the summary first, then one building a line.
+  std::fputs(("{\n  \"summary\": " + compact_json(counts) + ",\n  \"buildings\": [").c_str(), impl_->json.file());
 }
 
 ReportWriter::~ReportWriter() = default;

@@ -104,8 +104,8 @@ same_outputs() {  # the outputs of two folders: byte for byte, the reports up to
   fi
   diff -r "$a/models" "$b/models" > /dev/null || fail "the models of $b differ from $a"
   for f in report.csv report.json; do
-    diff <(sed -E 's/,[0-9]+\.[0-9]{4},[0-9]+\.[0-9]{4}$//; s/"(cpu_)?seconds": [0-9.]+//g' "$a/$f") \
-      <(sed -E 's/,[0-9]+\.[0-9]{4},[0-9]+\.[0-9]{4}$//; s/"(cpu_)?seconds": [0-9.]+//g' "$b/$f") > /dev/null || fail "$f of $b differs from $a"
+    diff <(sed -E 's/,[0-9]+\.[0-9]{4},[0-9]+\.[0-9]{4}$//; s/"(cpu_)?seconds":[0-9.]+//g' "$a/$f") \
+      <(sed -E 's/,[0-9]+\.[0-9]{4},[0-9]+\.[0-9]{4}$//; s/"(cpu_)?seconds":[0-9.]+//g' "$b/$f") > /dev/null || fail "$f of $b differs from $a"
   done
   # report.html up to each building's seconds ("t" in its data).
   grep -q "city3d report ready" "$a/report.html" || fail "$a/report.html is not a report"
