@@ -546,7 +546,8 @@ TEST(LeftOut, points_in_no_plane_become_a_roof_level_per_group) {
   for (int k = 0; k < 6; ++k) add(20.0 + 0.2 * k, 0.0, 3.0, true);
   for (int k = 0; k < 12; ++k) add(10.0 + 0.2 * (k % 4), 0.2 * (k / 4), 3.0, false);
 
-  const std::vector<PlanarSegment> levels = detail::left_out_levels(points, {plane}, unexplained, 0.2, 10, RebuildParams{});
+  const std::vector<PlanarSegment> levels = detail::left_out_levels(points, {plane}, unexplained, 0.2, 10,
+                                                                     RebuildParams{});
   ASSERT_EQ(levels.size(), 2u);
   EXPECT_EQ(levels[0].points.size(), 15u);
   EXPECT_EQ(levels[0].points.front(), 30u);
@@ -599,7 +600,8 @@ TEST(LeftOut, a_plane_mostly_left_out_gets_a_rectangle_parallel_to_the_outline) 
     points.push_back({p.x, p.y, 4.0});
     unexplained.push_back(true);
   }
-  const std::vector<Segment2> lines = detail::left_out_plane_lines(points, {strip, roof, row}, unexplained, {square}, RebuildParams{});
+  const std::vector<Segment2> lines = detail::left_out_plane_lines(points, {strip, roof, row}, unexplained, {square},
+                                                                   RebuildParams{});
   ASSERT_EQ(lines.size(), 4u);
   // In the outline's frame the rectangle is [2, 5.8] x [1.1, 1.3]: the left-out rows only.
   double u0 = 1e9, u1 = -1e9, v0 = 1e9, v1 = -1e9;

@@ -286,7 +286,8 @@ std::vector<InputCurve> support_cuts(const std::vector<Point3>& points, const st
         if (inside_polygon(poly, points[i].x, points[i].y)) own.push_back({points[i].x, points[i].y});
       Point2 n;
       double t = 0.0;
-      if (own.size() >= static_cast<std::size_t>(params.min_support_points) && separating_line(poly, own, bare, params.support_cut_mixed, n, t))
+      if (own.size() >= static_cast<std::size_t>(params.min_support_points) &&
+          separating_line(poly, own, bare, params.support_cut_mixed, n, t))
         add_chords(poly, n, t, cuts);
     }
   }

@@ -12,11 +12,11 @@
 namespace city3d::detail {
 
 /// The outline of a building without footprint, inferred from the heightmap of its points
-/// (infer_outline, closing gaps of `params.outline`'s `wide_outline` ? wide_gap_spacings : gap_spacings
-/// point spacings), regularised and fitted to the points, and cut into the parts that are modelled
-/// (separate parts of min_extra_part_area or more that hold most of a roof plane's points). The footprint's polygons when
-/// the input has a footprint. Notes what it did in `report`; throws ReconstructionError when no
-/// outline can be inferred.
+/// (infer_outline, closing gaps of `wide_outline` ? wide_gap_spacings : gap_spacings point spacings,
+/// of `params.outline`), regularised and fitted to the points, and cut into the parts that are
+/// modelled (separate parts of min_extra_part_area or more that hold most of a roof plane's points).
+/// The footprint's polygons when the input has a footprint. Notes what it did in `report`; throws
+/// ReconstructionError when no outline can be inferred.
 std::vector<Polygon2> building_outline(const BuildingInput& input, const Heightmap& heightmap,
                                        const std::vector<PlanarSegment>& roofs, const ReconstructionParams& params,
                                        bool wide_outline, BuildingReport& report);

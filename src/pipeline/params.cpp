@@ -33,7 +33,8 @@ void ReconstructionParams::validate() const {
   const auto need = [&](bool ok, const char* what) {
     if (!ok) problems += (problems.empty() ? "" : "; ") + std::string(what);
   };
-  need(outline.min_region_area > 0 && std::isfinite(outline.min_region_area), "outline.min_region_area must be > 0 (m2)");
+  need(outline.min_region_area > 0 && std::isfinite(outline.min_region_area),
+       "outline.min_region_area must be > 0 (m2)");
   need(outline.gap_spacings > 0 && std::isfinite(outline.gap_spacings), "outline.gap_spacings must be > 0");
   need(outline.wide_gap_spacings > 0 && std::isfinite(outline.wide_gap_spacings),
        "outline.wide_gap_spacings must be > 0");

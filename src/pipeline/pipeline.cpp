@@ -134,8 +134,8 @@ BuildingModel rung_model(const BuildingInput& input, const ReconstructionParams&
 
 // The fallback ladder: full LoD2 -> LoD2 with footprint walls only -> LoD1 block, from the level
 // asked for down. The first rung that gives a closed, 2-manifold, outward model wins; the report keeps
-// the first failure. With --time-limit, the full rung may use full_rung_time_share of the building's time,
-// the footprint-walls rung the rest.
+// the first failure. With --time-limit, the full rung may use full_rung_time_share of the building's
+// time, the footprint-walls rung the rest.
 std::optional<BuildingModel> walk_ladder(const BuildingInput& input, const ReconstructionParams& params,
                                          Clock::time_point start, BuildingReport& r,
                                          std::optional<detail::Explained>& lod2_fit) {
