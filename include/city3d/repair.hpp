@@ -25,9 +25,11 @@ struct WrittenValidity {
 };
 
 /// Makes `model` what the writers will write (round_to_grid), validates it part by part
-/// (validate_model), and when that fails repairs it: zero-width spikes are cut off (104), faces
-/// that are not planar as rounded (203, 204) or not simple are split into triangles of their own
-/// vertices, then the grid rounding and the check are repeated. The model is changed in place.
+/// (validate_model), and when that fails tries three repairs, mildest first, each followed by the grid
+/// rounding and the check; the first that leaves a valid model is kept: (1) faces that are not planar
+/// as rounded (203, 204) or not simple are split into triangles of their own vertices; (2) vertices
+/// within the snap tolerance become one (102), then (1); (3) zero-width spikes are cut off (104),
+/// then (1). The model is changed in place; when no repair works it stays as rounded.
 WrittenValidity validate_as_written(BuildingModel& model, double grid, const ValidityParams& params = {});
 
 }  // namespace city3d
