@@ -342,6 +342,34 @@ TEST(SurfaceSupport, a_blade_above_the_roof_is_measured_and_the_flat_roof_is_not
     EXPECT_EQ(beneath[i], house.points[i].x > 4.1) << house.points[i].x;
 }
 
+// ModelFit, both ways: the points to the model (how many lie farther than 1 m, their squared distances)
+// and the model to the points (its unsupported surface), and the two in one figure.
+TEST(SurfaceSupport, a_models_fit_counts_far_points_one_way_and_unsupported_surface_the_other) {
+  BladeHouse house;
+  house.points.push_back({5.0, 5.0, 7.5});  // 2.5 m above the flat roof: far from the flat model
+  const LocalTop top(house.points, 1.5);
+  std::vector<double> distances;
+  const ModelFit flat = fit_both_ways(house.flat, surface_types_unoriented(house.flat), house.points, top, {},
+                                      &distances);
+  EXPECT_EQ(flat.far, 1u);
+  EXPECT_NEAR(flat.squares, 2.5 * 2.5, 1e-9);
+  ASSERT_EQ(distances.size(), house.points.size());
+  EXPECT_NEAR(distances.back(), 2.5, 1e-9);
+  // The lone high point lifts the local top around it: the flat roof stays supported.
+  EXPECT_EQ(flat.support.unsupported_area, 0.0);
+  const ModelFit blade = fit_both_ways(house.blade, surface_types_unoriented(house.blade), house.points, top, {});
+  EXPECT_GT(blade.support.unsupported_area, 100.0);
+  // One way only: the same distances, no support measured.
+  const ModelFit one_way = fit_of_points(house.flat, house.points);
+  EXPECT_EQ(one_way.far, flat.far);
+  EXPECT_EQ(one_way.squares, flat.squares);
+  EXPECT_EQ(one_way.support.unsupported_area, 0.0);
+  // Both ways in one figure, at 4 points per m2: a square metre unsupported weighs 4 points left out.
+  EXPECT_DOUBLE_EQ(blade.unfaithful(4.0), static_cast<double>(blade.far) + 4.0 * blade.support.unsupported_area);
+  EXPECT_DOUBLE_EQ(flat.squares_both_ways(4.0), flat.squares);
+  EXPECT_LT(flat.unfaithful(4.0), blade.unfaithful(4.0));
+}
+
 TEST(SurfaceSupport, a_sliver_thinner_than_the_spacing_is_still_sampled_along_its_length) {
   // 20 m long, 5 cm wide, vertical: a sample every 0.25 m along it.
   const std::vector<Point3> sliver = {{0, 0, 0}, {20, 0, 0}, {20, 0, 0.05}, {0, 0, 0.05}};

@@ -127,7 +127,7 @@ struct SurfaceSupport {
 /// type (surface_types() of model_io.hpp classifies the faces of a model without semantics by their
 /// normal); a face without an entry counts as a wall. Faces with out-of-range indices are skipped.
 /// Walls are measured as columns params.sample_spacing wide, other faces as sample_polygon's samples; an
-/// unsupported column or sample is measured again at a fifth of the spacing (its area, its excess and its
+/// unsupported column or sample is measured again at 1/refine of the spacing (its area, its excess and its
 /// unsupported samples are those of the finer ones), so that a gap in the points narrower than the
 /// spacing counts for its own width. Never throws on bad geometry.
 SurfaceSupport surface_support(const PolygonMesh& mesh, const std::vector<SurfaceType>& types,
@@ -145,5 +145,31 @@ std::vector<SurfaceType> surface_types_unoriented(const PolygonMesh& mesh);
 /// wall).
 std::vector<bool> points_beneath_unsupported(const SurfaceSupport& support, const std::vector<Point3>& points,
                                              const SurfaceSupportParams& params = {});
+
+/// How faithful a model is to the building's points, both ways: from the points to the model, how many
+/// lie farther than kUnexplainedDistance (building_report.hpp) and the sum of the squared distances;
+/// from the model to the points, its surface no point supports.
+struct ModelFit {
+  std::size_t far = 0;
+  double squares = 0.0;
+  SurfaceSupport support;
+  /// Both directions in one figure, in points: the points left out, plus the unsupported area at
+  /// the building's point density (`points_per_m2`): a square metre of surface no point asks for
+  /// weighs as much as a square metre of points the model leaves out (the selection's E_u and E_d).
+  double unfaithful(double points_per_m2) const;
+  /// The sum of the squared distances, both ways: each square metre of unsupported surface counted as
+  /// the points of a square metre lying kUnexplainedDistance off it.
+  double squares_both_ways(double points_per_m2) const;
+};
+
+/// From the points to the model only (point_distances); `distances_out`, when given, receives each
+/// point's distance. `support` stays empty.
+ModelFit fit_of_points(const PolygonMesh& mesh, const std::vector<Point3>& points,
+                       std::vector<double>* distances_out = nullptr);
+
+/// Both ways: fit_of_points, and surface_support of the faces of `types` against `local_top`.
+ModelFit fit_both_ways(const PolygonMesh& mesh, const std::vector<SurfaceType>& types,
+                       const std::vector<Point3>& points, const LocalTop& local_top,
+                       const SurfaceSupportParams& params, std::vector<double>* distances_out = nullptr);
 
 }  // namespace city3d

@@ -8,7 +8,9 @@
 #include <numeric>
 #include <string>
 
+#include "city3d/building_report.hpp"
 #include "city3d/error.hpp"
+#include "city3d/evaluation.hpp"
 
 namespace city3d {
 namespace {
@@ -493,6 +495,34 @@ std::vector<bool> points_beneath_unsupported(const SurfaceSupport& support, cons
     beneath[i] = !std::isnan(z) && z - points[i].z > params.tolerance;
   }
   return beneath;
+}
+
+double ModelFit::unfaithful(double points_per_m2) const {
+  return static_cast<double>(far) + support.unsupported_area * points_per_m2;
+}
+
+double ModelFit::squares_both_ways(double points_per_m2) const {
+  return squares + support.unsupported_area * points_per_m2 * kUnexplainedDistance * kUnexplainedDistance;
+}
+
+ModelFit fit_of_points(const PolygonMesh& mesh, const std::vector<Point3>& points,
+                       std::vector<double>* distances_out) {
+  ModelFit fit;
+  const std::vector<double> distances = point_distances(mesh, points);
+  for (const double d : distances) {
+    fit.far += d > kUnexplainedDistance;
+    fit.squares += d * d;
+  }
+  if (distances_out) *distances_out = distances;
+  return fit;
+}
+
+ModelFit fit_both_ways(const PolygonMesh& mesh, const std::vector<SurfaceType>& types,
+                       const std::vector<Point3>& points, const LocalTop& local_top,
+                       const SurfaceSupportParams& params, std::vector<double>* distances_out) {
+  ModelFit fit = fit_of_points(mesh, points, distances_out);
+  fit.support = surface_support(mesh, types, local_top, params);
+  return fit;
 }
 
 }  // namespace city3d

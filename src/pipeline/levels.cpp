@@ -12,6 +12,8 @@
 #include "city3d/mesh_check.hpp"
 #include "city3d/repair.hpp"
 #include "city3d/rings.hpp"
+#include "city3d/stage_profile.hpp"
+#include "city3d/surface_support.hpp"
 
 namespace city3d::detail {
 namespace {
@@ -76,7 +78,7 @@ void describe_points(const BuildingInput& input, const ReconstructionParams& par
 }
 
 void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams& params,
-                          const std::optional<Explained>& lod2_fit, BuildingResult& result) {
+                          const std::optional<ModelFit>& lod2_fit, BuildingResult& result) {
   BuildingReport& r = result.report;
   const BuildingModel primary = *result.model;
   std::vector<LodModel> made;  // in order 1.2, 1.3, 2.2
@@ -130,12 +132,15 @@ void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams
     if (asked) kept.push_back(std::move(m));
   }
   if (kept.empty()) kept.push_back({lod2 ? "2.2" : "1.2", primary});
-  std::optional<std::pair<const BuildingModel*, Explained>> measured;  // the last level measured
+  std::optional<std::pair<const BuildingModel*, ModelFit>> measured;  // the last level measured
   for (const LodModel& m : kept) {
     const double volume = check_mesh(m.model.mesh).signed_volume;
     if (!(lod2 && m.lod == "2.2" && lod2_fit) && !(measured && same_model(m.model, *measured->first)))
-      measured.emplace(&m.model, explained_points(m.model.mesh, input.points));
-    const Explained fit = lod2 && m.lod == "2.2" && lod2_fit ? *lod2_fit : measured->second;
+      measured.emplace(&m.model, [&] {
+        const StageTimer stage(Stage::measure);
+        return fit_of_points(m.model.mesh, input.points);
+      }());
+    const ModelFit fit = lod2 && m.lod == "2.2" && lod2_fit ? *lod2_fit : measured->second;
     const std::size_t n = input.points.size();
     const double error = n == 0 ? 0.0 : std::sqrt(fit.squares / static_cast<double>(n));
     // The unexplained points of the model the OBJ/PLY files hold: the last level kept.

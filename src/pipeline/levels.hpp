@@ -16,7 +16,7 @@ void describe_points(const BuildingInput& input, const ReconstructionParams& par
 /// there), each valid as written; volumes and RMSE per level; the model OBJ/PLY get is the highest
 /// level asked for. `lod2_fit`: the LoD2 model's distances to the points, when already measured.
 void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams& params,
-                          const std::optional<Explained>& lod2_fit, BuildingResult& result);
+                          const std::optional<ModelFit>& lod2_fit, BuildingResult& result);
 
 /// The RMSE of the model the OBJ/PLY files hold (the highest level written), already measured for its
 /// level's attribute.

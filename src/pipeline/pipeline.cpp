@@ -114,7 +114,7 @@ struct Rung {
 // rung gives no model.
 BuildingModel rung_model(const BuildingInput& input, const ReconstructionParams& params, const Rung& rung,
                          Clock::time_point deadline, DebugTrace* trace, BuildingReport& r,
-                         std::optional<detail::Explained>& lod2_fit) {
+                         std::optional<ModelFit>& lod2_fit) {
   using namespace detail;
   if (rung.level == ModelLevel::lod12)
     return checked_model(params, rung.level, false, lod1_rung(input, params, r), trace, r);
@@ -138,7 +138,7 @@ BuildingModel rung_model(const BuildingInput& input, const ReconstructionParams&
 // time, the footprint-walls rung the rest.
 std::optional<BuildingModel> walk_ladder(const BuildingInput& input, const ReconstructionParams& params,
                                          Clock::time_point start, BuildingReport& r,
-                                         std::optional<detail::Explained>& lod2_fit) {
+                                         std::optional<ModelFit>& lod2_fit) {
   std::optional<DebugTrace> trace;  // with --debug: what each rung's stages leave, written as the rung ends
   if (!params.debug_dir.empty()) {
     trace.emplace();
@@ -229,7 +229,7 @@ BuildingResult reconstruct_building(const BuildingInput& given, const Reconstruc
   BuildingReport& r = result.report;
   r = first_report(input, params, simplify_note);
   if (!nothing_to_reconstruct(input, r)) {
-    std::optional<detail::Explained> lod2_fit;  // the LoD2 model's distances, as explain_more measured them
+    std::optional<ModelFit> lod2_fit;  // the LoD2 model's distances, as explain_more measured them
     result.model = walk_ladder(input, params, start, r, lod2_fit);
     if (result.model) {
       const StageTimer stage(Stage::lod1);

@@ -1,4 +1,4 @@
-// The rebuilds of a LoD2 model (explain_more) and the measure of a model both ways (rebuild.hpp).
+// The rebuilds of a LoD2 model (explain_more, rebuild.hpp).
 #include "pipeline/rebuild.hpp"
 
 #include <algorithm>
@@ -63,28 +63,7 @@ bool same_hypothesis(const Lod2Hypothesis& a, const Lod2Hypothesis& b) {
 
 }  // namespace
 
-Explained explained_points(const PolygonMesh& mesh, const std::vector<Point3>& points,
-                           std::vector<double>* distances_out) {
-  const StageTimer stage(Stage::measure);
-  Explained e;
-  const std::vector<double> distances = point_distances(mesh, points);
-  for (const double d : distances) {
-    e.far += d > kUnexplainedDistance;
-    e.squares += d * d;
-  }
-  if (distances_out) *distances_out = distances;
-  return e;
-}
-
-Explained explained(const BuildingModel& model, const std::vector<Point3>& points, const LocalTop& local_top,
-                    const SurfaceSupportParams& support_params, std::vector<double>* distances_out) {
-  Explained e = explained_points(model.mesh, points, distances_out);
-  const StageTimer stage(Stage::measure);
-  e.support = surface_support(model.mesh, surface_types(model), local_top, support_params);
-  return e;
-}
-
-Explained explain_more(const BuildingInput& input, const ReconstructionParams& params, const Lod2Rung& rung,
+ModelFit explain_more(const BuildingInput& input, const ReconstructionParams& params, const Lod2Rung& rung,
                        BuildingReport& r, BuildingModel& model) {
   const Lod2Hypothesis& hypothesis = rung.hypothesis;
   const Clock::time_point deadline = rung.deadline;
@@ -94,8 +73,12 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
   std::optional<StageTimer> measuring(Stage::measure);
   const LocalTop local_top(input.points, support_params.radius);
   measuring.reset();
+  const auto fit = [&](const BuildingModel& m, std::vector<double>* distances) {
+    const StageTimer stage(Stage::measure);
+    return fit_both_ways(m.mesh, surface_types(m), input.points, local_top, support_params, distances);
+  };
   std::vector<double> distances;
-  Explained best = explained(model, input.points, local_top, support_params, &distances);
+  ModelFit best = fit(model, &distances);
   const bool too_many_left_out = static_cast<double>(best.far) > params.retry_unexplained_share * static_cast<double>(n);
   const bool unsupported = best.support.unsupported_area > params.retry_unsupported_area;
   if (!too_many_left_out && !unsupported) return best;
@@ -103,7 +86,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
   for (std::size_t i = 0; i < n; ++i) unexplained[i] = unexplained[i] || distances[i] > kUnexplainedDistance;
   const double area = r.footprint_area;  // of input.footprint.polygons (describe_points)
   const double density = area > 0.0 ? static_cast<double>(n) / area : 0.0;
-  const auto what = [&](const Explained& e) {
+  const auto what = [&](const ModelFit& e) {
     std::string text;
     if (too_many_left_out) text = "unexplained points " + percent(e.far, n);
     if (unsupported) {
@@ -174,7 +157,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
   };
 
   std::vector<Lod2Hypothesis> tried;  // the variant hypotheses selected over (the rung's own is `hypothesis`)
-  const Explained before = best;
+  const ModelFit before = best;
   std::string kept;
   std::string over_limit;  // variant hypotheses not selected: more than max_faces candidate faces
   BuildingReport kept_report;
@@ -230,7 +213,7 @@ Explained explain_more(const BuildingInput& input, const ReconstructionParams& p
             p, rung.level, rung.footprint_walls_only,
             lod2_model(input, own ? hypothesis : *built, p, deadline, nullptr, trial, &dropped), nullptr, trial);
         if (!v.without_prior && !v.half_complexity) prior_dropped = dropped;
-        Explained e = explained(m, input.points, local_top, support_params);
+        ModelFit e = fit(m, nullptr);
         if (e.unfaithful(density) < best.unfaithful(density) &&
             e.squares_both_ways(density) < best.squares_both_ways(density)) {
           best = std::move(e);

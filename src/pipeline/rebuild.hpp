@@ -1,5 +1,6 @@
 // The rebuilds of a LoD2 model that leaves points unexplained or carries surface no point supports
-// (explain_more), and the measure of how faithful a model is to its points, both ways (Explained).
+// (explain_more); how faithful a model is to its points, both ways, is measured by evaluation
+// (ModelFit, surface_support.hpp).
 #pragma once
 
 #include <cstddef>
@@ -9,34 +10,6 @@
 #include "pipeline/lod2.hpp"
 
 namespace city3d::detail {
-
-// How faithful a model is to the building's points, both ways: from the points to the model, how many
-// lie farther than kUnexplainedDistance and the sum of the squared distances; from the model to the
-// points, its surface no point supports (surface_support.hpp).
-struct Explained {
-  std::size_t far = 0;
-  double squares = 0.0;
-  SurfaceSupport support;
-  /// Both directions in one figure, in points: the points left out, plus the unsupported area at
-  /// the building's point density (`points_per_m2`): a square metre of surface no point asks for
-  /// weighs as much as a square metre of points the model leaves out (the selection's E_u and E_d).
-  double unfaithful(double points_per_m2) const {
-    return static_cast<double>(far) + support.unsupported_area * points_per_m2;
-  }
-  /// The sum of the squared distances, both ways: each square metre of unsupported surface counted as
-  /// the points of a square metre lying kUnexplainedDistance off it.
-  double squares_both_ways(double points_per_m2) const {
-    return squares + support.unsupported_area * points_per_m2 * kUnexplainedDistance * kUnexplainedDistance;
-  }
-};
-
-/// From the points to the model only; `distances_out`, when given, receives each point's distance.
-Explained explained_points(const PolygonMesh& mesh, const std::vector<Point3>& points,
-                           std::vector<double>* distances_out = nullptr);
-
-/// Both ways.
-Explained explained(const BuildingModel& model, const std::vector<Point3>& points, const LocalTop& local_top,
-                    const SurfaceSupportParams& support_params, std::vector<double>* distances_out = nullptr);
 
 /// A LoD2 rung as it was built, for explain_more: its level, its hypothesis, its deadline, whether its
 /// selection had to drop the face prior, and the report as it was before the hypothesis and before
@@ -74,14 +47,14 @@ struct Lod2Rung {
 ///  - both.
 /// A model rebuilt only for its unsupported surface is selected over each hypothesis without those
 /// variants of the selection.
-/// A variant replaces the model only if it is more faithful both ways (Explained::unfaithful: fewer
+/// A variant replaces the model only if it is more faithful both ways (ModelFit::unfaithful: fewer
 /// points left out plus less unsupported surface at the point density) and fits better both ways
-/// (Explained::squares_both_ways: a smaller sum of squared distances, with a square metre of unsupported
+/// (ModelFit::squares_both_ways: a smaller sum of squared distances, with a square metre of unsupported
 /// surface counted as the points of a square metre 1 m off; without unsupported surface, the sum of the
 /// points' squared distances). The report says which variant was kept, or that none helped.
 /// Debug files are written for the rung's own hypothesis only. Returns how well the model it leaves
 /// explains the points (measured once: the report's figures reuse it).
-Explained explain_more(const BuildingInput& input, const ReconstructionParams& params, const Lod2Rung& rung,
+ModelFit explain_more(const BuildingInput& input, const ReconstructionParams& params, const Lod2Rung& rung,
                        BuildingReport& report, BuildingModel& model);
 
 }  // namespace city3d::detail
