@@ -29,39 +29,34 @@ void ReconstructionParams::validate() const {
   check([&] { assemble.validate(); });
   check([&] { lod1.validate(); });
   check([&] { validity.validate(); });
-  // The pipeline's own numbers (outline, rebuild, roof type), each named as parameters_text names it.
+  // The pipeline's own numbers, each named as parameters_text names it (NaN fails every comparison).
   const auto need = [&](bool ok, const char* what) {
     if (!ok) problems += (problems.empty() ? "" : "; ") + std::string(what);
   };
-  need(outline.min_region_area > 0 && std::isfinite(outline.min_region_area),
-       "outline.min_region_area must be > 0 (m2)");
-  need(outline.gap_spacings > 0 && std::isfinite(outline.gap_spacings), "outline.gap_spacings must be > 0");
-  need(outline.wide_gap_spacings > 0 && std::isfinite(outline.wide_gap_spacings),
-       "outline.wide_gap_spacings must be > 0");
-  need(outline.min_extra_part_area >= 0 && std::isfinite(outline.min_extra_part_area),
+  const auto finite = [](double v) { return std::isfinite(v); };
+  need(outline.min_region_area > 0 && finite(outline.min_region_area), "outline.min_region_area must be > 0 (m2)");
+  need(outline.gap_spacings > 0 && finite(outline.gap_spacings), "outline.gap_spacings must be > 0");
+  need(outline.wide_gap_spacings > 0 && finite(outline.wide_gap_spacings), "outline.wide_gap_spacings must be > 0");
+  need(outline.min_extra_part_area >= 0 && finite(outline.min_extra_part_area),
        "outline.min_extra_part_area must be >= 0 (m2)");
-  need(outline.part_gap >= 0 && std::isfinite(outline.part_gap), "outline.part_gap must be >= 0 (metres)");
-  need(rebuild.level_link_spacings > 0 && std::isfinite(rebuild.level_link_spacings),
+  need(outline.part_gap >= 0 && finite(outline.part_gap), "outline.part_gap must be >= 0 (metres)");
+  need(rebuild.level_link_spacings > 0 && finite(rebuild.level_link_spacings),
        "rebuild.level_link_spacings must be > 0");
-  need(rebuild.level_link_height >= 0 && std::isfinite(rebuild.level_link_height),
+  need(rebuild.level_link_height >= 0 && finite(rebuild.level_link_height),
        "rebuild.level_link_height must be >= 0 (metres)");
-  need(rebuild.min_left_out_width >= 0 && std::isfinite(rebuild.min_left_out_width),
+  need(rebuild.min_left_out_width >= 0 && finite(rebuild.min_left_out_width),
        "rebuild.min_left_out_width must be >= 0 (metres)");
   need(roof_type.flat_angle >= 0 && roof_type.flat_angle <= 90, "roof_type.flat_angle must be in [0, 90] (degrees)");
-  need(roof_type.level_gap >= 0 && std::isfinite(roof_type.level_gap), "roof_type.level_gap must be >= 0 (metres)");
+  need(roof_type.level_gap >= 0 && finite(roof_type.level_gap), "roof_type.level_gap must be >= 0 (metres)");
   need(full_rung_time_share > 0 && full_rung_time_share <= 1, "full_rung_time_share must be in (0, 1]");
-  if (!lods.any()) problems += (problems.empty() ? "" : "; ") + std::string("lods: no level of detail asked for");
-  if (!(lod13_step_height > 0)) problems += (problems.empty() ? "" : "; ") + std::string("lod13_step_height must be > 0 (metres)");
-  if (!(output_grid >= 0) || !std::isfinite(output_grid))
-    problems += (problems.empty() ? "" : "; ") + std::string("output_grid must be >= 0 (metres)");
-  if (max_footprint_vertices < 3)
-    problems += (problems.empty() ? "" : "; ") + std::string("max_footprint_vertices must be >= 3");
-  if (!(retry_unexplained_share >= 0) || !std::isfinite(retry_unexplained_share))
-    problems += (problems.empty() ? "" : "; ") + std::string("retry_unexplained_share must be a share >= 0 (1: never retry)");
-  if (!(retry_unsupported_area >= 0) || std::isnan(retry_unsupported_area))
-    problems += (problems.empty() ? "" : "; ") + std::string("retry_unsupported_area must be >= 0 (m2)");
-  if (!(time_limit >= 0) || !std::isfinite(time_limit))
-    problems += (problems.empty() ? "" : "; ") + std::string("time_limit must be >= 0 seconds (0: none)");
+  need(lods.any(), "lods: no level of detail asked for");
+  need(lod13_step_height > 0, "lod13_step_height must be > 0 (metres)");
+  need(output_grid >= 0 && finite(output_grid), "output_grid must be >= 0 (metres)");
+  need(max_footprint_vertices >= 3, "max_footprint_vertices must be >= 3");
+  need(retry_unexplained_share >= 0 && finite(retry_unexplained_share),
+       "retry_unexplained_share must be a share >= 0 (1: never retry)");
+  need(retry_unsupported_area >= 0, "retry_unsupported_area must be >= 0 (m2)");
+  need(time_limit >= 0 && finite(time_limit), "time_limit must be >= 0 seconds (0: none)");
   if (!problems.empty()) throw ConfigError(problems);
 }
 
