@@ -108,6 +108,10 @@ double segment_dist2(const Point2& p, const Point2& a, const Point2& b) {
 // segment_dist2's arithmetic: the terms that depend on one side only are computed once (this is the
 // innermost loop of the simplification). A segment of length 0 gets direction (0, 0) and length 1,
 // with which the formula gives |p - a|^2, as segment_dist2 does.
+// Where segment_dist2's parameter t clamps, the division is skipped and its result is the same bit
+// for bit: a dot product <= 0 clamps t to 0 (p - (a + 0 d) is p - a up to the sign of a zero,
+// which squaring removes), one >= |d|^2 gives a quotient >= 1 (division rounds monotonically), so
+// t = 1 and the foot is a + d, kept per segment. A NaN falls through to the division as before.
 class SegmentFan {
  public:
   void reset(const Point2& a) {
@@ -115,6 +119,8 @@ class SegmentFan {
     dx_.clear();
     dy_.clear();
     len2_.clear();
+    end_x_.clear();
+    end_y_.clear();
   }
   void add(const Point2& b) {
     const double dx = b.x - a_.x, dy = b.y - a_.y;
@@ -123,17 +129,28 @@ class SegmentFan {
     dx_.push_back(degenerate ? 0.0 : dx);
     dy_.push_back(degenerate ? 0.0 : dy);
     len2_.push_back(degenerate ? 1.0 : len2);
+    end_x_.push_back(a_.x + dx_.back());
+    end_y_.push_back(a_.y + dy_.back());
   }
   // The first k with the smallest segment_dist2(p, a, b_k), and that squared distance.
   std::pair<std::size_t, double> nearest(const Point2& p) const {
     const double ax = a_.x, ay = a_.y;
     const double rx = p.x - ax, ry = p.y - ay;
+    const double at_a = sq(rx) + sq(ry);
     std::size_t best = 0;
     double best_d2 = std::numeric_limits<double>::infinity();
     for (std::size_t k = 0; k < len2_.size(); ++k) {
       const double dx = dx_[k], dy = dy_[k];
-      const double t = std::min(std::max((rx * dx + ry * dy) / len2_[k], 0.0), 1.0);  // std::clamp
-      const double d2 = sq(p.x - (ax + t * dx)) + sq(p.y - (ay + t * dy));
+      const double dot = rx * dx + ry * dy;
+      double d2;
+      if (dot <= 0.0) {
+        d2 = at_a;
+      } else if (dot >= len2_[k]) {
+        d2 = sq(p.x - end_x_[k]) + sq(p.y - end_y_[k]);
+      } else {
+        const double t = dot / len2_[k];
+        d2 = sq(p.x - (ax + t * dx)) + sq(p.y - (ay + t * dy));
+      }
       if (d2 < best_d2) {
         best_d2 = d2;
         best = k;
@@ -144,7 +161,7 @@ class SegmentFan {
 
  private:
   Point2 a_;
-  std::vector<double> dx_, dy_, len2_;
+  std::vector<double> dx_, dy_, len2_, end_x_, end_y_;
 };
 
 // Uniform hash grid over the pixels for "is there a pixel within d of q" queries.
