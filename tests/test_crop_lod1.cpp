@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <set>
 #include <string>
 
 #include "city3d/crop.hpp"
@@ -828,6 +829,31 @@ TEST(Lod13, part_heights_come_from_the_points_above_them) {
     if (blocks.surfaces[f] == SurfaceType::roof && blocks.mesh.vertices[blocks.mesh.faces[f][0]].x >= 10.0)
       b_roof = blocks.mesh.vertices[blocks.mesh.faces[f][0]].z;
   EXPECT_DOUBLE_EQ(b_roof, 6.0);
+}
+
+TEST(Lod13, roof_parts_made_once_give_both_levels_as_the_model_does) {
+  std::vector<Point3> points;
+  for (int i = 0; i < 10; ++i) points.push_back({12.0 + 0.5 * i, 5.0, 6.0});  // over B
+  points.push_back({5.0, 15.0, 9.25});                                          // over C
+  const Lod13Parts parts = lod13_parts(three_roof_parts(), points);
+  ASSERT_EQ(parts.parts.size(), 3u);
+  ASSERT_EQ(parts.part_z.size(), 3u);
+  EXPECT_TRUE(parts.part_z[0].empty());  // A: no point above it
+  EXPECT_EQ(parts.part_z[1].size(), 10u);
+  EXPECT_EQ(parts.part_z[2], std::vector<double>{9.25});
+  // A touches B (x = 10) and C (y = 10); B and C meet at the corner (10, 10) only.
+  const std::set<std::pair<std::size_t, std::size_t>> adjacent{{0, 1}, {0, 2}};
+  EXPECT_EQ(parts.adjacent, adjacent);
+  for (const double step : {3.0, std::numeric_limits<double>::infinity()}) {
+    const BuildingModel once = make_lod13_blocks(parts, 0.0, step);
+    const BuildingModel whole = make_lod13_blocks(three_roof_parts(), points, 0.0, step);
+    EXPECT_EQ(once.mesh.vertices.size(), whole.mesh.vertices.size());
+    EXPECT_EQ(once.mesh.faces, whole.mesh.faces);
+    EXPECT_EQ(once.surfaces, whole.surfaces);
+    for (std::size_t v = 0; v < std::min(once.mesh.vertices.size(), whole.mesh.vertices.size()); ++v)
+      EXPECT_EQ(once.mesh.vertices[v].z, whole.mesh.vertices[v].z);
+  }
+  EXPECT_THROW(lod13_parts(BuildingModel{}, points), ReconstructionError);
 }
 
 }  // namespace

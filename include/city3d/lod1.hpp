@@ -2,7 +2,12 @@
 // rung of the fallback ladder, and a baseline).
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "city3d/crop.hpp"
@@ -43,6 +48,29 @@ Lod1Heights lod1_heights(const BuildingInput& input, const Lod1Params& params = 
 /// with holes cannot be split (self-intersecting rings), or when roof_z <= floor_z.
 PolygonMesh extrude_polygons(const std::vector<Polygon2>& polygons, double floor_z, double roof_z,
                              const BuildingId& id = {});
+
+/// The roof parts of an LoD2 model in plan view, with the building points above each: what
+/// make_lod13_blocks clusters. They do not depend on the step height, so LoD1.2 and LoD1.3 are made
+/// from one of them.
+struct Lod13Parts {
+  BuildingId id;
+  Point3 origin;                                   ///< the model's
+  std::vector<Point2> pts;                         ///< plan-view vertices (equal x, y are one)
+  std::vector<std::vector<std::uint32_t>> parts;   ///< each roof face as a counter-clockwise loop of pts
+  std::vector<double> mean_z;                      ///< per part, its face's mean vertex height
+  std::vector<double> area;                        ///< per part, in plan view
+  std::vector<std::vector<double>> part_z;         ///< per part, the z of the points above it
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> part_of_edge;  ///< directed edge -> part
+  std::set<std::pair<std::size_t, std::size_t>> adjacent;                        ///< parts sharing an edge
+};
+
+/// The roof parts of `lod22` (see make_lod13_blocks). Throws ReconstructionError when the model has
+/// no roof face.
+Lod13Parts lod13_parts(const BuildingModel& lod22, const std::vector<Point3>& points);
+
+/// make_lod13_blocks from parts made once (LoD1.2 and LoD1.3 of one model differ only in the step).
+BuildingModel make_lod13_blocks(const Lod13Parts& roof, double floor_z, double step_height,
+                                double roof_percentile = 70.0, double min_height = 1.0);
 
 /// Blocks per roof-height cluster from an LoD2 model (3DBAG's LoD1.3; LoD1.2 with an infinite
 /// step): the model's roof faces, projected to the ground, are the roof parts; each part's height is

@@ -17,6 +17,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <set>
@@ -284,17 +285,22 @@ using Mesh = CGAL::Surface_mesh<P3>;
 // A triangle soup as a CGAL mesh, or false when it is not a valid polygon mesh.
 bool to_surface_mesh(const std::vector<Point3>& vertices, const std::vector<Triangle>& triangles, Mesh& mesh) {
   namespace PMP = CGAL::Polygon_mesh_processing;
+  // The soup's points in the order the triangles first use them (the mesh's vertex order).
+  constexpr std::size_t kUnused = std::numeric_limits<std::size_t>::max();
   std::vector<P3> points;
-  std::map<std::uint32_t, std::size_t> local;
-  std::vector<std::vector<std::size_t>> faces;
+  std::vector<std::size_t> local(vertices.size(), kUnused);
+  std::vector<std::array<std::size_t, 3>> faces;
+  faces.reserve(triangles.size());
   for (const Triangle& t : triangles) {
-    std::vector<std::size_t> f;
-    for (std::uint32_t i : t) {
-      const auto [it, fresh] = local.emplace(i, points.size());
-      if (fresh) points.push_back({vertices[i].x, vertices[i].y, vertices[i].z});
-      f.push_back(it->second);
+    std::array<std::size_t, 3>& f = faces.emplace_back();
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::uint32_t i = t[k];
+      if (local[i] == kUnused) {
+        local[i] = points.size();
+        points.push_back({vertices[i].x, vertices[i].y, vertices[i].z});
+      }
+      f[k] = local[i];
     }
-    faces.push_back(f);
   }
   if (!PMP::is_polygon_soup_a_polygon_mesh(faces)) return false;
   PMP::polygon_soup_to_polygon_mesh(points, faces, mesh);

@@ -415,14 +415,16 @@ std::vector<Loop> boundary_loops(const std::vector<Loop>& parts, const std::vect
 
 }  // namespace
 
-BuildingModel make_lod13_blocks(const BuildingModel& lod22, const std::vector<Point3>& points, double floor_z,
-                                double step_height, double roof_percentile, double min_height) {
+Lod13Parts lod13_parts(const BuildingModel& lod22, const std::vector<Point3>& points) {
   const std::vector<SurfaceType> types = surface_types(lod22);
+  Lod13Parts out;
+  out.id = lod22.id;
+  out.origin = lod22.origin;
   // Plan-view vertices (equal x, y are one vertex) and the roof parts as loops of them.
-  std::vector<Point2> pts;
+  std::vector<Point2>& pts = out.pts;
   std::map<Key2, std::uint32_t> index_of;
-  std::vector<Loop> parts;
-  std::vector<double> mean_z;
+  std::vector<Loop>& parts = out.parts;
+  std::vector<double>& mean_z = out.mean_z;
   for (std::size_t f = 0; f < lod22.mesh.faces.size(); ++f) {
     if (types[f] != SurfaceType::roof) continue;
     Loop loop;
@@ -463,8 +465,9 @@ BuildingModel make_lod13_blocks(const BuildingModel& lod22, const std::vector<Po
     loop = std::move(split);
   }
 
-  // Heights: the percentile of the points above each part.
-  std::vector<std::vector<double>> part_z(parts.size());
+  // Heights: the points above each part.
+  std::vector<std::vector<double>>& part_z = out.part_z;
+  part_z.resize(parts.size());
   std::vector<std::vector<Point2>> rings(parts.size());
   std::vector<Box2> boxes(parts.size());
   for (std::size_t p = 0; p < parts.size(); ++p)
@@ -480,18 +483,29 @@ BuildingModel make_lod13_blocks(const BuildingModel& lod22, const std::vector<Po
         break;
       }
     }
-  std::vector<double> area(parts.size());
-  for (std::size_t p = 0; p < parts.size(); ++p) area[p] = signed_area(rings[p]);
+  out.area.resize(parts.size());
+  for (std::size_t p = 0; p < parts.size(); ++p) out.area[p] = signed_area(rings[p]);
 
   // Adjacent parts (a shared edge in plan view).
-  std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> part_of_edge;
   for (std::size_t p = 0; p < parts.size(); ++p)
-    for (std::size_t k = 0; k < parts[p].size(); ++k) part_of_edge[{parts[p][k], parts[p][(k + 1) % parts[p].size()]}] = p;
-  std::set<std::pair<std::size_t, std::size_t>> adjacent;
-  for (const auto& [e, p] : part_of_edge) {
-    const auto it = part_of_edge.find({e.second, e.first});
-    if (it != part_of_edge.end() && it->second != p) adjacent.insert(std::minmax(p, it->second));
+    for (std::size_t k = 0; k < parts[p].size(); ++k)
+      out.part_of_edge[{parts[p][k], parts[p][(k + 1) % parts[p].size()]}] = p;
+  for (const auto& [e, p] : out.part_of_edge) {
+    const auto it = out.part_of_edge.find({e.second, e.first});
+    if (it != out.part_of_edge.end() && it->second != p) out.adjacent.insert(std::minmax(p, it->second));
   }
+  return out;
+}
+
+BuildingModel make_lod13_blocks(const Lod13Parts& roof, double floor_z, double step_height, double roof_percentile,
+                                double min_height) {
+  const std::vector<Point2>& pts = roof.pts;
+  const std::vector<Loop>& parts = roof.parts;
+  const std::vector<double>& mean_z = roof.mean_z;
+  const std::vector<double>& area = roof.area;
+  const std::vector<std::vector<double>>& part_z = roof.part_z;
+  const auto& part_of_edge = roof.part_of_edge;
+  const auto& adjacent = roof.adjacent;
 
   // Clusters: merge the adjacent pair of clusters with the smallest height difference while it is
   // below the step height.
@@ -535,8 +549,8 @@ BuildingModel make_lod13_blocks(const BuildingModel& lod22, const std::vector<Po
   // The mesh: a column of vertices over every plan-view vertex (the floor and each incident
   // cluster's height), roofs, floors and walls through every column vertex they pass.
   BuildingModel out;
-  out.id = lod22.id;
-  out.origin = lod22.origin;
+  out.id = roof.id;
+  out.origin = roof.origin;
   std::map<std::pair<std::uint32_t, double>, std::uint32_t> vertex_of;
   std::vector<std::set<double>> column(pts.size());
   for (std::size_t p = 0; p < parts.size(); ++p)
@@ -602,6 +616,11 @@ BuildingModel make_lod13_blocks(const BuildingModel& lod22, const std::vector<Po
     }
   }
   return out;
+}
+
+BuildingModel make_lod13_blocks(const BuildingModel& lod22, const std::vector<Point3>& points, double floor_z,
+                                double step_height, double roof_percentile, double min_height) {
+  return make_lod13_blocks(lod13_parts(lod22, points), floor_z, step_height, roof_percentile, min_height);
 }
 
 }  // namespace city3d

@@ -87,10 +87,12 @@ void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams
   // A building of one height level has the same blocks at LoD1.3 as at LoD1.2: they are validated
   // (and below measured) once.
   std::optional<std::pair<BuildingModel, BuildingModel>> derived;  // the last blocks, as made and as validated
+  std::optional<Lod13Parts> roof_parts;  // made once for both levels
   const auto derive = [&](const char* lod, double step) {
     try {
-      BuildingModel blocks = make_lod13_blocks(primary, input.points, input.ground_z, step,
-                                               params.lod1.roof_percentile, params.lod1.min_height);
+      if (!roof_parts) roof_parts = lod13_parts(primary, input.points);
+      BuildingModel blocks = make_lod13_blocks(*roof_parts, input.ground_z, step, params.lod1.roof_percentile,
+                                               params.lod1.min_height);
       if (derived && same_model(blocks, derived->first)) {
         made.push_back({lod, derived->second});
         real.push_back(lod);
