@@ -2,6 +2,8 @@
 // 0.03 m Gaussian noise, fixed seeds) with known geometry, plus the AHN3 smoke buildings.
 #include <gtest/gtest.h>
 
+#include <opencv2/core.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -740,6 +742,15 @@ TEST(DetectEdges, height_step_between_flat_roofs_gives_a_line_of_edge_pixels) {
   for (const Point2& p : edges)
     EXPECT_TRUE(std::abs(p.x - kStepX) <= 0.5 || distance_to_box_outline(p, 10, 8) <= 0.5)
         << "stray edge pixel at " << p.x << ", " << p.y;
+}
+
+// OpenCV's own threads cost more than they save on a building's image (heightmap.cpp): the first
+// image turns them off for the process.
+TEST(DetectEdges, opencv_runs_on_the_calling_thread_once_an_image_was_made) {
+  const HeightmapParams params;
+  const Heightmap map = rasterise_tin(flat_box(10, 8, 6.0, 14), params);
+  EXPECT_FALSE(detect_edges(map, params).empty());
+  EXPECT_EQ(cv::getNumThreads(), 1);
 }
 
 TEST(DetectEdges, flat_box_gives_edges_on_its_whole_outline_and_nowhere_else) {

@@ -42,8 +42,23 @@ std::string format_number(double value) {
   return out.str();
 }
 
+/// OpenCV run on the calling thread. Its own threads (TBB on Debian) split Canny and the morphology
+/// into stripes, and on a building's image of a few thousand pixels the hand-off costs more than it
+/// saves: a worker thread, and the caller spinning in sched_yield until the stripes are done (15,000
+/// calls for the Delft block at -j 1). city3d runs buildings in parallel itself. The stripes give the
+/// same pixels as one pass. The setting is OpenCV's, for the whole process; set once, before the first
+/// OpenCV call of any thread that comes through here.
+void opencv_on_calling_thread() {
+  static const bool once = [] {
+    cv::setNumThreads(1);
+    return true;
+  }();
+  (void)once;
+}
+
 /// Heights with no-data pixels set to `fill`, as a CV_32F image (row 0 = south).
 cv::Mat filled_image(const Heightmap& map, float fill) {
+  opencv_on_calling_thread();
   cv::Mat image(map.height, map.width, CV_32F);
   for (int row = 0; row < map.height; ++row) {
     float* out = image.ptr<float>(row);
@@ -302,6 +317,7 @@ std::vector<Polygon2> infer_outline(const Heightmap& heightmap, const std::vecto
   const double spacing = std::sqrt(std::max<double>(data_pixels, 1) * r * r / local_points.size());
   const int radius = std::max(1, static_cast<int>(std::ceil(gap_spacings * spacing / r)));
   // Occupancy with a border of `radius` empty pixels, so the closing never touches the image edge.
+  detail::opencv_on_calling_thread();
   cv::Mat mask = cv::Mat::zeros(heightmap.height + 2 * radius, heightmap.width + 2 * radius, CV_8U);
   for (const Point3& p : local_points) {
     const int col = static_cast<int>(std::floor((p.x - heightmap.origin.x) / r));
