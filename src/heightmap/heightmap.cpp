@@ -50,7 +50,7 @@ std::string format_number(double value) {
 /// OpenCV call of any thread that comes through here.
 void opencv_on_calling_thread() {
   static const bool once = [] {
-    cv::setNumThreads(1);
+    cv::setNumThreads(0);  // 0: "run all its functions sequentially" (1 would set up a TBB arena)
     return true;
   }();
   (void)once;
