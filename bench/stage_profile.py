@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Issue 27: where the CPU goes, stage by stage. Runs `city3d reconstruct --profile` on the Delft block
 (both LAS tiles, 160 footprints, -j 1, every default output) and on the single-building clouds of
-../shared/data/city3d_dev and city3d_dev_large (-j 2), and prints per stage the CPU seconds of the first
+../shared/data/city3d_dev and city3d_dev_large (-j 1), and prints per stage the CPU seconds of the first
 models and of the rebuilds, summed over each set's buildings (medians over --runs runs), with the share of
 each stage; then, from the reports, the per-building CPU (report.csv's cpu_seconds): total, median, p99 and
 maximum.
@@ -9,7 +9,9 @@ maximum.
     python3 bench/stage_profile.py [--city3d build/city3d] [--runs 3] [--sets delft,dev,dev_large]
 
 Needs python3 only. Stage CPU is thread CPU plus the solver processes' (CBC), counted exclusive: a stage
-nested in another is taken out of it (include/city3d/stage_profile.hpp).
+nested in another is taken out of it (include/city3d/stage_profile.hpp). Every set runs on one thread:
+a building's CPU is then its own, not inflated by a second thread on the same core's caches (the clouds
+ran one at a time whatever -j said until the threads shared them; bench/delft_jobs.sh measures -j 2).
 """
 import argparse
 import csv
@@ -69,9 +71,10 @@ def main():
                                       "-f", os.path.join(DELFT, "footprints", "bgt_pand_laz_area.gpkg"),
                                       "--id-field", "gml_id", "-j", "1"]
     if "dev" in wanted:
-        sets["city3d_dev (-j 2)"] = clouds_of(os.path.join(SHARED, "city3d_dev")) + ["-j", "2", "--no-cityjson"]
+        sets["city3d_dev (-j 1)"] = clouds_of(os.path.join(SHARED, "city3d_dev")) + ["-j", "1", "--no-cityjson"]
     if "dev_large" in wanted:
-        sets["city3d_dev_large (-j 2)"] = clouds_of(os.path.join(SHARED, "city3d_dev_large")) + ["-j", "2", "--no-cityjson"]
+        sets["city3d_dev_large (-j 1)"] = clouds_of(os.path.join(SHARED, "city3d_dev_large")) + ["-j", "1",
+                                                                                            "--no-cityjson"]
     with tempfile.TemporaryDirectory() as work:
         for name, args in sets.items():
             runs = [run(city3d, args, os.path.join(work, f"run{k}")) for k in range(a.runs)]

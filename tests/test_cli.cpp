@@ -517,6 +517,28 @@ TEST_F(Reconstruct, single_building_cloud_without_footprint_gives_one_model) {
   EXPECT_TRUE(fs::exists(dir_ / "out" / "models" / (fs::path(first).stem().string() + ".obj")));
 }
 
+// Clouds without footprints are one pass that the threads share, so a thread takes the largest file
+// first (it used to be one pass per cloud: -j 2 ran one cloud at a time). The outputs keep input order.
+TEST_F(Reconstruct, single_building_clouds_are_taken_largest_first_and_written_in_input_order) {
+  const std::string smoke = kShared + "/city3d_smoke/AHN3/";
+  if (!fs::exists(smoke)) GTEST_SKIP() << "../shared/data is not beside the repository";
+  const std::vector<std::string> ids = {"00295", "08541", "04160"};  // 12 kB, 4 kB, 25 kB
+  ASSERT_GT(fs::file_size(smoke + ids[2] + ".ply"), fs::file_size(smoke + ids[0] + ".ply"));
+  ASSERT_GT(fs::file_size(smoke + ids[0] + ".ply"), fs::file_size(smoke + ids[1] + ".ply"));
+  std::string clouds;
+  for (const std::string& id : ids) clouds += smoke + id + ".ply ";
+  const Result r = run("reconstruct " + clouds + "-j 1 --no-progress -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto rows = lines_of(read_file(dir_ / "out" / "report.csv"));
+  ASSERT_EQ(rows.size(), 4u);
+  for (std::size_t i = 0; i < ids.size(); ++i) EXPECT_EQ(rows[i + 1].substr(0, 6), ids[i] + ",") << rows[i + 1];
+  // The journal holds the records in the order they were finished: the largest cloud first.
+  const auto journal = lines_of(read_file(dir_ / "out" / "resume.journal"));
+  ASSERT_EQ(journal.size(), 4u);  // header + 3 buildings
+  for (const auto& [line, id] : {std::pair{1, ids[2]}, std::pair{2, ids[0]}, std::pair{3, ids[1]}})
+    EXPECT_TRUE(contains(journal[line], "\"csv\":\"" + id + ",")) << line << ": " << journal[line].substr(0, 60);
+}
+
 TEST_F(Reconstruct, missing_footprint_source_is_an_input_error_naming_it) {
   const std::string d = CITY3D_SAMPLE_DATA;
   const Result r = run("reconstruct " + d + "/delft_sample_1.las -f /nonexistent/bgt.gpkg -o " + dir_.string());

@@ -593,11 +593,12 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   // Cropping passes: consecutive blocks in tile order, up to group_area of footprints, so that a tile
   // is streamed once for as many blocks as memory allows. (A pass is not cut where the home tile
   // changes: tiles with fewer footprints than group_area, and the neighbours every block's ground
-  // buffer reaches into, would be streamed once per home tile.)
+  // buffer reaches into, would be streamed once per home tile.) Single-building clouds are one pass,
+  // so that the threads share them all.
   std::vector<std::vector<std::size_t>> groups;
   double group_weight = 0.0;
   for (std::size_t b : my_blocks) {
-    if (groups.empty() || !source || group_weight + plan.weights[b] > options.group_area) {
+    if (groups.empty() || (source && group_weight + plan.weights[b] > options.group_area)) {
       groups.emplace_back();
       group_weight = 0.0;
     }
@@ -704,16 +705,22 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
         std::all_of(indices.begin(), indices.end(), [&](std::uint64_t i) { return journal.find(i) != nullptr; });
     if (all_done) continue;
     if (!source) {
-      const std::string& file = files[indices.front()];
-      const CloudId& cloud = plan.cloud_ids[indices.front()];
+      // Single-building clouds: one pass over them all, each cloud read by the thread that
+      // reconstructs it, the largest files first.
+      std::vector<std::size_t> work;
+      for (std::uint64_t i : indices) work.push_back(static_cast<std::size_t>(plan.weights[i]));
       reconstruct_all(
-          indices, [&](std::size_t) { return cloud.id; },
-          [&](std::size_t) { return building_from_cloud(cloud.id, read_all_points(file), options.ground_z); },
-          [](std::size_t) { return nullptr; },
-          [&](std::size_t, BuildingResult& result) {
-            if (!cloud.note.empty()) append_note(result.report, cloud.note);
+          indices, [&](std::size_t k) { return plan.cloud_ids[indices[k]].id; },
+          [&](std::size_t k) {
+            return building_from_cloud(plan.cloud_ids[indices[k]].id, read_all_points(files[indices[k]]),
+                                       options.ground_z);
           },
-          {});
+          [](std::size_t) { return nullptr; },
+          [&](std::size_t k, BuildingResult& result) {
+            const std::string& note = plan.cloud_ids[indices[k]].note;
+            if (!note.empty()) append_note(result.report, note);
+          },
+          work);
       continue;
     }
     // The group's footprints and every other footprint that can reach into their ground buffers
