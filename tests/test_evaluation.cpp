@@ -206,6 +206,65 @@ TEST(Evaluation, l_shaped_roof_is_triangulated_without_covering_the_notch) {
   EXPECT_NEAR(rmse(m, {{3, 3, 1.5}}), 1.0, 1e-12);
 }
 
+/// The distance from p to triangle abc, the plain way: to the plane where p projects inside the
+/// triangle, else to the nearest of its three edges.
+double triangle_distance(const Point3& p, const Point3& a, const Point3& b, const Point3& c) {
+  const auto sub = [](const Point3& u, const Point3& v) { return Point3{u.x - v.x, u.y - v.y, u.z - v.z}; };
+  const auto dot = [](const Point3& u, const Point3& v) { return u.x * v.x + u.y * v.y + u.z * v.z; };
+  const auto cross = [](const Point3& u, const Point3& v) {
+    return Point3{u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x};
+  };
+  const auto segment = [&](const Point3& s, const Point3& e) {
+    const Point3 d = sub(e, s);
+    const double t = std::clamp(dot(sub(p, s), d) / dot(d, d), 0.0, 1.0);
+    const Point3 q{s.x + t * d.x, s.y + t * d.y, s.z + t * d.z};
+    return std::sqrt(dot(sub(p, q), sub(p, q)));
+  };
+  const Point3 n = cross(sub(b, a), sub(c, a));
+  const bool inside = dot(cross(sub(b, a), sub(p, a)), n) >= 0 && dot(cross(sub(c, b), sub(p, b)), n) >= 0 &&
+                      dot(cross(sub(a, c), sub(p, c)), n) >= 0;
+  if (inside) return std::abs(dot(sub(p, a), n)) / std::sqrt(dot(n, n));
+  return std::min({segment(a, b), segment(b, c), segment(c, a)});
+}
+
+// The tree search skips a triangle whose bounding box is farther than the closest point so far: the
+// distances must be those of trying every triangle, for points on, near, inside and far from a tilted
+// L-shaped prism (boxes that are not flat), in an order that makes each search's start a poor one.
+TEST(Evaluation, point_distances_are_those_of_trying_every_triangle) {
+  PolygonMesh m = l_prism();
+  const double a = 0.4, b = 0.3;  // rotations about z and about x
+  for (Point3& v : m.vertices) {
+    const Point3 r{std::cos(a) * v.x - std::sin(a) * v.y, std::sin(a) * v.x + std::cos(a) * v.y, v.z};
+    v = {r.x + 100.0, std::cos(b) * r.y - std::sin(b) * r.z + 200.0, std::sin(b) * r.y + std::cos(b) * r.z};
+  }
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-3.0, 7.0), pick(0.0, 1.0);
+  std::vector<Point3> points;
+  const auto triangles = triangulate(m);
+  for (int i = 0; i < 3000; ++i) {
+    if (i % 3 == 0) {  // on a triangle, or a hair off it
+      const auto& t = triangles[rng() % triangles.size()];
+      double s = pick(rng), w = pick(rng);
+      if (s + w > 1) s = 1 - s, w = 1 - w;
+      const Point3 &p0 = m.vertices[t[0]], &p1 = m.vertices[t[1]], &p2 = m.vertices[t[2]];
+      const double off = (i % 2) * 1e-7;
+      points.push_back({p0.x + s * (p1.x - p0.x) + w * (p2.x - p0.x) + off,
+                        p0.y + s * (p1.y - p0.y) + w * (p2.y - p0.y), p0.z + s * (p1.z - p0.z) + w * (p2.z - p0.z)});
+    } else {
+      const double scale = i % 3 == 1 ? 1.0 : 8.0;  // around it, or far away
+      points.push_back({100.0 + scale * u(rng), 200.0 + scale * u(rng), scale * u(rng)});
+    }
+  }
+  const std::vector<double> d = point_distances(m, points);
+  ASSERT_EQ(d.size(), points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    double best = 1e300;
+    for (const auto& t : triangles)
+      best = std::min(best, triangle_distance(points[i], m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]));
+    ASSERT_NEAR(d[i], best, 1e-9) << "point " << i;
+  }
+}
+
 TEST(Evaluation, l_shaped_prism_is_a_valid_solid) {
   const auto v = check_validity(l_prism());
   EXPECT_TRUE(v.valid()) << v.problem;

@@ -124,15 +124,65 @@ std::vector<Triangle> triangulate(const PolygonMesh& mesh) {
   return triangles;
 }
 
+namespace {
+
+using DistanceTriangle = Kernel::Triangle_3;
+using DistancePrimitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<DistanceTriangle>::const_iterator>;
+
+// CGAL's AABB traits, whose closest-point step first bounds the triangle's distance by its bounding box.
+// The tree prunes by the boxes of its nodes, but a leaf projects each of its triangles onto the query
+// point; a triangle whose box is farther than the closest point so far cannot be closer. The test
+// skips only triangles farther by a margin (1e-6 relative, 1e-6 m) that is many orders above the
+// rounding of the projection, where CGAL's own exact comparison would keep the closest point so far
+// too: the closest points, and so the distances, are the same bits as without the test.
+struct BoxFilteredTraits : CGAL::AABB_traits<Kernel, DistancePrimitive> {
+  using Base = CGAL::AABB_traits<Kernel, DistancePrimitive>;
+  class Closest_point {
+   public:
+    explicit Closest_point(const BoxFilteredTraits& traits) : base_(traits) {}
+    Kernel::Point_3 operator()(const Kernel::Point_3& p, const DistancePrimitive& primitive,
+                               const Kernel::Point_3& bound) const {
+      const DistanceTriangle& t = primitive.datum();
+      double box = 0.0;
+      for (int axis = 0; axis < 3; ++axis) {
+        const double a = t[0][axis], b = t[1][axis], c = t[2][axis];
+        const double lo = std::min({a, b, c}), hi = std::max({a, b, c});
+        const double outside = p[axis] < lo ? lo - p[axis] : p[axis] > hi ? p[axis] - hi : 0.0;
+        box += outside * outside;
+      }
+      const double dx = bound.x() - p.x(), dy = bound.y() - p.y(), dz = bound.z() - p.z();
+      const double best = dx * dx + dy * dy + dz * dz;
+      if (box > best * (1.0 + 1e-6) + 1e-12) return bound;
+      return base_(p, primitive, bound);
+    }
+
+   private:
+    Base::Closest_point base_;
+  };
+  Closest_point closest_point_object() const { return Closest_point(*this); }
+};
+
+// Whether the triangle's edge vectors have a cross product that is certainly not zero: a component
+// larger than the rounding of its computation (a bound well above the few roundings involved). Most
+// triangles pass; the rest go to CGAL's exact collinearity test, whose interval filter fails (and
+// throws) on the triangles of collinear face vertices.
+bool certainly_not_flat(const DistanceTriangle& t) {
+  const double ux = t[1].x() - t[0].x(), uy = t[1].y() - t[0].y(), uz = t[1].z() - t[0].z();
+  const double vx = t[2].x() - t[0].x(), vy = t[2].y() - t[0].y(), vz = t[2].z() - t[0].z();
+  const auto clear = [](double p, double q) { return std::abs(p - q) > 1e-14 * (std::abs(p) + std::abs(q)); };
+  return clear(uy * vz, uz * vy) || clear(uz * vx, ux * vz) || clear(ux * vy, uy * vx);
+}
+
+}  // namespace
+
 std::vector<double> point_distances(const PolygonMesh& mesh, const std::vector<Point3>& points) {
-  using Tri = Kernel::Triangle_3;
-  using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<Tri>::const_iterator>;
-  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
+  using Tri = DistanceTriangle;
+  using Tree = CGAL::AABB_tree<BoxFilteredTraits>;
   if (points.empty()) throw ReconstructionError(ReconstructionStage::evaluation, "rmse needs at least one point");
   std::vector<Tri> triangles;
   for (const auto& t : triangulate(mesh)) {
     Tri tri(to_cgal(mesh.vertices[t[0]]), to_cgal(mesh.vertices[t[1]]), to_cgal(mesh.vertices[t[2]]));
-    if (!tri.is_degenerate()) triangles.push_back(tri);  // AABB distance queries need real triangles
+    if (certainly_not_flat(tri) || !tri.is_degenerate()) triangles.push_back(tri);  // AABB queries need real triangles
   }
   if (triangles.empty())
     throw ReconstructionError(ReconstructionStage::evaluation, "rmse of a mesh without area (" +

@@ -39,7 +39,6 @@ std::vector<std::vector<int>> cell_roof_planes(const std::vector<Point3>& points
   struct PlaneRank {
     std::size_t inside, near;
     int plane;
-    bool blade = false;
   };
   std::vector<std::vector<PlaneRank>> ranked(cell_count);
   std::vector<std::vector<int>> cell_planes(cell_count);
@@ -78,24 +77,31 @@ std::vector<std::vector<int>> cell_roof_planes(const std::vector<Point3>& points
       const std::size_t need = std::min<std::size_t>(static_cast<std::size_t>(params.min_support_points),
                                                      roofs[r].points.size());
       if (need > 0 && near_count[r] >= need)
-        ranked[c].push_back({inside_count[r], near_count[r], static_cast<int>(r), false});
+        ranked[c].push_back({inside_count[r], near_count[r], static_cast<int>(r)});
     }
     // Best-supported first (points inside the cell, then points near it, then plane index); keep
     // at most max_planes_per_cell. When there are more, planes whose face over the cell would rise
     // over no point (more than max_unsupported_area of it: a steep plane extended beyond its points, a
     // blade above the roof) come after the others: they must not take a better plane's place.
+    // The blade test is made in that order and only until max_planes others are found: the planes
+    // after them are dropped whether blades or not.
     auto& list = ranked[c];
-    if (list.size() > max_planes)
-      for (auto& pr : list)
-        pr.blade = unsupported_over(roofs[static_cast<std::size_t>(pr.plane)], poly, local_top,
-                                    params.surface_support) > params.max_unsupported_area;
     std::sort(list.begin(), list.end(), [](const PlaneRank& x, const PlaneRank& y) {
-      if (x.blade != y.blade) return y.blade;
       if (x.inside != y.inside) return x.inside > y.inside;
       if (x.near != y.near) return x.near > y.near;
       return x.plane < y.plane;
     });
-    if (list.size() > max_planes) list.resize(max_planes);
+    if (list.size() > max_planes) {
+      std::vector<PlaneRank> kept, blades;
+      for (const PlaneRank& pr : list) {
+        if (kept.size() == max_planes) break;
+        const bool blade = unsupported_over(roofs[static_cast<std::size_t>(pr.plane)], poly, local_top,
+                                            params.surface_support) > params.max_unsupported_area;
+        (blade ? blades : kept).push_back(pr);
+      }
+      for (std::size_t b = 0; b < blades.size() && kept.size() < max_planes; ++b) kept.push_back(blades[b]);
+      list = std::move(kept);
+    }
     for (const auto& pr : list) cell_planes[c].push_back(pr.plane);
     std::sort(cell_planes[c].begin(), cell_planes[c].end());
     if (points_inside) {
