@@ -462,9 +462,22 @@ std::string validity_codes(const std::vector<ValidityError>& errors) {
 }
 
 std::vector<ValidityError> validate_solid(const SolidGeometry& solid, const ValidityParams& params) {
-  std::vector<ValidityError> errors;
-  const std::vector<Point3>& v = solid.vertices;
   for (const auto& shell : solid.shells)
+    for (const auto& polygon : shell)
+      for (const auto& ring : polygon)
+        for (std::uint32_t i : ring)
+          if (i >= solid.vertices.size())
+            return {{101, -1, -1, "vertex index " + std::to_string(i) + " of " + std::to_string(solid.vertices.size())}};
+  return detail::validate_snapped_solid(solid.vertices, solid.shells,
+                                        snap_vertices(solid.vertices, params.snap_tolerance), params);
+}
+
+std::vector<ValidityError> detail::validate_snapped_solid(const std::vector<Point3>& v,
+                                                          const std::vector<std::vector<SolidPolygon>>& solid_shells,
+                                                          const std::vector<std::uint32_t>& to,
+                                                          const ValidityParams& params) {
+  std::vector<ValidityError> errors;
+  for (const auto& shell : solid_shells)
     for (const auto& polygon : shell)
       for (const auto& ring : polygon)
         for (std::uint32_t i : ring)
@@ -475,15 +488,14 @@ std::vector<ValidityError> validate_solid(const SolidGeometry& solid, const Vali
 
   // 309: every listed vertex must be used.
   std::vector<bool> used(v.size(), false);
-  for (const auto& shell : solid.shells)
+  for (const auto& shell : solid_shells)
     for (const auto& polygon : shell)
       for (const auto& ring : polygon)
         for (std::uint32_t i : ring) used[i] = true;
   const std::size_t unused = static_cast<std::size_t>(std::count(used.begin(), used.end(), false));
 
-  // Snap, then rings and polygons.
-  const std::vector<std::uint32_t> to = snap_vertices(v, params.snap_tolerance);
-  std::vector<std::vector<SolidPolygon>> shells = solid.shells;
+  // Snapped, then rings and polygons.
+  std::vector<std::vector<SolidPolygon>> shells = solid_shells;
   for (auto& shell : shells)
     for (auto& polygon : shell)
       for (auto& ring : polygon)
@@ -606,10 +618,18 @@ std::vector<ValidityError> validate_solid(const SolidGeometry& solid, const Vali
         const double l = norm(n);
         if (l > 0) normals.push_back({n.x / l, n.y / l, n.z / l});
       }
+      // First the test of every normal against the first one: when none is more than half the
+      // tolerance (less a margin far above rounding) away from it, no two are more than the tolerance
+      // apart, and the pairs need not be compared: a floor of many vertices has thousands of triangles.
+      const double half = 0.5 * max_angle - 1e-9;
+      const bool near_first = std::all_of(normals.begin(), normals.end(), [&](const Vec& n) {
+        return std::acos(std::clamp(dot(normals.front(), n), -1.0, 1.0)) <= half;
+      });
       double worst = 0.0;
-      for (std::size_t a = 0; a < normals.size(); ++a)
-        for (std::size_t b = a + 1; b < normals.size(); ++b)
-          worst = std::max(worst, std::acos(std::clamp(dot(normals[a], normals[b]), -1.0, 1.0)));
+      if (!near_first)
+        for (std::size_t a = 0; a < normals.size(); ++a)
+          for (std::size_t b = a + 1; b < normals.size(); ++b)
+            worst = std::max(worst, std::acos(std::clamp(dot(normals[a], normals[b]), -1.0, 1.0)));
       if (worst > max_angle) report(204, format(worst * 180.0 / kPi, 1) + " degrees between two triangles");
     }
   }
