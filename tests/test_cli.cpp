@@ -531,12 +531,14 @@ TEST_F(Reconstruct, single_building_clouds_are_taken_largest_first_and_written_i
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto rows = lines_of(read_file(dir_ / "out" / "report.csv"));
   ASSERT_EQ(rows.size(), 4u);
-  for (std::size_t i = 0; i < ids.size(); ++i) EXPECT_EQ(rows[i + 1].substr(0, 6), ids[i] + ",") << rows[i + 1];
+  for (std::size_t i = 0; i < ids.size(); ++i)
+    EXPECT_EQ(rows[i + 1].substr(0, 6), ids[i] + ",") << rows[i + 1];
   // The journal holds the records in the order they were finished: the largest cloud first.
   const auto journal = lines_of(read_file(dir_ / "out" / "resume.journal"));
   ASSERT_EQ(journal.size(), 4u);  // header + 3 buildings
   for (const auto& [line, id] : {std::pair{1, ids[2]}, std::pair{2, ids[0]}, std::pair{3, ids[1]}})
-    EXPECT_TRUE(contains(journal[line], "\"csv\":\"" + id + ",")) << line << ": " << journal[line].substr(0, 60);
+    EXPECT_TRUE(contains(journal[line], "\"csv\":\"" + id + ","))
+        << line << ": " << journal[line].substr(0, 60);
 }
 
 TEST_F(Reconstruct, missing_footprint_source_is_an_input_error_naming_it) {

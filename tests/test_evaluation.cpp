@@ -249,7 +249,8 @@ TEST(Evaluation, point_distances_are_those_of_trying_every_triangle) {
       const Point3 &p0 = m.vertices[t[0]], &p1 = m.vertices[t[1]], &p2 = m.vertices[t[2]];
       const double off = (i % 2) * 1e-7;
       points.push_back({p0.x + s * (p1.x - p0.x) + w * (p2.x - p0.x) + off,
-                        p0.y + s * (p1.y - p0.y) + w * (p2.y - p0.y), p0.z + s * (p1.z - p0.z) + w * (p2.z - p0.z)});
+                        p0.y + s * (p1.y - p0.y) + w * (p2.y - p0.y),
+                        p0.z + s * (p1.z - p0.z) + w * (p2.z - p0.z)});
     } else {
       const double scale = i % 3 == 1 ? 1.0 : 8.0;  // around it, or far away
       points.push_back({100.0 + scale * u(rng), 200.0 + scale * u(rng), scale * u(rng)});
@@ -260,7 +261,8 @@ TEST(Evaluation, point_distances_are_those_of_trying_every_triangle) {
   for (std::size_t i = 0; i < points.size(); ++i) {
     double best = 1e300;
     for (const auto& t : triangles)
-      best = std::min(best, triangle_distance(points[i], m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]));
+      best =
+          std::min(best, triangle_distance(points[i], m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]));
     ASSERT_NEAR(d[i], best, 1e-9) << "point " << i;
   }
 }

@@ -127,7 +127,8 @@ std::vector<Triangle> triangulate(const PolygonMesh& mesh) {
 namespace {
 
 using DistanceTriangle = Kernel::Triangle_3;
-using DistancePrimitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<DistanceTriangle>::const_iterator>;
+using DistancePrimitive =
+    CGAL::AABB_triangle_primitive<Kernel, std::vector<DistanceTriangle>::const_iterator>;
 
 // CGAL's AABB traits, whose closest-point step first bounds the triangle's distance by its bounding box.
 // The tree prunes by the boxes of its nodes, but a leaf projects each of its triangles onto the query
@@ -182,7 +183,8 @@ std::vector<double> point_distances(const PolygonMesh& mesh, const std::vector<P
   std::vector<Tri> triangles;
   for (const auto& t : triangulate(mesh)) {
     Tri tri(to_cgal(mesh.vertices[t[0]]), to_cgal(mesh.vertices[t[1]]), to_cgal(mesh.vertices[t[2]]));
-    if (certainly_not_flat(tri) || !tri.is_degenerate()) triangles.push_back(tri);  // AABB queries need real triangles
+    // AABB distance queries need real triangles.
+    if (certainly_not_flat(tri) || !tri.is_degenerate()) triangles.push_back(tri);
   }
   if (triangles.empty())
     throw ReconstructionError(ReconstructionStage::evaluation, "rmse of a mesh without area (" +

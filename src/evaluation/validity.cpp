@@ -467,15 +467,15 @@ std::vector<ValidityError> validate_solid(const SolidGeometry& solid, const Vali
       for (const auto& ring : polygon)
         for (std::uint32_t i : ring)
           if (i >= solid.vertices.size())
-            return {{101, -1, -1, "vertex index " + std::to_string(i) + " of " + std::to_string(solid.vertices.size())}};
+            return {{101, -1, -1,
+                     "vertex index " + std::to_string(i) + " of " + std::to_string(solid.vertices.size())}};
   return detail::validate_snapped_solid(solid.vertices, solid.shells,
                                         snap_vertices(solid.vertices, params.snap_tolerance), params);
 }
 
-std::vector<ValidityError> detail::validate_snapped_solid(const std::vector<Point3>& v,
-                                                          const std::vector<std::vector<SolidPolygon>>& solid_shells,
-                                                          const std::vector<std::uint32_t>& to,
-                                                          const ValidityParams& params) {
+std::vector<ValidityError> detail::validate_snapped_solid(
+    const std::vector<Point3>& v, const std::vector<std::vector<SolidPolygon>>& solid_shells,
+    const std::vector<std::uint32_t>& to, const ValidityParams& params) {
   std::vector<ValidityError> errors;
   for (const auto& shell : solid_shells)
     for (const auto& polygon : shell)

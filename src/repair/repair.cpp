@@ -102,10 +102,11 @@ std::size_t remove_spikes(BuildingModel& model, double tolerance) {
 // Polygon-level codes (1xx, 2xx) of one face on its own, as validate_solid() gives them for a solid of
 // that face over all the model's vertices; `snapped` is their snap map (snap_vertices()), made once
 // for all the faces: made per face it cost a model of 1,500 faces and 2,400 vertices seconds.
-std::vector<int> face_codes(const BuildingModel& model, std::size_t f, const std::vector<std::uint32_t>& snapped,
-                            const ValidityParams& params) {
+std::vector<int> face_codes(const BuildingModel& model, std::size_t f,
+                            const std::vector<std::uint32_t>& snapped, const ValidityParams& params) {
   std::vector<int> codes;
-  for (const ValidityError& e : validate_snapped_solid(model.mesh.vertices, {{{model.mesh.faces[f]}}}, snapped, params))
+  for (const ValidityError& e :
+       validate_snapped_solid(model.mesh.vertices, {{{model.mesh.faces[f]}}}, snapped, params))
     if (e.code < 300) codes.push_back(e.code);
   return codes;
 }
