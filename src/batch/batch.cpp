@@ -593,8 +593,8 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   // Cropping passes: consecutive blocks in tile order, up to group_area of footprints, so that a tile
   // is streamed once for as many blocks as memory allows. (A pass is not cut where the home tile
   // changes: tiles with fewer footprints than group_area, and the neighbours every block's ground
-  // buffer reaches into, would be streamed once per home tile.) Single-building clouds are one pass,
-  // so that the threads share them all.
+  // buffer reaches into, would be streamed once per home tile.) Single-building clouds are one pass
+  // that the threads share, each thread reading the clouds it takes, the largest files first.
   std::vector<std::vector<std::size_t>> groups;
   double group_weight = 0.0;
   for (std::size_t b : my_blocks) {
@@ -705,8 +705,6 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
         std::all_of(indices.begin(), indices.end(), [&](std::uint64_t i) { return journal.find(i) != nullptr; });
     if (all_done) continue;
     if (!source) {
-      // Single-building clouds: one pass over them all, each cloud read by the thread that
-      // reconstructs it, the largest files first.
       std::vector<std::size_t> work;
       for (std::uint64_t i : indices) work.push_back(static_cast<std::size_t>(plan.weights[i]));
       reconstruct_all(
