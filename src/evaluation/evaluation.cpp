@@ -130,12 +130,15 @@ using DistanceTriangle = Kernel::Triangle_3;
 using DistancePrimitive =
     CGAL::AABB_triangle_primitive<Kernel, std::vector<DistanceTriangle>::const_iterator>;
 
-// CGAL's AABB traits, whose closest-point step first bounds the triangle's distance by its bounding box.
-// The tree prunes by the boxes of its nodes, but a leaf projects each of its triangles onto the query
-// point; a triangle whose box is farther than the closest point so far cannot be closer. The test
-// skips only triangles farther by a margin (1e-6 relative, 1e-6 m) that is many orders above the
-// rounding of the projection, where CGAL's own exact comparison would keep the closest point so far
-// too: the closest points, and so the distances, are the same bits as without the test.
+// CGAL's AABB traits with two shortcuts in doubles, each taken only where CGAL's exact answer is certain,
+// so the closest points, and so the distances, are the same bits as without them.
+// - The closest-point step first bounds the triangle's distance by its bounding box. The tree prunes
+//   by the boxes of its nodes, but a leaf projects each of its triangles onto the query point; a
+//   triangle whose box is farther than the closest point so far cannot be closer. The test skips only
+//   triangles farther by a margin (1e-6 relative, 1e-6 m) many orders above the rounding of the
+//   projection, where CGAL's own exact comparison would keep the closest point so far too.
+// - The node test (does the node's box come within that distance) is decided in doubles where the
+//   answer is clear by a relative 1e-10; CGAL's filtered exact test decides the rest.
 struct BoxFilteredTraits : CGAL::AABB_traits<Kernel, DistancePrimitive> {
   using Base = CGAL::AABB_traits<Kernel, DistancePrimitive>;
   class Closest_point {
@@ -161,6 +164,29 @@ struct BoxFilteredTraits : CGAL::AABB_traits<Kernel, DistancePrimitive> {
     Base::Closest_point base_;
   };
   Closest_point closest_point_object() const { return Closest_point(*this); }
+
+  // Whether a node's box comes within the distance of the closest point so far (SMALLER) or not
+  // (LARGER): the box's squared distance and the bound's each carry a few roundings, far below 1e-10.
+  class Compare_distance : public Base::Compare_distance {
+   public:
+    using Base::Compare_distance::operator();
+    CGAL::Comparison_result operator()(const Kernel::Point_3& p, const CGAL::Bbox_3& box,
+                                       const Kernel::Point_3& bound) const {
+      const double dx = bound.x() - p.x(), dy = bound.y() - p.y(), dz = bound.z() - p.z();
+      const double radius = dx * dx + dy * dy + dz * dz;
+      double outside = 0.0;
+      for (int axis = 0; axis < 3; ++axis) {
+        const double d = p[axis] < box.min(axis) ? box.min(axis) - p[axis]
+                         : p[axis] > box.max(axis) ? p[axis] - box.max(axis)
+                                                   : 0.0;
+        outside += d * d;
+      }
+      if (outside < radius * (1.0 - 1e-10)) return CGAL::SMALLER;
+      if (outside > radius * (1.0 + 1e-10) && outside > 1e-200) return CGAL::LARGER;
+      return Base::Compare_distance::operator()(p, box, bound);
+    }
+  };
+  Compare_distance compare_distance_object() const { return Compare_distance(); }
 };
 
 // Whether the triangle's edge vectors have a cross product that is certainly not zero: a component
