@@ -1,25 +1,25 @@
 // Tests of face selection: hand-built programs with known optima, brute force over all assignments
 // as the oracle, both backends, limits, components, determinism under threads.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
-#include <cstdint>
-#include <random>
-#include <thread>
-#include <vector>
-
 #include <csignal>
+#include <cstdint>
 #include <cstdlib>
 #include <fstream>
 #include <limits>
-#include <unistd.h>
+#include <random>
+#include <thread>
+#include <vector>
 
 #include "../bench/building_problems.hpp"
 #include "city3d/error.hpp"
 #include "city3d/selection.hpp"
 #include "selection/solver.hpp"
 #include "selection/solver_process.hpp"
+#include "selection/windows.hpp"
 
 namespace city3d {
 namespace {
@@ -766,6 +766,117 @@ TEST(Selection, large_program_is_solved_by_windows_from_its_start) {
   const auto whole = solve_selection(p, windows);
   ASSERT_EQ(whole.status, SelectionStatus::feasible) << whole.message;
   EXPECT_NEAR(whole.objective, optimum.objective, 1e-9);
+}
+
+// A window's rows of one free column become bounds (reduce_window): over random programs of binary
+// columns, the assignments the reduced program allows, with the settled columns at their values, are
+// exactly the assignments the window allows, and no row of the reduced program has fewer than two
+// columns.
+TEST(Selection, window_reduction_keeps_the_feasible_set) {
+  std::mt19937 random(11);
+  const auto feasible = [](const detail::MipModel& m, const std::vector<double>& x) {
+    for (const auto& row : m.rows) {
+      double sum = 0.0;
+      for (std::size_t k = 0; k < row.columns.size(); ++k) sum += row.values[k] * x[row.columns[k]];
+      if (sum < row.lower - 1e-9 || sum > row.upper + 1e-9) return false;
+    }
+    for (std::size_t c = 0; c < m.columns.size(); ++c)
+      if (x[c] < m.columns[c].lower - 1e-9 || x[c] > m.columns[c].upper + 1e-9) return false;
+    return true;
+  };
+  std::size_t settled_columns = 0, removed_rows = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const std::size_t n = 3 + random() % 8;
+    detail::MipModel sub;
+    sub.columns.assign(n, {0.0, 0.0, 1.0, true});
+    for (std::size_t c = 0; c < n; ++c) sub.start.push_back(static_cast<double>(random() % 2));
+    const std::size_t rows = 1 + random() % (2 * n);
+    const double coefs[] = {1.0, -1.0, 2.0, -2.0};
+    for (std::size_t r = 0; r < rows; ++r) {
+      detail::MipModel::Row row;
+      const std::size_t size = 1 + random() % 3;
+      for (std::size_t k = 0; k < size; ++k) {
+        const int c = static_cast<int>(random() % n);
+        if (std::find(row.columns.begin(), row.columns.end(), c) != row.columns.end()) continue;
+        row.columns.push_back(c);
+        row.values.push_back(coefs[random() % 4]);
+      }
+      double at_start = 0.0;
+      for (std::size_t k = 0; k < row.columns.size(); ++k)
+        at_start += row.values[k] * sub.start[row.columns[k]];
+      // Bounds the start satisfies: an equality, one side, or a range, some shifted as the fixed
+      // share of a window shifts them.
+      const double inf = std::numeric_limits<double>::infinity();
+      switch (random() % 4) {
+        case 0:
+          row.lower = row.upper = at_start;
+          break;
+        case 1:
+          row.lower = at_start - static_cast<double>(random() % 2);
+          row.upper = inf;
+          break;
+        case 2:
+          row.lower = -inf;
+          row.upper = at_start + static_cast<double>(random() % 2);
+          break;
+        default:
+          row.lower = at_start - 1.0;
+          row.upper = at_start + 1.0;
+          break;
+      }
+      sub.rows.push_back(std::move(row));
+    }
+    detail::ReducedWindow reduced;
+    ASSERT_TRUE(detail::reduce_window(sub, reduced)) << "trial " << trial;
+    ASSERT_EQ(reduced.free_index.size(), n);
+    for (const auto& row : reduced.program.rows) EXPECT_GE(row.columns.size(), 2u) << "trial " << trial;
+    const std::size_t free = reduced.program.columns.size();
+    settled_columns += n - free;
+    removed_rows += sub.rows.size() - reduced.program.rows.size();
+    ASSERT_EQ(reduced.program.start.size(), free);
+    EXPECT_TRUE(feasible(reduced.program, reduced.program.start)) << "trial " << trial;
+
+    // Every assignment of the window against every assignment of the reduced program.
+    std::vector<std::vector<double>> by_window, by_reduced;
+    for (std::uint32_t bits = 0; bits < (1u << n); ++bits) {
+      std::vector<double> x(n);
+      for (std::size_t c = 0; c < n; ++c) x[c] = (bits >> c) & 1u;
+      if (feasible(sub, x)) by_window.push_back(x);
+    }
+    for (std::uint32_t bits = 0; bits < (1u << free); ++bits) {
+      std::vector<double> y(free), x(n);
+      for (std::size_t c = 0; c < free; ++c) y[c] = (bits >> c) & 1u;
+      if (!feasible(reduced.program, y)) continue;
+      for (std::size_t c = 0; c < n; ++c)
+        x[c] = reduced.free_index[c] < 0 ? reduced.settled[c]
+                                         : y[static_cast<std::size_t>(reduced.free_index[c])];
+      by_reduced.push_back(x);
+    }
+    std::sort(by_window.begin(), by_window.end());
+    std::sort(by_reduced.begin(), by_reduced.end());
+    EXPECT_EQ(by_window, by_reduced) << "trial " << trial;
+  }
+  // The random rows gave the reduction work to do.
+  EXPECT_GT(settled_columns, 100u);
+  EXPECT_GT(removed_rows, 300u);
+}
+
+// A continuous corner column whose face outside the window is on: c >= x_outside - x_inner, with
+// x_outside = 1 moved into the bound, and x_inner settled off by an overlap with a face that is on,
+// leaves c settled at 1.
+TEST(Selection, window_reduction_settles_a_corner_column) {
+  detail::MipModel sub;
+  sub.columns = {{0.0, 0.0, 1.0, true}, {0.3, 0.0, 1.0, false}, {-0.1, 0.0, 1.0, true}};
+  sub.start = {0.0, 1.0, 1.0};
+  const double inf = std::numeric_limits<double>::infinity();
+  sub.rows.push_back({{0}, {1.0}, -inf, 0.0});         // x0 + x_on <= 1 with x_on = 1
+  sub.rows.push_back({{1, 0}, {1.0, 1.0}, 1.0, inf});  // c + x0 >= x_outside = 1
+  sub.rows.push_back({{0, 2}, {1.0, 1.0}, 1.0, 1.0});  // x0 + x2 = 1
+  detail::ReducedWindow reduced;
+  ASSERT_TRUE(detail::reduce_window(sub, reduced));
+  EXPECT_TRUE(reduced.program.columns.empty());
+  EXPECT_TRUE(reduced.program.rows.empty());
+  EXPECT_EQ(reduced.settled, (std::vector<double>{0.0, 1.0, 1.0}));
 }
 
 TEST(Selection, large_program_without_a_start_is_solved_whole) {

@@ -1,5 +1,6 @@
 // Large programs by windows (windows.hpp): windows grown through shared rows, sub-programs with the
-// rest fixed at the incumbent, accepted when they lower the objective.
+// rest fixed at the incumbent and their rows of one free column taken as bounds, accepted when they
+// lower the objective.
 #include "selection/windows.hpp"
 
 #include <algorithm>
@@ -17,6 +18,94 @@ constexpr double kImprovement = 1e-12;
 constexpr double kRowTolerance = 1e-9;
 
 }  // namespace
+
+bool reduce_window(const MipModel& sub, ReducedWindow& out) {
+  const std::size_t n = sub.columns.size();
+  std::vector<double> lower(n), upper(n);
+  for (std::size_t c = 0; c < n; ++c) {
+    lower[c] = sub.columns[c].lower;
+    upper[c] = sub.columns[c].upper;
+  }
+  std::vector<std::vector<std::size_t>> rows_of(n);
+  for (std::size_t r = 0; r < sub.rows.size(); ++r)
+    for (int c : sub.rows[r].columns) rows_of[static_cast<std::size_t>(c)].push_back(r);
+  std::vector<bool> row_gone(sub.rows.size(), false);
+  const auto settled = [&](std::size_t c) { return lower[c] == upper[c]; };
+  std::vector<std::size_t> queue(sub.rows.size());
+  for (std::size_t r = 0; r < queue.size(); ++r) queue[r] = r;
+  while (!queue.empty()) {
+    const std::size_t r = queue.back();
+    queue.pop_back();
+    if (row_gone[r]) continue;
+    const MipModel::Row& row = sub.rows[r];
+    double fixed = 0.0, coef = 0.0;
+    std::size_t free_count = 0, column = 0;
+    for (std::size_t k = 0; k < row.columns.size(); ++k) {
+      const auto c = static_cast<std::size_t>(row.columns[k]);
+      if (settled(c)) {
+        fixed += row.values[k] * lower[c];
+      } else {
+        ++free_count;
+        column = c;
+        coef = row.values[k];
+      }
+    }
+    if (free_count > 1) continue;
+    row_gone[r] = true;
+    if (free_count == 0) continue;  // the start satisfies it
+    // lower - fixed <= coef x <= upper - fixed
+    double from = (coef > 0.0 ? row.lower : row.upper) - fixed;
+    double to = (coef > 0.0 ? row.upper : row.lower) - fixed;
+    from /= coef;
+    to /= coef;
+    if (sub.columns[column].integer) {
+      from = std::ceil(from - kRowTolerance);
+      to = std::floor(to + kRowTolerance);
+    }
+    lower[column] = std::max(lower[column], from);
+    upper[column] = std::min(upper[column], to);
+    if (lower[column] > upper[column] + kRowTolerance) return false;
+    if (lower[column] > upper[column]) lower[column] = upper[column] = 0.5 * (lower[column] + upper[column]);
+    if (settled(column))
+      for (std::size_t other : rows_of[column])
+        if (!row_gone[other]) queue.push_back(other);
+  }
+
+  out.program = MipModel{};
+  out.free_index.assign(n, -1);
+  out.settled.assign(n, 0.0);
+  for (std::size_t c = 0; c < n; ++c) {
+    if (settled(c)) {
+      out.settled[c] = lower[c];
+      continue;
+    }
+    out.free_index[c] = static_cast<int>(out.program.columns.size());
+    MipModel::Column column = sub.columns[c];
+    column.lower = lower[c];
+    column.upper = upper[c];
+    out.program.columns.push_back(column);
+    out.program.start.push_back(sub.start[c]);
+  }
+  for (std::size_t r = 0; r < sub.rows.size(); ++r) {
+    if (row_gone[r]) continue;
+    const MipModel::Row& row = sub.rows[r];
+    MipModel::Row part;
+    double fixed = 0.0;
+    for (std::size_t k = 0; k < row.columns.size(); ++k) {
+      const auto c = static_cast<std::size_t>(row.columns[k]);
+      if (out.free_index[c] < 0) {
+        fixed += row.values[k] * out.settled[c];
+      } else {
+        part.columns.push_back(out.free_index[c]);
+        part.values.push_back(row.values[k]);
+      }
+    }
+    part.lower = row.lower - fixed;
+    part.upper = row.upper - fixed;
+    out.program.rows.push_back(std::move(part));
+  }
+  return true;
+}
 
 MipSolution solve_by_windows(const MipModel& model, std::size_t window_variables, std::size_t max_rounds,
                              const std::function<MipSolution(const MipModel&)>& solve, WindowSearch& search) {
@@ -100,7 +189,25 @@ MipSolution solve_by_windows(const MipModel& model, std::size_t window_variables
         }
       for (std::size_t c : window) local[c] = -1;
 
-      const MipSolution answer = solve(sub);
+      MipSolution answer;
+      ReducedWindow reduced;
+      if (!reduce_window(sub, reduced)) {
+        answer = solve(sub);
+      } else if (reduced.program.columns.empty()) {
+        answer.status = MipStatus::optimal;  // every column settled by its rows: the start
+        answer.values = sub.start;
+      } else {
+        answer = solve(reduced.program);
+        if ((answer.status == MipStatus::optimal || answer.status == MipStatus::feasible) &&
+            answer.values.size() == reduced.program.columns.size()) {
+          std::vector<double> values(window.size());
+          for (std::size_t k = 0; k < window.size(); ++k)
+            values[k] = reduced.free_index[k] < 0
+                            ? reduced.settled[k]
+                            : answer.values[static_cast<std::size_t>(reduced.free_index[k])];
+          answer.values = std::move(values);
+        }
+      }
       ++search.windows;
       if ((answer.status == MipStatus::optimal || answer.status == MipStatus::feasible) &&
           answer.values.size() == window.size()) {
