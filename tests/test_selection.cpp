@@ -861,6 +861,74 @@ TEST(Selection, window_reduction_keeps_the_feasible_set) {
   EXPECT_GT(removed_rows, 300u);
 }
 
+// GLPK with its LP presolver before the relaxation (as windows use it) and without (as whole programs
+// do): both reach the optimum that trying every assignment finds, and both tell infeasible programs.
+TEST(Selection, glpk_finds_the_optimum_with_and_without_the_relaxation_presolved) {
+  std::mt19937 random(5);
+  std::size_t infeasible = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const std::size_t n = 3 + random() % 8;
+    detail::MipModel model;
+    for (std::size_t c = 0; c < n; ++c)
+      model.columns.push_back(
+          {static_cast<double>(static_cast<int>(random() % 21) - 10) / 7.0, 0.0, 1.0, true});
+    const std::size_t rows = 1 + random() % (2 * n);
+    for (std::size_t r = 0; r < rows; ++r) {
+      detail::MipModel::Row row;
+      for (std::size_t k = 0, size = 1 + random() % 3; k < size; ++k) {
+        const int c = static_cast<int>(random() % n);
+        if (std::find(row.columns.begin(), row.columns.end(), c) != row.columns.end()) continue;
+        row.columns.push_back(c);
+        row.values.push_back(random() % 2 ? 1.0 : -1.0);
+      }
+      const double bound = static_cast<double>(static_cast<int>(random() % 3) - 1);
+      switch (random() % 3) {
+        case 0:
+          row.lower = row.upper = bound;
+          break;
+        case 1:
+          row.lower = bound;
+          break;
+        default:
+          row.upper = bound;
+          break;
+      }
+      model.rows.push_back(std::move(row));
+    }
+    bool found = false;
+    double best = 0.0;
+    for (std::uint32_t bits = 0; bits < (1u << n); ++bits) {
+      bool ok = true;
+      for (const auto& row : model.rows) {
+        double sum = 0.0;
+        for (std::size_t k = 0; k < row.columns.size(); ++k)
+          sum += row.values[k] * ((bits >> row.columns[k]) & 1u);
+        ok = ok && sum >= row.lower - 1e-9 && sum <= row.upper + 1e-9;
+      }
+      if (!ok) continue;
+      double cost = 0.0;
+      for (std::size_t c = 0; c < n; ++c) cost += model.columns[c].cost * ((bits >> c) & 1u);
+      if (!found || cost < best) best = cost;
+      found = true;
+    }
+    infeasible += !found;
+    for (const bool presolve : {false, true}) {
+      detail::MipLimits limits;
+      limits.presolve_relaxation = presolve;
+      const detail::MipSolution s = detail::solve_with_glpk(model, limits);
+      if (!found) {
+        EXPECT_EQ(s.status, detail::MipStatus::infeasible) << "trial " << trial << ", presolve " << presolve;
+        continue;
+      }
+      ASSERT_EQ(s.status, detail::MipStatus::optimal)
+          << "trial " << trial << ", presolve " << presolve << ": " << s.message;
+      EXPECT_NEAR(s.objective, best, 1e-9) << "trial " << trial << ", presolve " << presolve;
+    }
+  }
+  EXPECT_GT(infeasible, 20u);  // the random rows made both kinds
+  EXPECT_LT(infeasible, 180u);
+}
+
 // A continuous corner column whose face outside the window is on: c >= x_outside - x_inner, with
 // x_outside = 1 moved into the bound, and x_inner settled off by an overlap with a face that is on,
 // leaves c settled at 1.

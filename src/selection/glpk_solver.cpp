@@ -48,6 +48,7 @@ struct GlpkRun {
   const std::vector<int>* ja = nullptr;
   const std::vector<double>* ar = nullptr;
   int tm_lim = INT_MAX;
+  bool presolve_relaxation = false;
   NodeBudget budget;
   int ret = 0, mip_status = 0;
   double objective = 0.0;
@@ -88,12 +89,18 @@ void run_glpk(GlpkRun& run) {
   // step"): a window with several optima of (nearly) equal energy may be left at another one. Where
   // the relaxation is not solved to optimality (infeasible, a limit), glp_intopt's presolver takes
   // the program as before and tells infeasibility apart.
+  // A window's sub-program (windows.hpp) goes through GLPK's LP presolver instead of the advanced
+  // basis: what fixing the rest of the program leaves (rows of two columns, dominated rows) it takes
+  // out, and the window programs of city3d_dev_large's AHN3/06790 need 30% less CPU for the
+  // relaxation and the search; the whole programs of the Delft block need 10-30% more
+  // (docs/BENCHMARKS.md, "CPU: issue 27, fifth step").
   glp_smcp lp;
   glp_init_smcp(&lp);
   lp.msg_lev = GLP_MSG_OFF;
   lp.meth = GLP_DUAL;
   lp.tm_lim = run.tm_lim;
-  glp_adv_basis(p, 0);
+  lp.presolve = run.presolve_relaxation ? GLP_ON : GLP_OFF;
+  if (!run.presolve_relaxation) glp_adv_basis(p, 0);
   const bool relaxation_solved = glp_simplex(p, &lp) == 0 && glp_get_status(p) == GLP_OPT;
 
   glp_iocp parm;
@@ -155,6 +162,7 @@ MipSolution solve_with_glpk(const MipModel& model, const MipLimits& limits) {
   run.ar = &ar;
   run.values = values.data();
   run.budget = NodeBudget{limits.node_limit, false};
+  run.presolve_relaxation = limits.presolve_relaxation;
   const double ms = std::ceil(limits.time_limit * 1000.0);
   run.tm_lim = ms >= static_cast<double>(INT_MAX) ? INT_MAX : static_cast<int>(std::max(1.0, ms));
 

@@ -544,10 +544,11 @@ struct Backends {
 /// "glpk" and "cbc" use that backend alone, and a broken backend hands the program to the other.
 /// A limit that stops the search keeps the start when it is better than what was found.
 MipSolution solve_program(const MipModel& model, const SelectionParams& params,
-                          const std::function<double()>& time_left, Backends& used) {
+                          const std::function<double()>& time_left, Backends& used, bool window = false) {
   const bool automatic = params.solver == "auto";
   MipLimits limits;
   limits.node_limit = params.node_limit;
+  limits.presolve_relaxation = window;
   limits.time_limit = time_left();
   MipSolution part;
   bool from_cbc = false;  // which backend gave `part`
@@ -761,7 +762,8 @@ SelectionResult solve_selection(const SelectionProblem& problem, const Selection
       detail::WindowSearch search;
       part = detail::solve_by_windows(
           model, params.window_variables, params.window_rounds,
-          [&](const MipModel& window) { return solve_program(window, params, time_left, backends); }, search);
+          [&](const MipModel& window) { return solve_program(window, params, time_left, backends, true); },
+          search);
       ++result.window_components;
     } else {
       part = solve_program(model, params, time_left, backends);

@@ -35,6 +35,10 @@ struct MipModel {
 struct MipLimits {
   double time_limit = std::numeric_limits<double>::infinity();  ///< wall clock, seconds (> 0; infinity: none)
   long node_limit = 100000;  ///< branch-and-bound nodes (>= 1); deterministic
+  /// GLPK: its LP presolver before the relaxation. A window's sub-program (windows.hpp) carries
+  /// what fixing the rest of the program left behind, which the presolver takes out; on the whole
+  /// programs it costs more than it saves (docs/BENCHMARKS.md, "CPU: issue 27, fifth step").
+  bool presolve_relaxation = false;
 };
 
 /// failed: the backend itself broke (CBC's process crashed or was killed); the message says how.
