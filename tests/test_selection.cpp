@@ -862,7 +862,8 @@ TEST(Selection, window_reduction_keeps_the_feasible_set) {
 }
 
 // GLPK with its LP presolver before the relaxation (as windows use it) and without (as whole programs
-// do): both reach the optimum that trying every assignment finds, and both tell infeasible programs.
+// do): both reach the optimum that trying every assignment finds, with integral values (most of these
+// relaxations are integral already, and skip the search), and both tell infeasible programs.
 TEST(Selection, glpk_finds_the_optimum_with_and_without_the_relaxation_presolved) {
   std::mt19937 random(5);
   std::size_t infeasible = 0;
@@ -923,6 +924,15 @@ TEST(Selection, glpk_finds_the_optimum_with_and_without_the_relaxation_presolved
       ASSERT_EQ(s.status, detail::MipStatus::optimal)
           << "trial " << trial << ", presolve " << presolve << ": " << s.message;
       EXPECT_NEAR(s.objective, best, 1e-9) << "trial " << trial << ", presolve " << presolve;
+      // Integral values (a relaxation that is integral already is taken as it is, rounded), and the
+      // objective they give.
+      ASSERT_EQ(s.values.size(), n);
+      double cost = 0.0;
+      for (std::size_t c = 0; c < n; ++c) {
+        EXPECT_TRUE(s.values[c] == 0.0 || s.values[c] == 1.0) << "trial " << trial << ": " << s.values[c];
+        cost += model.columns[c].cost * s.values[c];
+      }
+      EXPECT_NEAR(cost, s.objective, 1e-9) << "trial " << trial;
     }
   }
   EXPECT_GT(infeasible, 20u);  // the random rows made both kinds
