@@ -82,6 +82,17 @@ TEST(Validity, catches_101_too_few_points) {
   EXPECT_TRUE(has(codes(s), 101)) << all_text(s);
 }
 
+// A ring naming a vertex the solid does not have is reported (101, with the index) and nothing else is
+// checked: every later check would read past the vertices.
+TEST(Validity, vertex_index_out_of_range_is_101_alone) {
+  SolidGeometry s = box_solid();
+  s.shells[0][1] = {{4, 5, 6, 70}};
+  const auto errors = validate_solid(s);
+  ASSERT_EQ(errors.size(), 1u) << all_text(s);
+  EXPECT_EQ(errors.front().code, 101);
+  EXPECT_NE(errors.front().text().find("vertex index 70 of 8"), std::string::npos) << errors.front().text();
+}
+
 TEST(Validity, catches_102_consecutive_points_same_after_snapping) {
   SolidGeometry s = box_solid();
   const auto near5 = add(s, {10.0004, 0, 10});  // within val3dity's 1 mm snap tolerance of vertex 5
