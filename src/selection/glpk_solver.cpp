@@ -59,6 +59,24 @@ struct GlpkRun {
   double* values = nullptr;  // n values, written when the run has a solution
 };
 
+// The solved relaxation of `p` as the program's optimum, when every integer column's value is
+// integral (within kIntegral; rounded): returns whether it was taken.
+bool take_integral_relaxation(glp_prob* p, const MipModel& model, GlpkRun& run) {
+  const int n = static_cast<int>(model.columns.size());
+  for (int j = 0; j < n; ++j) {
+    const double v = glp_get_col_prim(p, j + 1);
+    if (model.columns[j].integer && std::abs(v - std::round(v)) > kIntegral) return false;
+  }
+  for (int j = 0; j < n; ++j) {
+    const double v = glp_get_col_prim(p, j + 1);
+    run.values[j] = model.columns[j].integer ? std::round(v) : v;
+  }
+  run.objective = glp_get_obj_val(p);
+  run.ret = 0;
+  run.mip_status = GLP_OPT;
+  return true;
+}
+
 // The GLPK part of a solve: problem, parameters, glp_intopt, the answer copied out, problem deleted.
 void run_glpk(GlpkRun& run) {
   const MipModel& model = *run.model;
@@ -112,47 +130,28 @@ void run_glpk(GlpkRun& run) {
   // records). Skipping glp_intopt's set-up (its tree, the cut generators' tables) saves about 1 ms
   // per such window program; 189 of the Delft block's 238 programs and 252 of AHN3/06790's 423 window
   // programs are such (docs/BENCHMARKS.md, "CPU: issue 27, fifth step").
-  if (relaxation_solved) {
-    bool integral = true;
-    for (int j = 0; j < n && integral; ++j)
-      if (model.columns[j].integer) {
-        const double v = glp_get_col_prim(p, j + 1);
-        integral = std::abs(v - std::round(v)) <= kIntegral;
-      }
-    if (integral) {
-      for (int j = 0; j < n; ++j) {
-        const double v = glp_get_col_prim(p, j + 1);
-        run.values[j] = model.columns[j].integer ? std::round(v) : v;
-      }
-      run.objective = glp_get_obj_val(p);
-      run.ret = 0;
-      run.mip_status = GLP_OPT;
-      glp_term_out(previous_term_out);
-      glp_delete_prob(p);
-      return;
+  if (!(relaxation_solved && take_integral_relaxation(p, model, run))) {
+    glp_iocp parm;
+    glp_init_iocp(&parm);
+    parm.msg_lev = GLP_MSG_OFF;
+    parm.presolve = relaxation_solved ? GLP_OFF : GLP_ON;
+    // Gomory + MIR cuts, nothing else (bench_selection, 2 seeds per size): without cuts GLPK needs
+    // 2-4 s at ~700 variables and fails at ~2,000; Gomory alone fails at ~3,300; adding clique cuts
+    // makes it 10-100x slower (building the conflict graph); cover cuts change nothing or slow it.
+    // With Gomory + MIR it solves ~2,000 variables in 0.1-0.2 s and ~5,500 in 1.5-2.2 s.
+    parm.gmi_cuts = GLP_ON;
+    parm.mir_cuts = GLP_ON;
+    parm.tm_lim = run.tm_lim;
+    parm.cb_func = count_nodes;
+    parm.cb_info = &run.budget;
+    run.ret = glp_intopt(p, &parm);
+    run.mip_status = glp_mip_status(p);
+    if (run.mip_status == GLP_OPT || run.mip_status == GLP_FEAS) {
+      for (int j = 0; j < n; ++j) run.values[j] = glp_mip_col_val(p, j + 1);
+      run.objective = glp_mip_obj_val(p);
     }
   }
-
-  glp_iocp parm;
-  glp_init_iocp(&parm);
-  parm.msg_lev = GLP_MSG_OFF;
-  parm.presolve = relaxation_solved ? GLP_OFF : GLP_ON;
-  // Gomory + MIR cuts, nothing else (bench_selection, 2 seeds per size): without cuts GLPK needs
-  // 2-4 s at ~700 variables and fails at ~2,000; Gomory alone fails at ~3,300; adding clique cuts
-  // makes it 10-100x slower (building the conflict graph); cover cuts change nothing or slow it.
-  // With Gomory + MIR it solves ~2,000 variables in 0.1-0.2 s and ~5,500 in 1.5-2.2 s.
-  parm.gmi_cuts = GLP_ON;
-  parm.mir_cuts = GLP_ON;
-  parm.tm_lim = run.tm_lim;
-  parm.cb_func = count_nodes;
-  parm.cb_info = &run.budget;
-  run.ret = glp_intopt(p, &parm);
   glp_term_out(previous_term_out);
-  run.mip_status = glp_mip_status(p);
-  if (run.mip_status == GLP_OPT || run.mip_status == GLP_FEAS) {
-    for (int j = 0; j < n; ++j) run.values[j] = glp_mip_col_val(p, j + 1);
-    run.objective = glp_mip_obj_val(p);
-  }
   glp_delete_prob(p);
 }
 
