@@ -46,7 +46,10 @@ struct BuildingInput {
   bool footprint_given = true;        ///< false for single-building clouds: `footprint` is only their hull
   Point3 origin;                      ///< world = local + origin; z = 0
   std::vector<Point3> points;         ///< building points inside the footprint, local, in input order
-  std::vector<Point3> ground_points;  ///< ground points that gave ground_z (see ground_method), local
+  /// Heights (local z) of the ground points that gave ground_z (see ground_method), in input order.
+  /// Only their heights: the crop holds every footprint's ground points at once, and x and y would
+  /// double what they take.
+  std::vector<double> ground_heights;
   double ground_z = 0.0;              ///< floor height, local (= world, since origin.z = 0), metres
   std::string ground_method;          ///< "ground percentile", "ground percentile (wide buffer)",
                                       ///< "lowest building point" or "none"

@@ -94,8 +94,8 @@ struct PreparedFootprint {
 /// What one footprint has collected so far (local coordinates, input order).
 struct Collected {
   std::vector<Point3> building;
-  std::vector<Point3> near_ground;  ///< within ground_buffer of the polygon
-  std::vector<Point3> wide_ground;  ///< in the wide box but not near; kept only while near is short
+  std::vector<double> near_ground;  ///< heights of the ground points within ground_buffer of the polygon
+  std::vector<double> wide_ground;  ///< in the wide box but not near; kept only while near is short
   PointPresence presence;           ///< cells of the footprint's box where a point of any class fell
 };
 
@@ -334,18 +334,18 @@ void Cropper::add(const PointCloud& chunk) {
       const detail::PreparedFootprint& f = index.prepared[*it];
       if (!detail::box_contains(f.wide_box, p.x, p.y)) continue;
       detail::Collected& c = index.collected[*it];
-      const Point3 local{p.x - f.origin.x, p.y - f.origin.y, p.z - f.origin.z};
+      const double local_z = p.z - f.origin.z;
       if (detail::box_contains(f.near_box, p.x, p.y) && f.boundary_distance2(p.x, p.y) <= near2) {
-        c.near_ground.push_back(local);
+        c.near_ground.push_back(local_z);
         ++stats_.ground_points;
         // Once the near buffer has enough points the wide buffer can never be used: free it. The
         // near count only grows, so this cannot depend on the chunking.
         if (c.near_ground.size() == min_ground) {
           stats_.ground_points -= c.wide_ground.size();
-          std::vector<Point3>().swap(c.wide_ground);
+          std::vector<double>().swap(c.wide_ground);
         }
       } else if (c.near_ground.size() < min_ground) {
-        c.wide_ground.push_back(local);
+        c.wide_ground.push_back(local_z);
         ++stats_.ground_points;
       }
     }
@@ -377,13 +377,11 @@ std::vector<BuildingInput> Cropper::finish() {
     b.presence = std::move(c.presence);
 
     // The ground ladder: buffer percentile, wide-buffer percentile, lowest building point, nothing.
-    b.ground_points = std::move(c.near_ground);
-    if (b.ground_points.size() < min_ground)
-      b.ground_points.insert(b.ground_points.end(), c.wide_ground.begin(), c.wide_ground.end());
-    std::vector<double> heights;
-    if (b.ground_points.size() >= min_ground) {
-      heights.reserve(b.ground_points.size());
-      for (const Point3& p : b.ground_points) heights.push_back(p.z);
+    b.ground_heights = std::move(c.near_ground);
+    if (b.ground_heights.size() < min_ground)
+      b.ground_heights.insert(b.ground_heights.end(), c.wide_ground.begin(), c.wide_ground.end());
+    if (b.ground_heights.size() >= min_ground) {
+      std::vector<double> heights = b.ground_heights;  // percentile reorders its argument
       b.ground_z = percentile(heights, params_.ground_percentile);
       b.ground_method = c.wide_ground.empty() ? "ground percentile" : "ground percentile (wide buffer)";
       b.ground_measured = true;

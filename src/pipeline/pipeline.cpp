@@ -57,7 +57,7 @@ BuildingReport first_report(const BuildingInput& input, const ReconstructionPara
   BuildingReport r;
   r.id = input.id;
   r.points = input.points.size();
-  r.ground_points = input.ground_points.size();
+  r.ground_points = input.ground_heights.size();
   r.ground_z = input.ground_z + input.origin.z;
   r.ground_method = input.ground_method;
   r.note = input.footprint.note;
