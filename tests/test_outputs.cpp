@@ -6,25 +6,24 @@
 // map's hover and scale bar, inputs and parameters, the outlines inferred for single-building clouds);
 // a row of report.json against its CSV row, and report.html's data against the records it is made of.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <map>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
-#include <nlohmann/json.hpp>
-
+#include "city3d/error.hpp"
 #include "city3d/run_outputs.hpp"
 #include "reports/report.hpp"
 
@@ -842,5 +841,70 @@ TEST(ReportPage, its_data_cannot_close_its_script_element_and_parses_back_to_the
   EXPECT_EQ(d["crs"], "EPSG:28992");
   EXPECT_EQ(d["inferred"], false);
   EXPECT_TRUE(d["models"].empty());
+  fs::remove_all(dir);
+}
+
+// A run's records, a box model each (of 8 to 400 vertices: the first ones are kept between the page's
+// passes, the later ones read again), with statuses and RMSEs that order the models shown.
+std::vector<city3d::OverviewRecord> box_records(std::size_t n) {
+  std::vector<city3d::OverviewRecord> records(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    city3d::OverviewRecord& r = records[k];
+    r.report.id = "b" + std::to_string(k);
+    r.report.status = k % 7 == 0 ? city3d::BuildingStatus::fallback : city3d::BuildingStatus::ok;
+    r.report.rmse = 0.01 * static_cast<double>((k * 37) % 101);
+    r.report.seconds = 0.001 * static_cast<double>(k);
+    r.report.footprint_area = 100;
+    const double x = 20.0 * static_cast<double>(k % 20), y = 20.0 * static_cast<double>(k / 20);
+    r.footprint = {{{{x, y}, {x + 10, y}, {x + 10, y + 10}, {x, y + 10}}, {}}};
+    city3d::CityGeometry level;
+    city3d::PolygonMesh& mesh = level.model.mesh;
+    for (int z = 0; z < 2; ++z)
+      for (const auto& [px, py] : std::vector<std::pair<double, double>>{{0, 0}, {10, 0}, {10, 10}, {0, 10}})
+        mesh.vertices.push_back({x + px, y + py, 5.0 * z});
+    mesh.faces = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    // Unused vertices make the large models that the page's vertex budgets weigh.
+    for (std::size_t extra = 0; extra < (k * 13) % 392; ++extra) mesh.vertices.push_back({x, y, 0});
+    r.lods.push_back(level);
+  }
+  return records;
+}
+
+// The same records from several threads give the same page as from one; a record that cannot be
+// read is reported as the first such record in output order, whichever thread read it first.
+TEST(ReportPage, is_the_same_page_whatever_the_threads_and_names_the_first_bad_record) {
+  const fs::path dir = fs::temp_directory_path() / ("city3d_page_threads_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const HeldRecords records(box_records(700));
+  const city3d::RunDescription run{"EPSG:28992", "--crs", "{}", "{}"};
+  city3d::write_report_html((dir / "one.html").string(), records, run, 1);
+  city3d::write_report_html((dir / "four.html").string(), records, run, 4);
+  const std::string one = read_file(dir / "one.html");
+  EXPECT_EQ(one, read_file(dir / "four.html"));
+  EXPECT_NE(one.find("\"id\":\"b699\""), std::string::npos);
+
+  class Failing : public city3d::OverviewSource {
+   public:
+    explicit Failing(const HeldRecords& held) : held_(held) {}
+    std::size_t size() const override { return held_.size(); }
+    city3d::OverviewRecord at(std::size_t k, bool levels) const override {
+      if (k == 150 || k == 151 || k == 190)
+        throw city3d::IoError("record " + std::to_string(k) + " is damaged");
+      return held_.at(k, levels);
+    }
+
+   private:
+    const HeldRecords& held_;
+  };
+  for (int round = 0; round < 20; ++round) {
+    try {
+      city3d::write_report_html((dir / "bad.html").string(), Failing(records), run, 4);
+      ADD_FAILURE() << "no error";
+    } catch (const city3d::IoError& e) {
+      EXPECT_STREQ(e.what(), "record 150 is damaged");
+    }
+  }
+  EXPECT_FALSE(fs::exists(dir / "bad.html"));
   fs::remove_all(dir);
 }

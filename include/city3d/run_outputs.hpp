@@ -60,7 +60,8 @@ class OverviewSource {
   virtual ~OverviewSource() = default;
   virtual std::size_t size() const = 0;
   /// Record k (0 <= k < size()); with `levels` false, without its levels of detail (cheaper).
-  /// Throws IoError when it cannot be read.
+  /// Throws IoError when it cannot be read. write_report_html() with more than one thread calls it
+  /// from several threads at once.
   virtual OverviewRecord at(std::size_t k, bool levels) const = 0;
 };
 
@@ -90,9 +91,11 @@ struct RunDescription {
 /// single-building clouds, of the outlines inferred from their points, side by side) coloured by
 /// status or by RMSE, with a scale bar and each building's figures on hover, histograms of RMSE,
 /// faces and seconds, the worst buildings with their reason, and a 3D view of a chosen building.
-/// Reads the records twice, one at a time, and the models it shows once more; the page holds a row
-/// per record. Throws IoError naming the path.
-void write_report_html(const std::string& path, const OverviewSource& records, const RunDescription& run);
+/// Reads the records twice, a few dozen at a time on up to `threads` threads (parsing them is most of
+/// its work), and the models it shows once more; the page holds a row per record and does not depend
+/// on `threads`. Throws IoError naming the path.
+void write_report_html(const std::string& path, const OverviewSource& records, const RunDescription& run,
+                       unsigned threads = 1);
 
 /// The folder of the tileset in a run's output folder.
 constexpr const char* kTilesetFolder = "3dtiles";

@@ -822,7 +822,8 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   manifest.records = sources.size();
   BatchSummary summary =
       detail::finalise_run(options.output_dir, plan.layout, sources, seconds_since(start), journal.restored(),
-                           sharded ? detail::FinaliseScope::shard : detail::FinaliseScope::whole_run, manifest.outputs);
+                           sharded ? detail::FinaliseScope::shard : detail::FinaliseScope::whole_run,
+                           manifest.outputs, static_cast<unsigned>(options.threads));
   manifest.seconds = seconds_since(start);
   folder.write_manifest(manifest);
   std::string building_classes;  // empty when classes are not used

@@ -12,15 +12,15 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
-
-#include <nlohmann/json.hpp>
 
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
 #include "city3d/model_io.hpp"
 #include "city3d/run_outputs.hpp"
+#include "core/in_order.hpp"
 #include "files/atomic_file.hpp"
 #include "reports/report.hpp"
 
@@ -31,6 +31,8 @@ using json = nlohmann::json;
 namespace {
 
 constexpr const char* kManifest = "run.json";
+// Journal records read together, on the run's threads (for_each_in_order).
+constexpr std::size_t kRecordBatch = 64;
 
 // A name run.json may list: a file in the folder, or under models/ or the tileset's folder (its
 // tiles), never outside it.
@@ -68,7 +70,8 @@ void remove_temporary_files(const fs::path& folder, bool locked) {
   }
 }
 
-// The records of a run as the overview outputs read them, one at a time, from their journals.
+// The records of a run as the overview outputs read them from their journals: at() may be called from
+// several threads (JournalReader reads one line at a time and parses outside its lock).
 class JournalOverview : public OverviewSource {
  public:
   JournalOverview(const std::vector<RecordSource>& records, const RunLayout& layout)
@@ -269,9 +272,10 @@ void OutputFolder::write_manifest(const RunManifest& m) {
   file.commit();
 }
 
-BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const std::vector<RecordSource>& records,
-                          double seconds, std::size_t resumed, FinaliseScope scope,
-                          std::map<std::string, std::string>& outputs) {
+BatchSummary finalise_run(const std::string& dir, const RunLayout& layout,
+                          const std::vector<RecordSource>& records, double seconds, std::size_t resumed,
+                          FinaliseScope scope, std::map<std::string, std::string>& outputs,
+                          unsigned threads) {
   const fs::path out(dir);
   const bool whole = scope == FinaliseScope::whole_run;
   if (whole) {
@@ -309,8 +313,9 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const
   ReportWriter report((out / "report.csv").string(), (out / "report.json").string(), summary);
 
   std::map<std::string, std::pair<std::size_t, std::size_t>> problems;  // key -> rows, rows outside every tile
-  for (const RecordSource& source : records) {
-    BuildingRecord r = source.journal->read(*source.ref);
+  // The records are read (parsed) a batch at a time on the run's threads, and taken in order.
+  const auto read = [&records](std::size_t k) { return records[k].journal->read(*records[k].ref); };
+  for_each_in_order(records.size(), threads, kRecordBatch, read, [&](std::size_t, BuildingRecord r) {
     report.add(r.report_csv, r.report_json);
     // A fallback has its model (a lower rung): not a problem of the run.
     if (r.status != BuildingStatus::ok && r.status != BuildingStatus::fallback) {
@@ -322,14 +327,15 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const
         outside += coverage != row.end() && coverage->is_number() && coverage->get<double>() == 0.0;
       }
     }
-    if (r.feature.empty()) continue;
+    if (r.feature.empty()) return;
     if (cityjson) cityjson->add(r.feature);
     if (seq) seq->add(r.feature);
     if (whole && layout.merged_file) {
-      if (!r.mesh) throw Error("finalise: record " + std::to_string(r.index) + " (" + r.id + ") holds no mesh");
+      if (!r.mesh)
+        throw Error("finalise: record " + std::to_string(r.index) + " (" + r.id + ") holds no mesh");
       merged.push_back(std::move(*r.mesh));
     }
-  }
+  });
 
   // The problem most rows share, when more than half do (ties: the first key).
   for (const auto& [key, counts] : problems)
@@ -379,7 +385,7 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const
       written.push_back("buildings.gpkg");
     }
     if (layout.html) {
-      write_report_html((out / "report.html").string(), overview, run_description(layout));
+      write_report_html((out / "report.html").string(), overview, run_description(layout), threads);
       written.push_back("report.html");
       summary.report_path = (out / "report.html").string();
     }

@@ -76,9 +76,11 @@ std::string file_stamp_of(const std::string& path);
 /// Writes the run-level files into `dir` from `records` (sorted by index) and returns the summary
 /// (counts of the records, `seconds`, `resumed`: the records an earlier run left, and the problem
 /// most rows share). For a whole run the records must be exactly the indices 0..layout.records-1.
-/// `outputs` receives the files written. Throws IoError.
-BatchSummary finalise_run(const std::string& dir, const RunLayout& layout, const std::vector<RecordSource>& records,
-                          double seconds, std::size_t resumed, FinaliseScope scope,
-                          std::map<std::string, std::string>& outputs);
+/// `outputs` receives the files written. report.html reads its records on up to `threads` threads
+/// (the files do not depend on it). Throws IoError.
+BatchSummary finalise_run(const std::string& dir, const RunLayout& layout,
+                          const std::vector<RecordSource>& records, double seconds, std::size_t resumed,
+                          FinaliseScope scope, std::map<std::string, std::string>& outputs,
+                          unsigned threads = 1);
 
 }  // namespace city3d::detail

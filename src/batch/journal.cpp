@@ -359,6 +359,7 @@ JournalReader::JournalReader(std::string path) : path_(std::move(path)) {
 }
 
 std::string JournalReader::line(const RecordRef& ref) const {
+  const std::lock_guard<std::mutex> lock(in_mutex_);
   if (!in_.is_open()) in_.open(path_, std::ios::binary);
   in_.clear();
   std::string text(ref.length, '\0');

@@ -98,7 +98,7 @@ class JournalReader {
   const std::vector<std::pair<std::size_t, std::string>>& damaged() const { return damaged_; }
   /// Reads one record back; throws IoError when its line changed since it was checked.
   BuildingRecord read(const RecordRef& ref) const;
-  /// The exact text of a record's line (without newline).
+  /// The exact text of a record's line (without newline). Both may be called from several threads.
   std::string line(const RecordRef& ref) const;
 
  private:
@@ -108,6 +108,7 @@ class JournalReader {
   std::vector<RecordRef> records_;
   std::vector<std::pair<std::size_t, std::string>> damaged_;
   mutable std::ifstream in_;  ///< kept open for read() and line()
+  mutable std::mutex in_mutex_;  ///< one reader of in_ at a time (the parsing is outside it)
 };
 
 /// The journal a run writes into its output folder.

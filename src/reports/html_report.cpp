@@ -3,20 +3,20 @@
 // buildings with their reason, and a 3D view of a chosen building. The data is embedded as JSON;
 // the page draws itself with plain DOM/SVG/canvas code. The page itself (HTML, CSS, script) is the
 // template src/reports/report_page.html, compiled in (report_page.hpp); this file writes the data into it.
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "city3d/error.hpp"
 #include "city3d/run_outputs.hpp"
+#include "core/in_order.hpp"
 #include "files/atomic_file.hpp"
 #include "reports/report_page.hpp"
 
@@ -86,9 +86,14 @@ constexpr std::size_t kModelVertexBudget = 150000;
 constexpr std::size_t kKeptRecords = 200;
 constexpr std::size_t kKeptVertexBudget = 50000;
 
+// Records read together, on several threads (parsing them is most of the page's work): the passes
+// below take them in order, a batch at a time.
+constexpr std::size_t kReadBatch = 64;
+
 }  // namespace
 
-void write_report_html(const std::string& path, const OverviewSource& records, const RunDescription& run) {
+void write_report_html(const std::string& path, const OverviewSource& records, const RunDescription& run,
+                       unsigned threads) {
   const std::string& crs = run.crs;
   // A first pass over the records: the footprints' extent (the map is drawn relative to the run's
   // corner, in centimetres), what orders the models (status, faithfulness both ways, RMSE) and each highest level's size.
@@ -102,44 +107,41 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
   std::vector<Key> keys(records.size());
   std::vector<std::optional<OverviewRecord>> kept(records.size());
   std::size_t kept_vertices = 0;
-  // Record k, as kept or read again (into `read`).
-  const auto record = [&](std::size_t k, bool levels, OverviewRecord& read) -> const OverviewRecord& {
-    if (kept[k]) return *kept[k];
-    read = records.at(k, levels);
-    return read;
-  };
   Box2 extent;
   double outline_size = 0;  // the widest inferred outline (single-building clouds)
   std::size_t outlines = 0;
-  for (std::size_t k = 0; k < records.size(); ++k) {
-    OverviewRecord r = records.at(k, true);
-    for (const Polygon2& p : r.footprint)
-      for (const Point2& v : p.outer) extent.add(v);
-    if (r.footprint.empty() && !r.lods.empty()) {
-      Box2 box;
-      for (const Ring2& ring : ground_rings(r.lods.back().model))
-        for (const Point2& v : ring) box.add(v);
-      if (!box.empty()) {
-        outline_size = std::max({outline_size, box.max.x - box.min.x, box.max.y - box.min.y});
-        ++outlines;
-      }
-    }
-    const BuildingReport& b = r.report;
-    const double unfaithful = (std::isfinite(b.unexplained_share) ? b.unexplained_share : 0.0) +
-                              (std::isfinite(b.unsupported_area) && b.footprint_area > 0 ? b.unsupported_area / b.footprint_area : 0.0);
-    keys[k] = {b.status == BuildingStatus::fallback || b.status == BuildingStatus::partial, unfaithful, b.rmse,
-               r.lods.empty() ? 0 : r.lods.back().model.mesh.vertices.size(), !r.lods.empty()};
-    std::size_t vertices = 0;
-    for (const Polygon2& p : r.footprint) {
-      vertices += p.outer.size();
-      for (const Ring2& h : p.holes) vertices += h.size();
-    }
-    for (const CityGeometry& level : r.lods) vertices += level.model.mesh.vertices.size();
-    if (k < kKeptRecords && kept_vertices + vertices <= kKeptVertexBudget) {
-      kept_vertices += vertices;
-      kept[k] = std::move(r);
-    }
-  }
+  const auto read_all = [&](std::size_t k) { return records.at(k, true); };
+  detail::for_each_in_order(
+      records.size(), threads, kReadBatch, read_all, [&](std::size_t k, OverviewRecord r) {
+        for (const Polygon2& p : r.footprint)
+          for (const Point2& v : p.outer) extent.add(v);
+        if (r.footprint.empty() && !r.lods.empty()) {
+          Box2 box;
+          for (const Ring2& ring : ground_rings(r.lods.back().model))
+            for (const Point2& v : ring) box.add(v);
+          if (!box.empty()) {
+            outline_size = std::max({outline_size, box.max.x - box.min.x, box.max.y - box.min.y});
+            ++outlines;
+          }
+        }
+        const BuildingReport& b = r.report;
+        const double unfaithful =
+            (std::isfinite(b.unexplained_share) ? b.unexplained_share : 0.0) +
+            (std::isfinite(b.unsupported_area) && b.footprint_area > 0 ? b.unsupported_area / b.footprint_area
+                                                                       : 0.0);
+        keys[k] = {b.status == BuildingStatus::fallback || b.status == BuildingStatus::partial, unfaithful,
+                   b.rmse, r.lods.empty() ? 0 : r.lods.back().model.mesh.vertices.size(), !r.lods.empty()};
+        std::size_t vertices = 0;
+        for (const Polygon2& p : r.footprint) {
+          vertices += p.outer.size();
+          for (const Ring2& h : p.holes) vertices += h.size();
+        }
+        for (const CityGeometry& level : r.lods) vertices += level.model.mesh.vertices.size();
+        if (k < kKeptRecords && kept_vertices + vertices <= kKeptVertexBudget) {
+          kept_vertices += vertices;
+          kept[k] = std::move(r);
+        }
+      });
   const bool have_footprints = !extent.empty();
   const Point2 corner = have_footprints ? Point2{std::floor(extent.min.x), std::floor(extent.min.y)} : Point2{0, 0};
   // Without footprints (single-building clouds, each in a frame of its own) the map shows the
@@ -161,27 +163,39 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
     return keys[a].rmse > keys[b].rmse;
   });
   std::vector<long> model_of(records.size(), -1);
+  // The models shown, chosen from the first pass's sizes.
+  std::vector<std::size_t> shown;
   for (std::size_t i : order) {
     if (!keys[i].model || keys[i].vertices > vertex_budget) continue;
-    // Only the models shown are read again.
-    OverviewRecord read;
-    const OverviewRecord& r = record(i, true, read);
-    const BuildingModel& m = r.lods.back().model;
-    vertex_budget -= m.mesh.vertices.size();
-    // Centred on the model's plan-view centre, floor at z = 0.
-    Box3 box;
-    for (const Point3& p : m.mesh.vertices) box.add(p);
-    const Point3 c{(box.min.x + box.max.x) / 2, (box.min.y + box.max.y) / 2, box.min.z};
-    ordered_json vertices = ordered_json::array();
-    for (const Point3& p : m.mesh.vertices)
-      vertices.push_back({page_number(p.x - c.x, 2), page_number(p.y - c.y, 2), page_number(p.z - c.z, 2)});
-    ordered_json surfaces = ordered_json::array();
-    for (SurfaceType t : surface_types(m)) surfaces.push_back(static_cast<int>(t));
-    const ordered_json model = {{"lod", r.lods.back().lod}, {"v", std::move(vertices)}, {"f", m.mesh.faces},
-                                {"s", std::move(surfaces)}};
-    models += (model_count ? "," : "") + page_json(model);
-    model_of[i] = static_cast<long>(model_count++);
+    vertex_budget -= keys[i].vertices;
+    shown.push_back(i);
   }
+  // Only the models shown are read again (those the first pass did not keep).
+  const auto read_shown = [&](std::size_t n) {
+    return kept[shown[n]] ? std::optional<OverviewRecord>() : records.at(shown[n], true);
+  };
+  detail::for_each_in_order(
+      shown.size(), threads, kReadBatch, read_shown, [&](std::size_t n, std::optional<OverviewRecord> read) {
+        const std::size_t i = shown[n];
+        const OverviewRecord& r = read ? *read : *kept[i];
+        const BuildingModel& m = r.lods.back().model;
+        // Centred on the model's plan-view centre, floor at z = 0.
+        Box3 box;
+        for (const Point3& p : m.mesh.vertices) box.add(p);
+        const Point3 c{(box.min.x + box.max.x) / 2, (box.min.y + box.max.y) / 2, box.min.z};
+        ordered_json vertices = ordered_json::array();
+        for (const Point3& p : m.mesh.vertices)
+          vertices.push_back(
+              {page_number(p.x - c.x, 2), page_number(p.y - c.y, 2), page_number(p.z - c.z, 2)});
+        ordered_json surfaces = ordered_json::array();
+        for (SurfaceType t : surface_types(m)) surfaces.push_back(static_cast<int>(t));
+        const ordered_json model = {{"lod", r.lods.back().lod},
+                                    {"v", std::move(vertices)},
+                                    {"f", m.mesh.faces},
+                                    {"s", std::move(surfaces)}};
+        models += (model_count ? "," : "") + page_json(model);
+        model_of[i] = static_cast<long>(model_count++);
+      });
   models += ']';
 
   // The page, written as it is made: a row per record, one record at a time, then the models.
@@ -199,57 +213,61 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
   data += ",\"buildings\":[";
   std::fputs(data.c_str(), out);
   std::size_t placed = 0;  // inferred outlines laid out so far
-  for (std::size_t i = 0; i < records.size(); ++i) {
-    OverviewRecord read;
-    const OverviewRecord& r = record(i, inferred, read);
-    const BuildingReport& b = r.report;
-    ordered_json row = {{"id", b.id},
-                        {"s", status_name(b.status)},
-                        {"l", level_name(b.level)},
-                        {"r", b.reason},
-                        {"n", b.note},
-                        {"lods", b.lods},
-                        {"rt", b.roof_type},
-                        {"rmse", page_number(b.rmse >= 0 ? b.rmse : NAN, 4)},
-                        {"us", page_number(b.unexplained_share, 4)},
-                        {"ua", page_number(b.unsupported_area, 2)},
-                        {"he", page_number(b.height_excess, 2)},
-                        {"fa", page_number(b.footprint_area, 2)},
-                        {"f", b.faces},
-                        {"p", b.points},
-                        {"t", page_number(b.seconds, 3)},
-                        {"h", page_number(b.h_roof_70p, 2)},
-                        {"m", model_of[i]}};
-    ordered_json rings = ordered_json::array();
-    const auto add_ring = [&](const Ring2& ring) {
-      ordered_json points = ordered_json::array();
-      for (const Point2& v : ring) points.push_back({page_number(v.x - corner.x, 2), page_number(v.y - corner.y, 2)});
-      rings.push_back(std::move(points));
-    };
-    for (const Polygon2& p : r.footprint) {
-      add_ring(p.outer);
-      for (const Ring2& h : p.holes) add_ring(h);
-    }
-    if (inferred && !r.lods.empty()) {
-      std::vector<Ring2> rings = ground_rings(r.lods.back().model);
-      Box2 box;
-      for (const Ring2& ring : rings)
-        for (const Point2& v : ring) box.add(v);
-      if (!box.empty()) {
-        // The centre of its cell, the grid's top row first (y grows upwards on the map).
-        const double cx = (static_cast<double>(placed % columns) + 0.5) * cell;
-        const double cy = (static_cast<double>(rows - 1 - placed / columns) + 0.5) * cell;
-        const Point2 shift{cx - (box.min.x + box.max.x) / 2, cy - (box.min.y + box.max.y) / 2};
-        for (Ring2& ring : rings) {
-          for (Point2& v : ring) v = {v.x + shift.x, v.y + shift.y};
-          add_ring(ring);
+  const auto read_row = [&](std::size_t i) {
+    return kept[i] ? std::optional<OverviewRecord>() : records.at(i, inferred);
+  };
+  detail::for_each_in_order(
+      records.size(), threads, kReadBatch, read_row, [&](std::size_t i, std::optional<OverviewRecord> read) {
+        const OverviewRecord& r = read ? *read : *kept[i];
+        const BuildingReport& b = r.report;
+        ordered_json row = {{"id", b.id},
+                            {"s", status_name(b.status)},
+                            {"l", level_name(b.level)},
+                            {"r", b.reason},
+                            {"n", b.note},
+                            {"lods", b.lods},
+                            {"rt", b.roof_type},
+                            {"rmse", page_number(b.rmse >= 0 ? b.rmse : NAN, 4)},
+                            {"us", page_number(b.unexplained_share, 4)},
+                            {"ua", page_number(b.unsupported_area, 2)},
+                            {"he", page_number(b.height_excess, 2)},
+                            {"fa", page_number(b.footprint_area, 2)},
+                            {"f", b.faces},
+                            {"p", b.points},
+                            {"t", page_number(b.seconds, 3)},
+                            {"h", page_number(b.h_roof_70p, 2)},
+                            {"m", model_of[i]}};
+        ordered_json rings = ordered_json::array();
+        const auto add_ring = [&](const Ring2& ring) {
+          ordered_json points = ordered_json::array();
+          for (const Point2& v : ring)
+            points.push_back({page_number(v.x - corner.x, 2), page_number(v.y - corner.y, 2)});
+          rings.push_back(std::move(points));
+        };
+        for (const Polygon2& p : r.footprint) {
+          add_ring(p.outer);
+          for (const Ring2& h : p.holes) add_ring(h);
         }
-        ++placed;
-      }
-    }
-    row["fp"] = std::move(rings);
-    std::fputs(((i ? ",\n" : "\n") + page_json(row)).c_str(), out);
-  }
+        if (inferred && !r.lods.empty()) {
+          std::vector<Ring2> rings = ground_rings(r.lods.back().model);
+          Box2 box;
+          for (const Ring2& ring : rings)
+            for (const Point2& v : ring) box.add(v);
+          if (!box.empty()) {
+            // The centre of its cell, the grid's top row first (y grows upwards on the map).
+            const double cx = (static_cast<double>(placed % columns) + 0.5) * cell;
+            const double cy = (static_cast<double>(rows - 1 - placed / columns) + 0.5) * cell;
+            const Point2 shift{cx - (box.min.x + box.max.x) / 2, cy - (box.min.y + box.max.y) / 2};
+            for (Ring2& ring : rings) {
+              for (Point2& v : ring) v = {v.x + shift.x, v.y + shift.y};
+              add_ring(ring);
+            }
+            ++placed;
+          }
+        }
+        row["fp"] = std::move(rings);
+        std::fputs(((i ? ",\n" : "\n") + page_json(row)).c_str(), out);
+      });
   std::fputs("],\"models\":", out);
   std::fputs(models.c_str(), out);
   std::fputs("}", out);
