@@ -428,6 +428,7 @@ void expect_same(const std::vector<BuildingInput>& a, const std::vector<Building
     EXPECT_EQ(a[i].ground_heights, b[i].ground_heights) << a[i].id;
     EXPECT_EQ(a[i].ground_z, b[i].ground_z) << a[i].id;
     EXPECT_EQ(a[i].ground_method, b[i].ground_method) << a[i].id;
+    EXPECT_EQ(a[i].presence.marked, b[i].presence.marked) << a[i].id;
   }
 }
 
