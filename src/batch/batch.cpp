@@ -156,10 +156,8 @@ double area(const Footprint& f) {
 // streamed the first time adds its classes to `classes`.
 void crop_tiles(const std::vector<std::string>& files, const std::vector<Box2>& regions, unsigned threads, Cropper& cropper,
                 std::vector<Box3>& bounds, detail::ClassCounts& classes) {
-  // Small chunks, kept from tile to tile: their memory is touched once. Chunks the size of a tile had
-  // every tile fault in fresh pages (a third of the Delft block's crop) and held 25 MB more at -j 2.
-  // With more than one thread the next chunk is read (and converted) while this one is cropped. The
-  // crop does not depend on the chunking.
+  // Small chunks kept from tile to tile: their pages are faulted in once. With threads the next chunk is
+  // read while this one is cropped. The crop does not depend on the chunking.
   constexpr std::size_t chunk_points = std::size_t{1} << 16;
   PointCloud chunk, next;
   for (std::size_t t = 0; t < files.size(); ++t) {
