@@ -428,6 +428,35 @@ TEST(Hypothesis, rejects_input_without_roof_planes) {
   }
 }
 
+// The checkpoint (a time limit) is called between the steps, and what it throws stops the work; a
+// checkpoint that returns changes nothing.
+TEST(Hypothesis, the_checkpoint_is_called_between_the_steps_and_may_stop_them) {
+  const auto b = box_building();
+  const CandidateFaces plain = candidates_of(b);
+  int calls = 0;
+  const CandidateFaces checked =
+      generate_candidates(b.points, b.roofs, b.walls, b.footprint, b.ground_z, b.ground_measured,
+                          HypothesisParams{}, SelectionParams{}, [&calls] { ++calls; });
+  EXPECT_GE(calls, 4);
+  ASSERT_EQ(plain.faces.size(), checked.faces.size());
+  for (std::size_t i = 0; i < plain.faces.size(); ++i)
+    EXPECT_EQ(plain.faces[i].vertices, checked.faces[i].vertices);
+  for (int stop_at = 1; stop_at <= calls; ++stop_at) {
+    int seen = 0;
+    try {
+      generate_candidates(b.points, b.roofs, b.walls, b.footprint, b.ground_z, b.ground_measured,
+                          HypothesisParams{}, SelectionParams{}, [&] {
+                            if (++seen == stop_at)
+                              throw ReconstructionError(ReconstructionStage::hypothesis, "out of time");
+                          });
+      ADD_FAILURE() << "not stopped at checkpoint " << stop_at;
+    } catch (const ReconstructionError& e) {
+      EXPECT_EQ(seen, stop_at);
+      EXPECT_NE(std::string(e.what()).find("out of time"), std::string::npos);
+    }
+  }
+}
+
 TEST(Hypothesis, rejects_invalid_parameters_listing_each) {
   HypothesisParams params;
   params.support_distance = 0.0;

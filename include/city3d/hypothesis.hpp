@@ -90,6 +90,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -209,6 +210,9 @@ struct CandidateFaces {
 /// a closed selection when one was found (see 5 above), improved under the weights of `energy`;
 /// exactly_one lists the roof faces over each cell.
 /// Deterministic: the same input gives the same faces in the same order.
+/// `checkpoint`, when given, is called after each of the longer steps (the arrangements, the planes
+/// lifted onto the cells, the faces, the problem); it may throw to stop the work (a time limit), and
+/// does not change the result otherwise.
 /// Throws ConfigError (params) and ReconstructionError ("hypothesis: 0 planes, need at least 1 roof
 /// plane", empty footprint, no inside cell).
 CandidateFaces generate_candidates(const std::vector<Point3>& points,
@@ -216,6 +220,7 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
                                    const std::vector<VerticalPlane>& walls,
                                    const std::vector<Polygon2>& footprint_local, double ground_z,
                                    bool ground_measured, const HypothesisParams& params,
-                                   const SelectionParams& energy = SelectionParams{});
+                                   const SelectionParams& energy = SelectionParams{},
+                                   const std::function<void()>& checkpoint = {});
 
 }  // namespace city3d

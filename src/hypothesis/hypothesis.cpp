@@ -68,9 +68,12 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
                                    const std::vector<VerticalPlane>& walls,
                                    const std::vector<Polygon2>& footprint_local, double ground_z,
                                    bool ground_measured, const HypothesisParams& params,
-                                   const SelectionParams& energy) {
+                                   const SelectionParams& energy, const std::function<void()>& checkpoint) {
   using namespace detail;
   params.validate();
+  const auto check = [&checkpoint] {
+    if (checkpoint) checkpoint();
+  };
 
   std::vector<PlanarSegment> roofs;
   for (const auto& s : roof_planes_in)
@@ -94,6 +97,7 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
   };
   PlainArrangement arr = arrange();
   if (arr.cells.empty()) throw ReconstructionError(ReconstructionStage::hypothesis, "the footprint has no inside cell");
+  check();
 
   // 3. The roof planes lifted onto each cell; where a plane's face would run beyond its points' height
   // range over no point, the cell is cut at the plane's contour (support cuts) and the arrangement
@@ -106,12 +110,15 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
   const LocalTopRaster local_top(tops, region, params.surface_support.sample_spacing);
   std::vector<std::vector<std::size_t>> points_inside;
   std::vector<std::vector<int>> cell_planes = cell_roof_planes(points, roofs, arr, local_top, params, &points_inside);
+  check();
   const std::vector<InputCurve> cuts = support_cuts(points, roofs, arr, cell_planes, points_inside, local_top, params);
   if (!cuts.empty()) {
     curves.insert(curves.end(), cuts.begin(), cuts.end());
     arr = arrange();
     if (arr.cells.empty()) throw ReconstructionError(ReconstructionStage::hypothesis, "the footprint has no inside cell");
+    check();
     cell_planes = cell_roof_planes(points, roofs, arr, local_top, params);
+    check();
     log_debug("hypothesis: " + std::to_string(cuts.size()) + " support cuts");
   }
   const std::size_t cell_count = arr.cells.size();
@@ -121,7 +128,9 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
   // 4. The candidate faces, 5. the selection problem over them, 6. a start for the solvers.
   CandidateFaces out;
   const auto edge_faces = lift_cells(arr, cell_planes, lv, params.vertex_merge_tolerance, out);
+  check();
   build_selection_problem(points, roofs, arr, floor_z, edge_faces, local_top, params, energy, out);
+  check();
   SelectionProblem& prob = out.problem;
   prob.start = start_assignment(out, arr, lv, cell_count, energy);
 

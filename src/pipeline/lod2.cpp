@@ -154,9 +154,9 @@ Lod2Hypothesis part_hypotheses(const BuildingInput& input, const std::vector<Pol
         throw ReconstructionError(ReconstructionStage::planes, "none of the " + std::to_string(roofs.size()) +
                                   " roof planes lies inside the inferred outline");
       stage.emplace(Stage::hypothesis);
-      CandidateFaces candidates =
-          generate_candidates(points, part_roofs, walls, part, input.ground_z, input.ground_measured, params.hypothesis,
-                              params.selection);
+      CandidateFaces candidates = generate_candidates(
+          points, part_roofs, walls, part, input.ground_z, input.ground_measured, params.hypothesis,
+          params.selection, [deadline] { check_time(deadline, ReconstructionStage::hypothesis); });
       report.candidate_faces += candidates.faces.size();
       check_time(deadline, ReconstructionStage::hypothesis);
       if (trace) trace->candidates.emplace_back(suffix, candidates);
