@@ -259,7 +259,8 @@ TEST_F(Shards, merge_of_1_2_4_and_7_shards_is_byte_identical_to_one_process) {
     }
     EXPECT_EQ(buildings, 15u);  // every footprint in exactly one shard
     const fs::path merged = dir_ / ("merged" + std::to_string(n));
-    const Result m = run("merge" + folders + " -o " + merged.string());
+    // With -j the records are read back on several threads: the same files.
+    const Result m = run("merge" + folders + (n >= 4 ? " -j 3" : "") + " -o " + merged.string());
     ASSERT_EQ(m.exit_code, 0) << m.output;
     expect_same_outputs(dir_ / "single", merged);
   }

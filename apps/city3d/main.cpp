@@ -139,7 +139,8 @@ int run_reconstruct(const city3d::RunOptions& options) {
 
 int run_merge(const city3d::RunOptions& options) {
   catch_interrupts("no file of the merge is left half-written: the same command merges again");
-  const city3d::BatchSummary s = city3d::merge_shards({options.inputs, options.batch.output_dir});
+  const city3d::BatchSummary s =
+      city3d::merge_shards({options.inputs, options.batch.output_dir, options.batch.threads});
   return finish(options, s, "merged " + std::to_string(options.inputs.size()) + " shard folders: ");
 }
 

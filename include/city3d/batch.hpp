@@ -85,6 +85,7 @@ BatchSummary run_batch(const BatchOptions& options);
 struct MergeOptions {
   std::vector<std::string> shard_dirs;  ///< output folders of `reconstruct --shard K/N` runs
   std::string output_dir;               ///< where the merged outputs go
+  int threads = 1;  ///< threads reading the records back (the outputs do not depend on it)
 };
 
 /// Combines the folders of every shard of one run into the outputs one process would have written

@@ -1,5 +1,6 @@
 // Merging shards (`city3d merge`): the outputs of `reconstruct --shard K/N` runs made into the outputs
 // of one run, from their journals and models alone.
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <memory>
@@ -137,7 +138,8 @@ BatchSummary merge_shards(const MergeOptions& options) {
   manifest.header = whole;
   manifest.records = sources.size();
   BatchSummary summary =
-      detail::finalise_run(options.output_dir, layout, sources, seconds, 0, detail::FinaliseScope::whole_run, manifest.outputs);
+      detail::finalise_run(options.output_dir, layout, sources, seconds, 0, detail::FinaliseScope::whole_run,
+                           manifest.outputs, static_cast<unsigned>(std::max(1, options.threads)));
   summary.advice = detail::advice_for(summary, nullptr, "");
   manifest.seconds = seconds;
   folder.write_manifest(manifest);

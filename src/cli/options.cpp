@@ -355,7 +355,9 @@ const std::vector<OptionSpec>& option_table() {
        [](const O& o) { return yes_no(o.batch.local_coordinates); },
        [](O& o, V) { o.batch.local_coordinates = true; }},
       // Run.
-      {"--jobs", "-j", "N", "buildings reconstructed in parallel (output is identical for any N)",
+      {"--jobs", "-j", "N",
+       "buildings reconstructed in parallel, and the run's records read back in parallel for its overall "
+       "files (merge too); output is identical for any N",
        [](const O& o) { return std::to_string(o.batch.threads); },
        [](O& o, V v) { o.batch.threads = parse_int("--jobs", v, 1); }},
       {"--no-resume", nullptr, nullptr,
