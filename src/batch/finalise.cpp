@@ -12,9 +12,10 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
+
+#include <nlohmann/json.hpp>
 
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"

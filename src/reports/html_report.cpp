@@ -3,13 +3,14 @@
 // buildings with their reason, and a 3D view of a chosen building. The data is embedded as JSON;
 // the page draws itself with plain DOM/SVG/canvas code. The page itself (HTML, CSS, script) is the
 // template src/reports/report_page.html, compiled in (report_page.hpp); this file writes the data into it.
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <map>
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
