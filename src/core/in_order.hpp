@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <exception>
 #include <optional>
+#include <system_error>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -38,7 +39,11 @@ void for_each_in_order(std::size_t n, unsigned threads, std::size_t batch, Make 
       }
     };
     std::vector<std::thread> helpers;
-    for (unsigned t = 1; t < threads && t < count; ++t) helpers.emplace_back(work);
+    try {
+      for (unsigned t = 1; t < threads && t < count; ++t) helpers.emplace_back(work);
+    } catch (const std::system_error&) {
+      // No more threads to be had: the ones started and this one do the batch.
+    }
     work();
     for (std::thread& t : helpers) t.join();
     for (std::size_t j = 0; j < count; ++j) {
