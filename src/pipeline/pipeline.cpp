@@ -125,9 +125,9 @@ BuildingModel rung_model(const BuildingInput& input, const ReconstructionParams&
   built.before_hypothesis = r;
   built.hypothesis = lod2_hypothesis(input, params, {rung.footprint_walls_only}, deadline, trace, r);
   built.before_selection = r;
+  built.selected = lod2_model(input, built.hypothesis, params, deadline, trace, r, &built.without_prior);
   BuildingModel model =
-      checked_model(params, rung.level, rung.footprint_walls_only,
-                    lod2_model(input, built.hypothesis, params, deadline, trace, r, &built.without_prior), trace, r);
+      checked_model(params, rung.level, rung.footprint_walls_only, built.selected, trace, r);
   lod2_fit = explain_more(input, params, built, r, model);
   return model;
 }

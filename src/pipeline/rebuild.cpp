@@ -61,6 +61,13 @@ bool same_hypothesis(const Lod2Hypothesis& a, const Lod2Hypothesis& b) {
   return true;
 }
 
+// Whether two models are the same, exactly: vertices, faces and their surface types.
+bool same_model(const BuildingModel& a, const BuildingModel& b) {
+  return a.mesh.faces == b.mesh.faces && a.surfaces == b.surfaces &&
+         std::equal(a.mesh.vertices.begin(), a.mesh.vertices.end(), b.mesh.vertices.begin(),
+                    b.mesh.vertices.end(), same_point);
+}
+
 }  // namespace
 
 ModelFit explain_more(const BuildingInput& input, const ReconstructionParams& params, const Lod2Rung& rung,
@@ -157,6 +164,7 @@ ModelFit explain_more(const BuildingInput& input, const ReconstructionParams& pa
   };
 
   std::vector<Lod2Hypothesis> tried;  // the variant hypotheses selected over (the rung's own is `hypothesis`)
+  std::vector<BuildingModel> selected{rung.selected};  // the models the selections gave, as they gave them
   const ModelFit before = best;
   std::string kept;
   std::string over_limit;  // variant hypotheses not selected: more than max_faces candidate faces
@@ -209,10 +217,19 @@ ModelFit explain_more(const BuildingInput& input, const ReconstructionParams& pa
       BuildingReport trial = after_hypothesis;
       try {
         bool dropped = false;
-        BuildingModel m = checked_model(
-            p, rung.level, rung.footprint_walls_only,
-            lod2_model(input, own ? hypothesis : *built, p, deadline, nullptr, trial, &dropped), nullptr, trial);
+        BuildingModel raw =
+            lod2_model(input, own ? hypothesis : *built, p, deadline, nullptr, trial, &dropped);
         if (!v.without_prior && !v.half_complexity) prior_dropped = dropped;
+        // A model already measured was kept, or was no better than the model then kept: it cannot be
+        // better than `best`, which only got better since.
+        if (std::any_of(selected.begin(), selected.end(),
+                        [&](const BuildingModel& s) { return same_model(s, raw); })) {
+          log_debug("explain: building " + input.id + ": " + name(h, v) + ": the same model as one measured");
+          continue;
+        }
+        selected.push_back(raw);
+        BuildingModel m =
+            checked_model(p, rung.level, rung.footprint_walls_only, std::move(raw), nullptr, trial);
         ModelFit e = fit(m, nullptr);
         if (e.unfaithful(density) < best.unfaithful(density) &&
             e.squares_both_ways(density) < best.squares_both_ways(density)) {

@@ -18,6 +18,9 @@ struct Lod2Rung {
   ModelLevel level = ModelLevel::lod22;
   bool footprint_walls_only = false;
   Lod2Hypothesis hypothesis;
+  /// The rung's model as its selection gave it, before checked_model: a variant whose selection gives
+  /// the same is not measured again.
+  BuildingModel selected;
   BuildingReport before_hypothesis;
   BuildingReport before_selection;
   bool without_prior = false;
@@ -33,7 +36,8 @@ struct Lod2Rung {
 /// misrepresented all the same). Hypotheses:
 ///  - roof planes of half min_points: an upper part or a small tier whose few points form no plane of
 ///    min_points is otherwise covered by the roof below it;
-///  - without a footprint, an outline closing wider gaps (OutlineParams::wide_gap_spacings): a roof whose returns have
+///  - without a footprint, an outline closing wider gaps (OutlineParams::wide_gap_spacings): a roof whose
+///  returns have
 ///    gaps (dark or wet roofing, glass) is otherwise cut at the gap, and a changed outline changes
 ///    the lines regularised against it; and both;
 ///  - roofs for the points left out (pipeline/left_out.hpp): a horizontal level for each group of
@@ -52,6 +56,9 @@ struct Lod2Rung {
 /// (ModelFit::squares_both_ways: a smaller sum of squared distances, with a square metre of unsupported
 /// surface counted as the points of a square metre 1 m off; without unsupported surface, the sum of the
 /// points' squared distances). The report says which variant was kept, or that none helped.
+/// A variant's selection that gives a model already measured (the rung's own, or an earlier variant's)
+/// is not checked or measured again: it could not be kept, since the model kept only ever gets
+/// strictly better both ways.
 /// Debug files are written for the rung's own hypothesis only. Returns how well the model it leaves
 /// explains the points (measured once: the report's figures reuse it).
 ModelFit explain_more(const BuildingInput& input, const ReconstructionParams& params, const Lod2Rung& rung,
