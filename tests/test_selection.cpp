@@ -768,22 +768,24 @@ TEST(Selection, large_program_is_solved_by_windows_from_its_start) {
   EXPECT_NEAR(whole.objective, optimum.objective, 1e-9);
 }
 
+// Whether `x` keeps every row and column bound of `m` (within 1e-9).
+bool feasible(const detail::MipModel& m, const std::vector<double>& x) {
+  for (const auto& row : m.rows) {
+    double sum = 0.0;
+    for (std::size_t k = 0; k < row.columns.size(); ++k) sum += row.values[k] * x[row.columns[k]];
+    if (sum < row.lower - 1e-9 || sum > row.upper + 1e-9) return false;
+  }
+  for (std::size_t c = 0; c < m.columns.size(); ++c)
+    if (x[c] < m.columns[c].lower - 1e-9 || x[c] > m.columns[c].upper + 1e-9) return false;
+  return true;
+}
+
 // A window's rows of one free column become bounds (reduce_window): over random programs of binary
 // columns, the assignments the reduced program allows, with the settled columns at their values, are
 // exactly the assignments the window allows, and no row of the reduced program has fewer than two
 // columns.
 TEST(Selection, window_reduction_keeps_the_feasible_set) {
   std::mt19937 random(11);
-  const auto feasible = [](const detail::MipModel& m, const std::vector<double>& x) {
-    for (const auto& row : m.rows) {
-      double sum = 0.0;
-      for (std::size_t k = 0; k < row.columns.size(); ++k) sum += row.values[k] * x[row.columns[k]];
-      if (sum < row.lower - 1e-9 || sum > row.upper + 1e-9) return false;
-    }
-    for (std::size_t c = 0; c < m.columns.size(); ++c)
-      if (x[c] < m.columns[c].lower - 1e-9 || x[c] > m.columns[c].upper + 1e-9) return false;
-    return true;
-  };
   std::size_t settled_columns = 0, removed_rows = 0;
   for (int trial = 0; trial < 300; ++trial) {
     const std::size_t n = 3 + random() % 8;
@@ -955,6 +957,83 @@ TEST(Selection, window_reduction_settles_a_corner_column) {
   EXPECT_TRUE(reduced.program.columns.empty());
   EXPECT_TRUE(reduced.program.rows.empty());
   EXPECT_EQ(reduced.settled, (std::vector<double>{0.0, 1.0, 1.0}));
+}
+
+// The rounds of one parity make the same windows; a window that improved nothing and whose
+// sub-program has not changed since is not solved again. Over random programs of binary columns
+// (x_a + x_b <= 1 between nearby columns, costs of both signs, the start all zero), with an exhaustive
+// deterministic solve: the search still counts every window of a round (as many as the first round of
+// its parity had), hands `solve` only the others,
+// does skip some, and ends at an assignment that keeps every row, where a fresh round of the last
+// round's parity, solving every window, improves nothing.
+TEST(Selection, windows_unchanged_since_an_unimproved_round_are_not_solved_again) {
+  std::size_t calls = 0;
+  const auto exhaustive = [&](const detail::MipModel& m) {
+    ++calls;
+    const std::size_t n = m.columns.size();
+    detail::MipSolution best;
+    best.status = detail::MipStatus::infeasible;
+    std::vector<double> x(n);
+    for (std::uint32_t bits = 0; bits < (1u << n); ++bits) {
+      double cost = 0.0;
+      for (std::size_t c = 0; c < n; ++c) {
+        x[c] = (bits >> c) & 1u;
+        cost += m.columns[c].cost * x[c];
+      }
+      if (!feasible(m, x) || (best.status == detail::MipStatus::optimal && cost >= best.objective)) continue;
+      best.status = detail::MipStatus::optimal;
+      best.objective = cost;
+      best.values = x;
+    }
+    return best;
+  };
+  std::mt19937 random(5);
+  std::size_t repeated = 0, late_rounds = 0, checked = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const std::size_t n = 40 + random() % 30;
+    detail::MipModel model;
+    for (std::size_t c = 0; c < n; ++c)
+      model.columns.push_back({static_cast<double>(random() % 150) / 100.0 - 1.0, 0.0, 1.0, true});
+    for (std::size_t a = 0; a + 1 < n; ++a)
+      for (std::size_t b = a + 1; b < std::min(n, a + 4); ++b)
+        if (random() % 2)
+          model.rows.push_back({{static_cast<int>(a), static_cast<int>(b)}, {1.0, 1.0}, -1e30, 1.0});
+    model.start.assign(n, 0.0);
+
+    // A round's windows when no window can be skipped: the first forward round, and the first
+    // backward one.
+    detail::WindowSearch one_round, two_rounds;
+    detail::solve_by_windows(model, 6, 1, exhaustive, one_round);
+    detail::solve_by_windows(model, 6, 2, exhaustive, two_rounds);
+    ASSERT_EQ(two_rounds.rounds, 2u) << "trial " << trial;
+    const std::size_t forward = one_round.windows, backward = two_rounds.windows - forward;
+    calls = 0;
+    detail::WindowSearch search;
+    const detail::MipSolution result = detail::solve_by_windows(model, 6, 8, exhaustive, search);
+    ASSERT_EQ(result.status, detail::MipStatus::feasible) << "trial " << trial << ": " << result.message;
+    EXPECT_TRUE(feasible(model, result.values)) << "trial " << trial;
+    EXPECT_EQ(search.windows, (search.rounds + 1) / 2 * forward + search.rounds / 2 * backward)
+        << "trial " << trial;
+    EXPECT_EQ(calls, search.windows - search.repeated) << "trial " << trial;
+    repeated += search.repeated;
+    late_rounds += search.rounds > 2;
+    if (search.rounds < 8 && search.rounds % 2 == 1) {
+      // The search stopped at a forward round that improved nothing, skipped windows included: a
+      // fresh forward round from its answer, which solves every window, improves nothing either.
+      detail::MipModel from_answer = model;
+      from_answer.start = result.values;
+      detail::WindowSearch fresh;
+      detail::solve_by_windows(from_answer, 6, 1, exhaustive, fresh);
+      EXPECT_EQ(fresh.improved, 0u) << "trial " << trial;
+      ++checked;
+    }
+    detail::WindowSearch again;
+    EXPECT_EQ(detail::solve_by_windows(model, 6, 8, exhaustive, again).values, result.values)
+        << "trial " << trial;
+  }
+  EXPECT_GT(late_rounds, 0u);
+  EXPECT_GT(repeated, 0u);
+  EXPECT_GT(checked, 0u);
 }
 
 TEST(Selection, large_program_without_a_start_is_solved_whole) {

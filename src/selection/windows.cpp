@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <optional>
 #include <vector>
 
 namespace city3d::detail {
@@ -16,6 +17,25 @@ constexpr double kImprovement = 1e-12;
 
 // Rows within this of their bounds count as satisfied when the incumbent is checked.
 constexpr double kRowTolerance = 1e-9;
+
+// Whether two programs are the same, exactly: columns, rows and start.
+bool same_program(const MipModel& a, const MipModel& b) {
+  const auto same_column = [](const MipModel::Column& c, const MipModel::Column& d) {
+    return c.cost == d.cost && c.lower == d.lower && c.upper == d.upper && c.integer == d.integer;
+  };
+  const auto same_row = [](const MipModel::Row& r, const MipModel::Row& q) {
+    return r.columns == q.columns && r.values == q.values && r.lower == q.lower && r.upper == q.upper;
+  };
+  return a.start == b.start &&
+         std::equal(a.columns.begin(), a.columns.end(), b.columns.begin(), b.columns.end(), same_column) &&
+         std::equal(a.rows.begin(), a.rows.end(), b.rows.begin(), b.rows.end(), same_row);
+}
+
+// A window that improved nothing: its columns and its sub-program as they were.
+struct Unimproved {
+  std::vector<std::size_t> window;
+  MipModel sub;
+};
 
 }  // namespace
 
@@ -124,11 +144,17 @@ MipSolution solve_by_windows(const MipModel& model, std::size_t window_variables
 
   std::vector<int> local(n, -1);
   std::vector<std::size_t> window;
+  // The rounds of one parity make the same windows, in the same order (they depend on the model
+  // alone). A window that improved nothing, and whose sub-program is the same again (no column it
+  // holds or shares a row with has changed since), would get the same answer: it is not solved again.
+  std::vector<std::optional<Unimproved>> unimproved[2];
   for (search.rounds = 0; search.rounds < max_rounds; ++search.rounds) {
     bool improved = false;
     std::vector<bool> held(n, false);  // by a window of this round
     // Odd rounds seed from the last column backwards, so their windows cut the building elsewhere.
     const bool backwards = search.rounds % 2 == 1;
+    std::vector<std::optional<Unimproved>>& before = unimproved[search.rounds % 2];
+    std::size_t ordinal = 0;  // of the window in this round
     for (std::size_t step = 0; step < n; ++step) {
       const std::size_t seed = backwards ? n - 1 - step : step;
       if (held[seed]) continue;
@@ -188,6 +214,14 @@ MipSolution solve_by_windows(const MipModel& model, std::size_t window_variables
           sub.rows.push_back(std::move(part));
         }
       for (std::size_t c : window) local[c] = -1;
+      if (before.size() <= ordinal) before.resize(ordinal + 1);
+      std::optional<Unimproved>& last = before[ordinal++];
+      if (last && last->window == window && same_program(last->sub, sub)) {
+        ++search.windows;
+        ++search.repeated;
+        continue;
+      }
+      last.reset();
 
       MipSolution answer;
       ReducedWindow reduced;
@@ -217,6 +251,8 @@ MipSolution solve_by_windows(const MipModel& model, std::size_t window_variables
           for (std::size_t k = 0; k < window.size(); ++k) x[window[k]] = settle(window[k], answer.values[k]);
           improved = true;
           ++search.improved;
+        } else {
+          last = Unimproved{window, std::move(sub)};
         }
       }
     }

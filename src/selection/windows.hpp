@@ -14,9 +14,12 @@ namespace city3d::detail {
 
 /// How a window search went.
 struct WindowSearch {
-  std::size_t windows = 0;   ///< sub-programs solved
+  std::size_t windows = 0;   ///< sub-programs solved, or known unchanged (below)
   std::size_t improved = 0;  ///< of them, how many lowered the objective
   std::size_t rounds = 0;    ///< passes over the whole program
+  /// Of the windows, how many had the sub-program they had in an earlier round, which improved
+  /// nothing then: not solved again, since the answer would be the same.
+  std::size_t repeated = 0;
 };
 
 /// A window's sub-program with its settled columns taken out. Fixing the rest of the program turns
@@ -46,7 +49,9 @@ bool reduce_window(const MipModel& sub, ReducedWindow& out);
 /// answer replaces the incumbent's window columns when it lowers the objective. Rounds repeat until
 /// one improves nothing, at most `max_rounds`. Every step keeps every row satisfied, so the result
 /// is feasible; it is not proven optimal. Deterministic: windows, order and sub-programs depend on
-/// the model alone. Each sub-program is reduced by reduce_window() before `solve` sees it. `solve` returning
+/// the model alone. Each sub-program is reduced by reduce_window() before `solve` sees it; a window
+/// whose sub-program is the one it had in an earlier round, which improved nothing then, does not go
+/// to `solve` again (its answer would be the same: `solve` must be deterministic). `solve` returning
 /// failed, infeasible or no_solution leaves the incumbent as it is.
 MipSolution solve_by_windows(const MipModel& model, std::size_t window_variables, std::size_t max_rounds,
                              const std::function<MipSolution(const MipModel&)>& solve, WindowSearch& search);
