@@ -28,14 +28,12 @@ import sys
 import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from stage_profile import clouds_of, percentile  # noqa: E402  (bench/stage_profile.py)
+
 SHARED = os.path.normpath(os.path.join(HERE, "..", "..", "shared", "data"))
 DELFT = os.path.join(SHARED, "ahn3_delft")
 TARGETS = {"delft": 1.6 / 3.68, "dev": 0.5, "dev_large": 0.5, "dev sets together": 0.5}
-
-
-def clouds_of(folder):
-    with open(os.path.join(folder, "manifest.csv")) as f:
-        return [os.path.join(folder, row["ply"]) for row in csv.DictReader(f)]
 
 
 def run(city3d, args, out):
@@ -50,14 +48,6 @@ def run(city3d, args, out):
     with open(os.path.join(out, "report.csv")) as f:
         buildings = [float(row["cpu_seconds"]) for row in csv.DictReader(f) if row["cpu_seconds"]]
     return usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0, buildings
-
-
-def percentile(values, p):
-    v = sorted(values)
-    k = (len(v) - 1) * p / 100.0
-    lo = int(k)
-    hi = min(lo + 1, len(v) - 1)
-    return v[lo] + (v[hi] - v[lo]) * (k - lo)
 
 
 def main():
