@@ -30,6 +30,7 @@ import tempfile
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 from stage_profile import clouds_of, percentile  # noqa: E402  (bench/stage_profile.py)
+from timed import run_timed  # noqa: E402  (bench/timed.py)
 
 SHARED = os.path.normpath(os.path.join(HERE, "..", "..", "shared", "data"))
 DELFT = os.path.join(SHARED, "ahn3_delft")
@@ -39,15 +40,15 @@ TARGETS = {"delft": 1.6 / 3.68, "dev": 0.5, "dev_large": 0.5, "dev sets together
 def run(city3d, args, out):
     """(CPU seconds of the process and its children, peak RSS in MB, per-building CPU list)."""
     cmd = [city3d, "reconstruct", *args, "--no-progress", "-q", "--no-resume", "-o", out]
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    _, status, usage = os.wait4(proc.pid, 0)
-    stderr = proc.stderr.read().decode(errors="replace")
-    proc.stderr.close()
-    if os.waitstatus_to_exitcode(status) != 0:
-        sys.exit("cpu_against.py: failed: " + " ".join(cmd) + "\n" + stderr)
+    with tempfile.TemporaryFile() as stderr:
+        try:
+            _, user, system, kb = run_timed(cmd, stdout=subprocess.DEVNULL, stderr=stderr)
+        except subprocess.CalledProcessError:
+            stderr.seek(0)
+            sys.exit("cpu_against.py: failed: " + " ".join(cmd) + "\n" + stderr.read().decode(errors="replace"))
     with open(os.path.join(out, "report.csv")) as f:
         buildings = [float(row["cpu_seconds"]) for row in csv.DictReader(f) if row["cpu_seconds"]]
-    return usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0, buildings
+    return user + system, kb / 1024.0, buildings
 
 
 def main():

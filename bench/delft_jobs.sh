@@ -30,7 +30,7 @@ declare -A wall cpu mem
 for ((i = 1; i <= runs; i++)); do
   for j in 1 2; do
     rm -rf "$out/j$j"
-    /usr/bin/time -f "%e %U %S %M" -o "$out/time" "$bin" reconstruct "${inputs[@]}" \
+    python3 "$here/timed.py" -o "$out/time" "$bin" reconstruct "${inputs[@]}" \
       -j "$j" --no-progress -q --no-resume --output "$out/j$j"
     read -r w u s kb < "$out/time"
     c=$(awk -v u="$u" -v s="$s" 'BEGIN { printf "%.2f", u + s }')

@@ -2,7 +2,7 @@
 """An AHN3-sized tile from the Delft block (issue 12): the two AHN3 tiles of ../shared/data/ahn3_delft
 replicated in a grid (default 6 x 5 copies: 25.5 M points, 4,800 footprints), the footprints shifted
 with their copy and their ids made unique; then `city3d reconstruct` on it and on the Delft block
-itself, under GNU time. Prints what the issue asks: points, footprints, wall and CPU time, peak
+itself, timed by bench/timed.py. Prints what the issue asks: points, footprints, wall and CPU time, peak
 memory, seconds per million points of both, and their ratio.
 
     python3 bench/synthetic_tile.py --city3d build/city3d [--grid 6x5] [--jobs 2] [--runs 1] [--work build/synthetic_tile]
@@ -21,9 +21,11 @@ import shutil
 import struct
 import subprocess
 import sys
-import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from timed import run_timed  # noqa: E402  (bench/timed.py)
+
 DELFT = os.path.join(HERE, "..", "..", "shared", "data", "ahn3_delft")
 TILES = [os.path.join(DELFT, "ahn3_cropped_1.las"), os.path.join(DELFT, "ahn3_cropped_2.las")]
 FOOTPRINTS = os.path.join(DELFT, "footprints", "bgt_pand_laz_area.gpkg")
@@ -100,11 +102,9 @@ def make_tile(work, nx, ny):
 
 
 def timed(command):
-    """(wall s, CPU s, peak RSS MB) of a command, by GNU time."""
-    with tempfile.NamedTemporaryFile("r") as t:
-        subprocess.run(["/usr/bin/time", "-f", "%e %U %S %M", "-o", t.name] + command, check=True)
-        wall, user, system, kb = t.read().split()
-    return float(wall), float(user) + float(system), int(kb) / 1024
+    """(wall s, CPU s, peak RSS MB) of a command (bench/timed.py)."""
+    wall, user, system, kb = run_timed(command)
+    return wall, user + system, kb / 1024
 
 
 def median(values):
