@@ -44,7 +44,7 @@ for x in s: x.bind(("127.0.0.1", 0))
 print(*[x.getsockname()[1] for x in s])')
 host="$(hostname)"
 user="$(id -un)"
-node="$(/usr/sbin/slurmd -C | head -n 1 | sed -E 's/ RealMemory=[0-9]+//; s/ UpTime=.*//')"
+node="$(/usr/sbin/slurmd -C | sed -nE '1{s/ RealMemory=[0-9]+//; s/ UpTime=.*//; p}')"
 memory=$(( $(free -m | awk '/^Mem:/ {print $2}') * 8 / 10 ))
 cat > "$cluster/slurm.conf" << CONF
 ClusterName=city3dtest
@@ -158,8 +158,11 @@ job="$(sed -nE 's/.*shard tasks 2 of job ([0-9]+).*/\1/p' <<< "$resubmitted")"
 # In the re-submitted task, shard 3 resumes from its journal and finished shard 4 is only re-assembled.
 section() { awk -v k="$1" '$0 ~ "city3d-slurm: shard " k "/4" {on = 1; next} /city3d-slurm: shard [0-9]+\/4/ {on = 0} on' \
   "$tmp/w2/logs/shards-${job}_2.out"; }
-section 3 | grep -q "resume: [1-9][0-9]* finished buildings" || fail "shard 3 did not resume from its journal"
-section 4 | grep -q "resume: [1-9][0-9]* finished buildings" || fail "shard 4 was not only re-assembled from its journal"
-section 4 | grep -q "points streamed" && fail "shard 4 read its tiles again"
+# Each section is read whole before it is searched: `section K | grep -q` under pipefail fails when grep
+# stops at its match while awk still writes (SIGPIPE), as it did once in CI.
+shard3="$(section 3)" shard4="$(section 4)"
+grep -q "resume: [1-9][0-9]* finished buildings" <<< "$shard3" || fail "shard 3 did not resume from its journal"
+grep -q "resume: [1-9][0-9]* finished buildings" <<< "$shard4" || fail "shard 4 was not only re-assembled from its journal"
+if grep -q "points streamed" <<< "$shard4"; then fail "shard 4 read its tiles again"; fi
 same_outputs "$tmp/single" "$tmp/merged2"
 echo "shard 3 killed, re-submitted, resumed + merge: identical to one process"
