@@ -15,7 +15,7 @@ packages=(
   libgdal-dev gdal-bin
   libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libboost-dev
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
-  libglpk-dev coinor-libcbc-dev libmimalloc-dev
+  libglpk-dev coinor-libcbc-dev
   libtomlplusplus-dev nlohmann-json3-dev libproj-dev
   libgtest-dev
 )

@@ -3,7 +3,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cstdlib>
 #include <cstring>
 
 #include <cstdio>
@@ -23,28 +22,7 @@
 #include "city3d/pipeline.hpp"
 #include "city3d/stage_profile.hpp"
 
-#ifdef CITY3D_MIMALLOC
-#include <mimalloc.h>
-#endif
-
 namespace {
-
-// --version's second line: which malloc this process runs on. With mimalloc linked (CMakeLists.txt), a
-// block from malloc() is checked to lie in mimalloc's heap: a link order (or an LD_PRELOAD) that puts
-// another malloc in front shows here.
-std::string allocator_text() {
-#ifdef CITY3D_MIMALLOC
-  const int v = mi_version();
-  std::string text = "mimalloc " + std::to_string(v / 100) + "." + std::to_string(v % 100 / 10) + "." +
-                     std::to_string(v % 10);
-  void* block = std::malloc(64);
-  if (!mi_is_in_heap_region(block)) text += " (linked, but malloc() is not mimalloc's)";
-  std::free(block);
-  return text;
-#else
-  return "the C library's malloc";
-#endif
-}
 
 // Ctrl-C (SIGINT) and SIGTERM during a run: the progress line is ended and the user told that the
 // finished buildings are kept (the journal is flushed as each one finishes), then the process exits
@@ -181,7 +159,7 @@ int main(int argc, char** argv) {
     return city3d::kExitOk;
   }
   if (options.version) {
-    std::cout << "city3d " << CITY3D_VERSION << "\nallocator: " << allocator_text() << "\n";
+    std::cout << "city3d " << CITY3D_VERSION << "\n";
     return city3d::kExitOk;
   }
   if (options.print_config) {
