@@ -106,7 +106,10 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
     bool model = false;
   };
   std::vector<Key> keys(records.size());
-  std::vector<std::optional<OverviewRecord>> kept(records.size());
+  // Slots for the first kKeptRecords only: an empty slot still takes the size of a record's report
+  // (about 0.7 KB), which a run or merge of many buildings would pay for each of them.
+  std::vector<std::optional<OverviewRecord>> kept(std::min(records.size(), kKeptRecords));
+  const auto kept_record = [&](std::size_t k) { return k < kept.size() && kept[k] ? &*kept[k] : nullptr; };
   std::size_t kept_vertices = 0;
   Box2 extent;
   double outline_size = 0;  // the widest inferred outline (single-building clouds)
@@ -173,12 +176,12 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
   }
   // Only the models shown are read again (those the first pass did not keep).
   const auto read_shown = [&](std::size_t n) {
-    return kept[shown[n]] ? std::optional<OverviewRecord>() : records.at(shown[n], true);
+    return kept_record(shown[n]) ? std::optional<OverviewRecord>() : records.at(shown[n], true);
   };
   detail::for_each_in_order(
       shown.size(), threads, kReadBatch, read_shown, [&](std::size_t n, std::optional<OverviewRecord> read) {
         const std::size_t i = shown[n];
-        const OverviewRecord& r = read ? *read : *kept[i];
+        const OverviewRecord& r = read ? *read : *kept_record(i);
         const BuildingModel& m = r.lods.back().model;
         // Centred on the model's plan-view centre, floor at z = 0.
         Box3 box;
@@ -215,11 +218,11 @@ void write_report_html(const std::string& path, const OverviewSource& records, c
   std::fputs(data.c_str(), out);
   std::size_t placed = 0;  // inferred outlines laid out so far
   const auto read_row = [&](std::size_t i) {
-    return kept[i] ? std::optional<OverviewRecord>() : records.at(i, inferred);
+    return kept_record(i) ? std::optional<OverviewRecord>() : records.at(i, inferred);
   };
   detail::for_each_in_order(
       records.size(), threads, kReadBatch, read_row, [&](std::size_t i, std::optional<OverviewRecord> read) {
-        const OverviewRecord& r = read ? *read : *kept[i];
+        const OverviewRecord& r = read ? *read : *kept_record(i);
         const BuildingReport& b = r.report;
         ordered_json row = {{"id", b.id},
                             {"s", status_name(b.status)},
