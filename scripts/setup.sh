@@ -14,7 +14,7 @@ packages=(
   build-essential cmake ccache pkg-config
   libgdal-dev gdal-bin
   libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libboost-dev
-  libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
+  libopencv-core-dev libopencv-imgproc-dev
   libglpk-dev coinor-libcbc-dev
   libtomlplusplus-dev nlohmann-json3-dev libproj-dev
   libgtest-dev

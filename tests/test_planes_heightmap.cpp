@@ -17,11 +17,12 @@
 #include "city3d/debug_output.hpp"
 #include "city3d/error.hpp"
 #include "city3d/heightmap.hpp"
-#include "city3d/regularise.hpp"
 #include "city3d/planes.hpp"
 #include "city3d/point_cloud_io.hpp"
 #include "city3d/polylines.hpp"
+#include "city3d/regularise.hpp"
 #include "city3d/walls.hpp"
+#include "read_png.hpp"
 
 namespace {
 
@@ -828,6 +829,41 @@ TEST(HeightmapPng, writers_produce_pngs_of_the_raster_size) {
   EXPECT_TRUE(e.signature_ok);
   EXPECT_EQ(e.width, static_cast<std::uint32_t>(map.width));
   EXPECT_EQ(e.colour_type, 2) << "RGB";
+
+  // The pixels, read back: north up (the raster's last row is the image's first), no data 0, the
+  // lowest height 1, the highest 255; the edge pixels red, every other pixel the grey of the heightmap.
+  const city3d::test::PngPixels g_px = city3d::test::read_png(grey), e_px = city3d::test::read_png(edges);
+  ASSERT_EQ(g_px.bands, 1);
+  ASSERT_EQ(e_px.bands, 3);
+  ASSERT_FALSE(g_px.samples.empty());
+  ASSERT_FALSE(e_px.samples.empty());
+  const auto [lowest, highest] = city3d::height_range(map);
+  ASSERT_LT(lowest, highest) << "two roofs at different heights";
+  std::size_t lowest_seen = 0, highest_seen = 0, no_data = 0, red = 0;
+  for (int row = 0; row < map.height; ++row)
+    for (int col = 0; col < map.width; ++col) {
+      const float z = map.at(col, row);
+      const int y = map.height - 1 - row;
+      const std::uint8_t v = g_px.at(col, y, 0);
+      if (std::isnan(z)) {
+        EXPECT_EQ(v, 0) << col << ", " << row;
+        ++no_data;
+        continue;
+      }
+      const double expected = 1.0 + 254.0 * (z - lowest) / (static_cast<double>(highest) - lowest);
+      EXPECT_EQ(v, static_cast<int>(std::lround(expected))) << col << ", " << row;
+      lowest_seen += v == 1;
+      highest_seen += v == 255;
+      const std::uint8_t r = e_px.at(col, y, 0), gr = e_px.at(col, y, 1), b = e_px.at(col, y, 2);
+      if (r == 255 && gr == 0 && b == 0) {
+        ++red;
+      } else {
+        EXPECT_TRUE(r == v && gr == v && b == v) << col << ", " << row;
+      }
+    }
+  EXPECT_GT(lowest_seen, 0u);
+  EXPECT_GT(highest_seen, 0u);
+  EXPECT_GT(red, 0u) << "the step between the roofs is an edge";
   std::filesystem::remove_all(dir);
 }
 

@@ -6,29 +6,27 @@
 // the CityJSON's, and CesiumJS (local, no network) drawing and picking the buildings in headless
 // Chromium, checked on its screenshot.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <functional>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
-#include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
-
 #include "city3d/footprint_io.hpp"
+#include "read_png.hpp"
 
 namespace {
 
@@ -289,14 +287,14 @@ struct Pixels {
 
 Pixels count_pixels(const fs::path& png) {
   Pixels p;
-  const cv::Mat image = cv::imread(png.string(), cv::IMREAD_COLOR);  // BGR
-  EXPECT_FALSE(image.empty()) << png;
-  if (image.empty()) return p;
-  const int w = image.cols, h = image.rows;
+  const city3d::test::PngPixels image = city3d::test::read_png(png.string());
+  EXPECT_FALSE(image.samples.empty()) << png;
+  EXPECT_GE(image.bands, 3) << png << ": not a colour image";
+  if (image.samples.empty() || image.bands < 3) return p;
+  const int w = image.width, h = image.height;
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      const cv::Vec3b c = image.at<cv::Vec3b>(y, x);
-      const int b = c[0], g = c[1], r = c[2];
+      const int r = image.at(x, y, 0), g = image.at(x, y, 1), b = image.at(x, y, 2);
       const bool drawn = r < 235 || g < 235 || b < 235;
       const bool roof = r > g + 15 && r > b + 15;
       const bool middle = x > w / 4 && x < 3 * w / 4 && y > h / 4 && y < 3 * h / 4;

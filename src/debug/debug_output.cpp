@@ -2,9 +2,8 @@
 // OBJ for a person to look at. The geometry modules do no file IO; the pipeline hands their results here.
 #include "city3d/debug_output.hpp"
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
+#include <cpl_error.h>
+#include <gdal.h>
 
 #include <algorithm>
 #include <array>
@@ -14,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <mutex>
 #include <system_error>
 #include <tuple>
 #include <type_traits>
@@ -26,14 +26,21 @@ namespace fs = std::filesystem;
 
 namespace {
 
+/// An 8-bit image of `bands` channels (1 grey, 3 RGB), interleaved by pixel, rows from the top.
+struct Image {
+  int width = 0, height = 0, bands = 1;
+  std::vector<std::uint8_t> pixels;
+};
 
 /// Grey image, north up: 0 no data, 1..255 lowest..highest.
-cv::Mat grey_image(const Heightmap& map) {
-  cv::Mat image(map.height, map.width, CV_8U, cv::Scalar(0));
+Image grey_image(const Heightmap& map) {
+  Image image{map.width, map.height, 1,
+              std::vector<std::uint8_t>(
+                  static_cast<std::size_t>(map.width) * static_cast<std::size_t>(map.height), 0)};
   const auto [lowest, highest] = height_range(map);
   const double span = highest > lowest ? static_cast<double>(highest) - lowest : 0.0;
   for (int row = 0; row < map.height; ++row) {
-    auto* out = image.ptr<std::uint8_t>(map.height - 1 - row);
+    std::uint8_t* out = image.pixels.data() + static_cast<std::size_t>(map.height - 1 - row) * map.width;
     for (int col = 0; col < map.width; ++col) {
       const float z = map.at(col, row);
       if (std::isnan(z)) continue;
@@ -44,14 +51,37 @@ cv::Mat grey_image(const Heightmap& map) {
   return image;
 }
 
-void write_png(const cv::Mat& image, const std::string& path) {
-  bool written = false;
-  try {
-    written = cv::imwrite(path, image);
-  } catch (const cv::Exception& e) {
-    throw IoError("debug: cannot write " + path + ": " + e.what());
+/// Writes `image` as a PNG through GDAL's PNG driver, from an in-memory copy. GDAL is the project's
+/// file-format library already; OpenCV's imgcodecs, which did this before, linked some 15 more shared
+/// libraries (DICOM, OpenEXR, X11) into every run for the debug images alone: about 14 ms of CPU at
+/// each start of the program (docs/BENCHMARKS.md).
+void write_png(const Image& image, const std::string& path) {
+  static std::once_flag registered;
+  std::call_once(registered, [] { GDALAllRegister(); });
+  const GDALDriverH memory = GDALGetDriverByName("MEM"), png = GDALGetDriverByName("PNG");
+  if (!memory || !png) throw IoError("debug: cannot write " + path + ": GDAL has no MEM or PNG driver");
+  CPLPushErrorHandler(CPLQuietErrorHandler);
+  CPLErrorReset();
+  const auto failed = [&path](const char* what) {
+    const std::string reason = CPLGetLastErrorMsg();
+    CPLPopErrorHandler();
+    return IoError("debug: cannot write " + path + ": " + what + (reason.empty() ? "" : ": " + reason));
+  };
+  const GDALDatasetH copy = GDALCreate(memory, "", image.width, image.height, image.bands, GDT_Byte, nullptr);
+  if (!copy) throw failed("no in-memory raster");
+  const int pixel = image.bands, line = image.bands * image.width;
+  if (GDALDatasetRasterIO(copy, GF_Write, 0, 0, image.width, image.height,
+                          const_cast<std::uint8_t*>(image.pixels.data()), image.width, image.height, GDT_Byte,
+                          image.bands, nullptr, pixel, line, 1) != CE_None) {
+    GDALClose(copy);
+    throw failed("raster write");
   }
-  if (!written) throw IoError("debug: cannot write " + path);
+  const GDALDatasetH written = GDALCreateCopy(png, path.c_str(), copy, FALSE, nullptr, nullptr, nullptr);
+  GDALClose(copy);
+  if (!written) throw failed("PNG driver");
+  GDALClose(written);  // flushes the file
+  if (CPLGetLastErrorType() >= CE_Failure) throw failed("PNG driver");
+  CPLPopErrorHandler();
 }
 
 // An OBJ file drawing each of `items` as one element over corners of its own: `element` is 'l' (a
@@ -117,13 +147,17 @@ void write_heightmap_png(const Heightmap& heightmap, const std::string& path) {
 void write_edges_png(const Heightmap& heightmap, const std::vector<Point2>& edges, const std::string& path) {
   if (heightmap.width <= 0 || heightmap.height <= 0)
     throw IoError("heightmap: cannot write " + path + ": empty heightmap");
-  cv::Mat colour;
-  cv::cvtColor(grey_image(heightmap), colour, cv::COLOR_GRAY2BGR);
+  const Image grey = grey_image(heightmap);
+  Image colour{grey.width, grey.height, 3, std::vector<std::uint8_t>(grey.pixels.size() * 3)};
+  for (std::size_t i = 0; i < grey.pixels.size(); ++i)
+    for (std::size_t c = 0; c < 3; ++c) colour.pixels[3 * i + c] = grey.pixels[i];
   for (const Point2& p : edges) {
     const int col = static_cast<int>(std::floor((p.x - heightmap.origin.x) / heightmap.resolution));
     const int row = static_cast<int>(std::floor((p.y - heightmap.origin.y) / heightmap.resolution));
     if (col < 0 || row < 0 || col >= heightmap.width || row >= heightmap.height) continue;
-    colour.at<cv::Vec3b>(heightmap.height - 1 - row, col) = cv::Vec3b(0, 0, 255);  // BGR red
+    std::uint8_t* rgb = colour.pixels.data() +
+                        3 * (static_cast<std::size_t>(heightmap.height - 1 - row) * heightmap.width + col);
+    rgb[0] = 255, rgb[1] = 0, rgb[2] = 0;  // red
   }
   write_png(colour, path);
 }
