@@ -4,6 +4,7 @@
 
 #include <cpl_error.h>
 #include <gdal.h>
+#include <gdal_frmts.h>
 
 #include <algorithm>
 #include <array>
@@ -56,8 +57,13 @@ Image grey_image(const Heightmap& map) {
 /// libraries (DICOM, OpenEXR, X11) into every run for the debug images alone: about 14 ms of CPU at
 /// each start of the program (docs/BENCHMARKS.md).
 void write_png(const Image& image, const std::string& path) {
+  // Only the two drivers this needs: GDALAllRegister would also reorder the driver list, which a
+  // footprint reader on another thread may be walking through in GDALOpenEx.
   static std::once_flag registered;
-  std::call_once(registered, [] { GDALAllRegister(); });
+  std::call_once(registered, [] {
+    GDALRegister_MEM();  // each a no-op when its driver is registered already
+    GDALRegister_PNG();
+  });
   const GDALDriverH memory = GDALGetDriverByName("MEM"), png = GDALGetDriverByName("PNG");
   if (!memory || !png) throw IoError("debug: cannot write " + path + ": GDAL has no MEM or PNG driver");
   CPLPushErrorHandler(CPLQuietErrorHandler);
