@@ -54,8 +54,8 @@ Image grey_image(const Heightmap& map) {
 
 /// Writes `image` as a PNG through GDAL's PNG driver, from an in-memory copy. GDAL is the project's
 /// file-format library already; OpenCV's imgcodecs, which did this before, linked some 15 more shared
-/// libraries (DICOM, OpenEXR, X11) into every run for the debug images alone: about 14 ms of CPU at
-/// each start of the program (docs/BENCHMARKS.md).
+/// libraries (GDCM's DICOM libraries, OpenEXR) into every run for the debug images alone: about 14 ms
+/// of CPU at each start of the program (docs/BENCHMARKS.md).
 void write_png(const Image& image, const std::string& path) {
   // Only the two drivers this needs: GDALAllRegister would also reorder the driver list, which a
   // footprint reader on another thread may be walking through in GDALOpenEx.
