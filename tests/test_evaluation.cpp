@@ -227,6 +227,21 @@ double triangle_distance(const Point3& p, const Point3& a, const Point3& b, cons
   return std::min({segment(a, b), segment(b, c), segment(c, a)});
 }
 
+/// point_distances(m, points) against the nearest of every triangle of m, the plain way.
+void expect_distances_of_every_triangle(const PolygonMesh& m, const std::vector<Point3>& points) {
+  const auto triangles = triangulate(m);
+  const std::vector<double> d = point_distances(m, points);
+  ASSERT_EQ(d.size(), points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    double best = 1e300;
+    for (const auto& t : triangles)
+      best =
+          std::min(best, triangle_distance(points[i], m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]));
+    ASSERT_NEAR(d[i], best, 1e-9) << "point " << i << " (" << points[i].x << ", " << points[i].y << ", "
+                                  << points[i].z << ")";
+  }
+}
+
 // The tree search skips a triangle whose bounding box is farther than the closest point so far: the
 // distances must be those of trying every triangle, for points on, near, inside and far from a tilted
 // L-shaped prism (boxes that are not flat), in an order that makes each search's start a poor one.
@@ -256,15 +271,67 @@ TEST(Evaluation, point_distances_are_those_of_trying_every_triangle) {
       points.push_back({100.0 + scale * u(rng), 200.0 + scale * u(rng), scale * u(rng)});
     }
   }
-  const std::vector<double> d = point_distances(m, points);
-  ASSERT_EQ(d.size(), points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    double best = 1e300;
-    for (const auto& t : triangles)
-      best =
-          std::min(best, triangle_distance(points[i], m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]));
-    ASSERT_NEAR(d[i], best, 1e-9) << "point " << i;
+  expect_distances_of_every_triangle(m, points);
+}
+
+// A prism over a 48-cornered star with a sloped roof (its floor and roof are fans of long triangles over
+// many columns of the search grid) and two slivers: the distances of points inside, on its corners,
+// edges and triangles (ties between triangles), under the floor, beside the walls and far outside the
+// grid must be those of trying every triangle.
+TEST(Evaluation, point_distances_find_the_nearest_of_many_triangles_wherever_the_point_is) {
+  PolygonMesh m;
+  const int corners = 48;
+  const auto roof_z = [](double x, double y) { return 6.0 + 0.15 * x - 0.05 * y; };
+  for (int k = 0; k < corners; ++k) {
+    const double angle = 2.0 * M_PI * k / corners;
+    const double r = k % 2 == 0 ? 12.0 : 7.0;  // every other corner in: a star
+    const double x = r * std::cos(angle) + 300.0, y = r * std::sin(angle) - 150.0;
+    m.vertices.push_back({x, y, 0.0});
+    m.vertices.push_back({x, y, roof_z(x - 300.0, y + 150.0)});
   }
+  std::vector<std::uint32_t> floor, roof;
+  for (int k = 0; k < corners; ++k) {
+    const auto a = static_cast<std::uint32_t>(2 * k), b = static_cast<std::uint32_t>(2 * ((k + 1) % corners));
+    floor.insert(floor.begin(), a);
+    roof.push_back(a + 1);
+    m.faces.push_back({a, b, b + 1, a + 1});
+  }
+  m.faces.push_back(floor);
+  m.faces.push_back(roof);
+  // Two slivers, 3 m long and 0.2 mm wide, one flat above the roof, one steep beside a wall.
+  const auto add = [&m](const Point3& a, const Point3& b, const Point3& c) {
+    const auto n = static_cast<std::uint32_t>(m.vertices.size());
+    m.vertices.insert(m.vertices.end(), {a, b, c});
+    m.faces.push_back({n, n + 1, n + 2});
+  };
+  add({300.0, -150.0, 9.0}, {303.0, -150.0, 9.0}, {301.5, -150.0 + 2e-4, 9.0});
+  add({312.5, -151.0, 1.0}, {312.5, -151.0 + 2e-4, 2.5}, {312.5, -151.0, 4.0});
+  const auto triangles = triangulate(m);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), pick(0.0, 1.0);
+  std::vector<Point3> points;
+  for (int i = 0; i < 6000; ++i) {
+    const int kind = i % 6;
+    if (kind == 0) {  // on a corner, an edge or a triangle (a sliver too), or a hair above one
+      const auto& t = triangles[rng() % triangles.size()];
+      const Point3 &p0 = m.vertices[t[0]], &p1 = m.vertices[t[1]], &p2 = m.vertices[t[2]];
+      const double s = (i / 6) % 3 == 0 ? 0.0 : pick(rng) / 2, w = (i / 6) % 3 == 2 ? pick(rng) / 2 : 0.0;
+      points.push_back({p0.x + s * (p1.x - p0.x) + w * (p2.x - p0.x),
+                        p0.y + s * (p1.y - p0.y) + w * (p2.y - p0.y),
+                        p0.z + s * (p1.z - p0.z) + w * (p2.z - p0.z) + (i % 4) * 1e-8});
+    } else if (kind == 1) {  // near the roof, inside or beyond the walls
+      const double x = 14.0 * u(rng), y = 14.0 * u(rng);
+      points.push_back({x + 300.0, y - 150.0, roof_z(x, y) + 0.3 * u(rng)});
+    } else if (kind == 2) {  // inside, at any height, and under the floor
+      points.push_back({300.0 + 10.0 * u(rng), -150.0 + 10.0 * u(rng), 4.0 + 6.0 * u(rng)});
+    } else if (kind == 3) {  // far outside the grid
+      points.push_back({300.0 + 200.0 * u(rng), -150.0 + 200.0 * u(rng), 50.0 * u(rng)});
+    } else {  // the same point again, or one a hair from the one before (the search starts there)
+      const Point3 before = points.back();
+      points.push_back(kind == 4 ? before : Point3{before.x + 1e-9, before.y, before.z - 1e-9});
+    }
+  }
+  expect_distances_of_every_triangle(m, points);
 }
 
 TEST(Evaluation, l_shaped_prism_is_a_valid_solid) {

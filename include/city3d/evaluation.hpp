@@ -15,7 +15,9 @@ namespace city3d {
 
 /// Root mean square of the distances from each point to the nearest point of the model surface,
 /// metres. `mesh` and `points` must be in the same (local) frame. Faces may be non-convex; they are
-/// triangulated internally (ear clipping in the face's plane) and queried with an AABB tree.
+/// triangulated internally (ear clipping in the face's plane). Each point's nearest triangle is found
+/// through a grid of columns in xy; where two triangles are about as near (a point nearest to an edge
+/// they share) CGAL's AABB tree decides. The distances are CGAL's closest points' either way.
 /// Throws ReconstructionError when `points` is empty or the mesh has no face with area.
 double rmse(const PolygonMesh& mesh, const std::vector<Point3>& points);
 

@@ -14,7 +14,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numeric>
+#include <optional>
 #include <sstream>
 #include <unordered_map>
 #include <vector>
@@ -31,6 +33,7 @@ using Triangle = std::array<std::uint32_t, 3>;
 
 using detail::cross;
 using detail::dot;
+using detail::norm;
 using detail::sub;
 using detail::Vec;
 
@@ -200,6 +203,219 @@ bool certainly_not_flat(const DistanceTriangle& t) {
   return clear(uy * vz, uz * vy) || clear(uz * vx, ux * vz) || clear(ux * vy, uy * vx);
 }
 
+// The triangle nearest to a point, found by columns, when it is certain. The triangles are listed
+// per column of a grid in xy (every column their projection may overlap); a query measures the
+// triangles of the columns around the point, ring by ring, until the next ring lies farther than the
+// nearest triangle found, each distance in doubles (Ericson's closest point on a triangle). The
+// answer is given only when every other triangle is farther by far more than the rounding of those
+// distances (and the nearest is no sliver, whose distance rounds worse): the CGAL projection onto it is
+// then the closest point the AABB tree's search would give, the same bits. Ties (a point nearest to an
+// edge or a corner two triangles share) are left to the tree. On a building's model a point meets a
+// few triangles of its own column (its roof, the floor, walls beside it) where the tree tests about a
+// hundred nodes and projects a dozen triangles.
+class ColumnIndex {
+ public:
+  // `queries`: how many points will be asked about (a column per four of them, 64 to 2,048).
+  ColumnIndex(const std::vector<DistanceTriangle>& triangles, std::size_t queries) {
+    double x0 = std::numeric_limits<double>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
+    for (const DistanceTriangle& t : triangles) {
+      Facet tri;
+      for (int v = 0; v < 3; ++v) {
+        tri.v[v] = {t[v].x(), t[v].y(), t[v].z()};
+        x0 = std::min(x0, tri.v[v].x), x1 = std::max(x1, tri.v[v].x);
+        y0 = std::min(y0, tri.v[v].y), y1 = std::max(y1, tri.v[v].y);
+      }
+      const Vec ab = sub(tri.v[1], tri.v[0]), ac = sub(tri.v[2], tri.v[0]), bc = sub(tri.v[2], tri.v[1]);
+      const double longest = std::max({dot(ab, ab), dot(ac, ac), dot(bc, bc)});
+      const double doubled_area = norm(cross(ab, ac));
+      tri.sliver = !(doubled_area * doubled_area > kSliver * longest * longest);
+      if (!tri.sliver) {
+        const Vec n = cross(ab, ac);
+        tri.normal = {n.x / doubled_area, n.y / doubled_area, n.z / doubled_area};
+      } else {
+        // Its longest edge first: every point of it is within the third corner's distance of that edge.
+        const int e = longest == dot(ab, ab) ? 0 : longest == dot(bc, bc) ? 1 : 2;
+        std::rotate(tri.v, tri.v + e, tri.v + 3);
+        tri.width = segment_distance(tri.v[2], tri.v[0], tri.v[1]);
+      }
+      facets_.push_back(tri);
+    }
+    // Square columns over the model's extent, none narrower than half a metre: building them costs
+    // what a few queries cost, and more columns hold fewer triangles each.
+    const double wanted = std::clamp(static_cast<double>(queries) / 4.0, 64.0, 2048.0);
+    const double w = x1 - x0, h = y1 - y0;
+    size_ = std::max(0.5, std::sqrt(std::max(w * h, w * w / 64 + h * h / 64) / wanted));
+    x0_ = x0, y0_ = y0;
+    nx_ = static_cast<long>(w / size_) + 1, ny_ = static_cast<long>(h / size_) + 1;
+    std::vector<std::vector<std::uint32_t>> columns(static_cast<std::size_t>(nx_ * ny_));
+    for (std::uint32_t k = 0; k < facets_.size(); ++k) {
+      const Facet& t = facets_[k];
+      const auto [i0, i1] = std::minmax({column_x(t.v[0].x), column_x(t.v[1].x), column_x(t.v[2].x)});
+      const auto [j0, j1] = std::minmax({column_y(t.v[0].y), column_y(t.v[1].y), column_y(t.v[2].y)});
+      for (long j = j0; j <= j1; ++j)
+        for (long i = i0; i <= i1; ++i)
+          if (may_overlap(t, i, j)) columns[static_cast<std::size_t>(j * nx_ + i)].push_back(k);
+    }
+    first_.reserve(columns.size() + 1);
+    first_.push_back(0);
+    for (const auto& c : columns) {
+      items_.insert(items_.end(), c.begin(), c.end());
+      first_.push_back(static_cast<std::uint32_t>(items_.size()));
+    }
+    seen_.assign(facets_.size(), 0);
+  }
+
+  // The index of the triangle nearest to p when it is certain, or -1.
+  long nearest(const Point3& p) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return -1;
+    if (++query_ == 0) std::fill(seen_.begin(), seen_.end(), 0), query_ = 1;
+    const long ci = std::clamp(column_x(p.x), 0L, nx_ - 1), cj = std::clamp(column_y(p.y), 0L, ny_ - 1);
+    const long rings = std::max({ci, nx_ - 1 - ci, cj, ny_ - 1 - cj});
+    // Squared distances: the nearest, the next nearest, the nearest a sliver may be (its box), and
+    // the reach (the nearest's distance and the tie margin) within which every triangle is measured.
+    double best = std::numeric_limits<double>::infinity(), second = best, sliver = best, reach = best;
+    double reach_distance = best;
+    long winner = -1;
+    for (long r = 0; r <= rings; ++r) {
+      bool any = false;  // a column of this ring within reach
+      for (long j = cj - r; j <= cj + r; ++j) {
+        if (j < 0 || j >= ny_) continue;
+        const bool edge_row = j == cj - r || j == cj + r;
+        for (long i = ci - r; i <= ci + r; i += edge_row ? 1 : 2 * r) {
+          if (i >= 0 && i < nx_ && squared_column_distance(p, i, j) <= reach) {
+            any = true;
+            const auto c = static_cast<std::size_t>(j * nx_ + i);
+            for (std::uint32_t n = first_[c]; n < first_[c + 1]; ++n) {
+              const std::uint32_t k = items_[n];
+              if (seen_[k] == query_) continue;
+              seen_[k] = query_;
+              const Facet& t = facets_[k];
+              if (t.sliver) {
+                const double low =
+                    std::max(0.0, segment_distance(p, t.v[0], t.v[1]) - t.width - kPlaneMargin);
+                sliver = std::min(sliver, low * low);
+                continue;
+              }
+              // Its plane is no farther than the triangle.
+              if (std::abs(dot(t.normal, sub(p, t.v[0]))) > reach_distance + kPlaneMargin) continue;
+              const double d = squared_distance(t, p);
+              if (d < best) {
+                second = best, best = d, winner = k;
+                reach_distance = std::sqrt(best) + kTie;
+                reach = reach_distance * reach_distance;
+              } else if (d < second) {
+                second = d;
+              }
+            }
+          }
+          if (r == 0) break;
+        }
+      }
+      if (!any && r > 0) break;
+    }
+    if (winner < 0 || !(second > reach) || !(sliver > reach)) return -1;
+    return winner;
+  }
+
+ private:
+  // Triangles whose doubled area is below this share of their longest edge squared are slivers: their
+  // normal and Ericson's distance round too coarsely to be trusted, so they are bounded by their box.
+  static constexpr double kSliver = 1e-8;
+  // Distances that differ by less than this are a tie: far above the rounding of the distances of the
+  // other triangles (a ten-thousandth of their longest edge or more across), about 1e-10 m here.
+  static constexpr double kTie = 1e-6;
+  // The rounding of a distance to a plane of such a triangle, and far more.
+  static constexpr double kPlaneMargin = 1e-7;
+
+  struct Facet {
+    Point3 v[3];  // a sliver's longest edge is v[0] v[1]
+    bool sliver = false;
+    Vec normal{0.0, 0.0, 0.0};  // the unit normal of its plane (not for a sliver)
+    double width = 0.0;         // a sliver's: how far its third corner is from its longest edge
+  };
+
+  // The distance from p to segment ab.
+  static double segment_distance(const Point3& p, const Point3& a, const Point3& b) {
+    const Vec ab = sub(b, a), ap = sub(p, a);
+    const double length2 = dot(ab, ab);
+    const double t = length2 > 0.0 ? std::clamp(dot(ab, ap) / length2, 0.0, 1.0) : 0.0;
+    return norm({ap.x - t * ab.x, ap.y - t * ab.y, ap.z - t * ab.z});
+  }
+
+  long column_x(double x) const { return static_cast<long>(std::floor((x - x0_) / size_)); }
+  long column_y(double y) const { return static_cast<long>(std::floor((y - y0_) / size_)); }
+
+  // The squared distance in xy from p to column (i, j), a lower bound of the 3D distance to what it
+  // holds; the column is taken a hair wider than it is, so the bound never exceeds the truth.
+  double squared_column_distance(const Point3& p, long i, long j) const {
+    const double margin = 1e-9 * size_;
+    const double xa = x0_ + static_cast<double>(i) * size_ - margin, xb = xa + size_ + 2 * margin;
+    const double ya = y0_ + static_cast<double>(j) * size_ - margin, yb = ya + size_ + 2 * margin;
+    const double dx = p.x < xa ? xa - p.x : p.x > xb ? p.x - xb : 0.0;
+    const double dy = p.y < ya ? ya - p.y : p.y > yb ? p.y - yb : 0.0;
+    return dx * dx + dy * dy;
+  }
+
+  // Whether the triangle's projection may overlap column (i, j): no edge of the projection separates
+  // them (the separating-axis test, with a margin, so an overlap is never missed).
+  bool may_overlap(const Facet& t, long i, long j) const {
+    const double margin = 1e-9 * size_;
+    const double xa = x0_ + static_cast<double>(i) * size_ - margin, xb = xa + size_ + 2 * margin;
+    const double ya = y0_ + static_cast<double>(j) * size_ - margin, yb = ya + size_ + 2 * margin;
+    for (int e = 0; e < 3; ++e) {
+      const Point3& a = t.v[e];
+      const Point3& b = t.v[(e + 1) % 3];
+      const double nx = a.y - b.y, ny = b.x - a.x;  // a normal of the edge in xy
+      if (nx == 0.0 && ny == 0.0) continue;
+      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+      for (const Point3& v : t.v)
+        lo = std::min(lo, nx * v.x + ny * v.y), hi = std::max(hi, nx * v.x + ny * v.y);
+      double box_lo = std::numeric_limits<double>::infinity(), box_hi = -box_lo;
+      for (const double x : {xa, xb})
+        for (const double y : {ya, yb})
+          box_lo = std::min(box_lo, nx * x + ny * y), box_hi = std::max(box_hi, nx * x + ny * y);
+      const double slack = 1e-9 * (std::abs(nx) + std::abs(ny)) * (size_ + std::abs(xa) + std::abs(ya));
+      if (box_hi < lo - slack || box_lo > hi + slack) return false;
+    }
+    return true;
+  }
+
+  // The squared distance from p to the triangle (Ericson, Real-Time Collision Detection, 5.1.5).
+  static double squared_distance(const Facet& t, const Point3& p) {
+    const Point3 &a = t.v[0], &b = t.v[1], &c = t.v[2];
+    const Vec ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
+    const auto length2 = [](const Vec& v) { return dot(v, v); };
+    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+    if (d1 <= 0.0 && d2 <= 0.0) return length2(ap);
+    const Vec bp = sub(p, b);
+    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0.0 && d4 <= d3) return length2(bp);
+    const double vc = d1 * d4 - d3 * d2;
+    const auto off = [&](const Point3& o, const Vec& u, double s, const Vec& v, double w) {
+      return length2({p.x - (o.x + s * u.x + w * v.x), p.y - (o.y + s * u.y + w * v.y),
+                      p.z - (o.z + s * u.z + w * v.z)});
+    };
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return off(a, ab, d1 / (d1 - d3), ac, 0.0);
+    const Vec cp = sub(p, c);
+    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0.0 && d5 <= d6) return length2(cp);
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return off(a, ab, 0.0, ac, d2 / (d2 - d6));
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0)
+      return off(b, sub(c, b), (d4 - d3) / ((d4 - d3) + (d5 - d6)), ab, 0.0);
+    const double denominator = 1.0 / (va + vb + vc);
+    return off(a, ab, vb * denominator, ac, vc * denominator);
+  }
+
+  std::vector<Facet> facets_;
+  double x0_ = 0.0, y0_ = 0.0, size_ = 1.0;
+  long nx_ = 1, ny_ = 1;
+  std::vector<std::uint32_t> first_, items_;  // the triangles of column c: items_[first_[c] .. first_[c + 1])
+  std::vector<std::uint32_t> seen_;           // the query that last measured each triangle
+  std::uint32_t query_ = 0;
+};
+
 }  // namespace
 
 std::vector<double> point_distances(const PolygonMesh& mesh, const std::vector<Point3>& points) {
@@ -215,16 +431,30 @@ std::vector<double> point_distances(const PolygonMesh& mesh, const std::vector<P
   if (triangles.empty())
     throw ReconstructionError(ReconstructionStage::evaluation, "rmse of a mesh without area (" +
                               std::to_string(mesh.faces.size()) + " faces)");
-  Tree tree(triangles.begin(), triangles.end());
+  std::optional<Tree> tree;  // built at its first query
   std::vector<double> distances;
   distances.reserve(points.size());
-  // The closest point of the previous point is the hint of the next: consecutive points of a scan are
-  // neighbours, so each search starts with a tight bound (faster than CGAL's accelerated queries,
-  // whose kd-tree of sample points costs more to build than it saves here).
+  // Where the column index is certain of the nearest triangle, the closest point is CGAL's projection
+  // onto it, as the tree's search would find it; the rest (ties, slivers) search the tree. The closest
+  // point of the previous point is the hint of the next: consecutive points of a scan are neighbours,
+  // so each tree search starts with a tight bound (faster than CGAL's accelerated queries, whose
+  // kd-tree of sample points costs more to build than it saves here).
   Kernel::Point_3 hint = triangles.front().vertex(0);
+  ColumnIndex columns(triangles, points.size());
+  const Kernel::Construct_projected_point_3 project;
+  const Kernel::Compare_distance_3 compare;
   for (const auto& p : points) {
     const Kernel::Point_3 q = to_cgal(p);
-    hint = tree.closest_point(q, hint);
+    const long nearest = columns.nearest(p);
+    if (nearest >= 0) {
+      // The tree's search starts from the hint and keeps it against a projection that is farther
+      // (by a rounding: the hint lies on the model, a closest point of the point before).
+      const Kernel::Point_3 projected = project(triangles[static_cast<std::size_t>(nearest)], q);
+      if (compare(q, projected, hint) != CGAL::LARGER) hint = projected;
+    } else {
+      if (!tree) tree.emplace(triangles.begin(), triangles.end());
+      hint = tree->closest_point(q, hint);
+    }
     distances.push_back(std::sqrt(CGAL::to_double(CGAL::squared_distance(q, hint))));
   }
   return distances;

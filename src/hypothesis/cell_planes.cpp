@@ -69,9 +69,9 @@ std::vector<std::vector<int>> cell_roof_planes(const std::vector<Point3>& points
     membership_grid.for_each_in(box.min.x - cm, box.min.y - cm, box.max.x + cm, box.max.y + cm, [&](std::uint32_t i) {
       const Point3& pt = points[memberships[i].second];
       if (pt.x < box.min.x - cm || pt.x > box.max.x + cm || pt.y < box.min.y - cm || pt.y > box.max.y + cm) return;
-      const double d = distance_to_polygon(poly, pt.x, pt.y);
-      if (d <= cm) ++near_count[memberships[i].first];
-      if (d <= 0.0) ++inside_count[memberships[i].first];
+      const int reach = polygon_reach(poly, pt.x, pt.y, cm);
+      if (reach >= 1) ++near_count[memberships[i].first];
+      if (reach == 2) ++inside_count[memberships[i].first];
     });
     for (std::size_t r = 0; r < R; ++r) {
       const std::size_t need = std::min<std::size_t>(static_cast<std::size_t>(params.min_support_points),

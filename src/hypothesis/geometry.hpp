@@ -87,6 +87,30 @@ inline double distance_to_polygon(const std::vector<Point2>& poly, double x, dou
   return best;
 }
 
+// Where (x, y) lies against the ring, as distance_to_polygon(poly, x, y) would tell it, without taking
+// every edge's distance: 2 where that distance is 0 (inside, or on an edge), 1 where it is at most
+// `reach`, 0 where it is farther. An edge's squared distance settles it unless it is within a relative
+// 1e-12 of reach squared (far above the rounding of both, a few units of 1e-16); only then is its
+// distance taken as distance_to_segment takes it.
+inline int polygon_reach(const std::vector<Point2>& poly, double x, double y, double reach) {
+  if (inside_polygon(poly, x, y)) return 2;
+  const double reach2 = reach * reach;
+  bool near = false;
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const Point2& a = poly[i];
+    const Point2& b = poly[(i + 1) % poly.size()];
+    const double dx = b.x - a.x, dy = b.y - a.y;
+    const double len2 = dx * dx + dy * dy;
+    const double t = std::clamp(len2 > 0 ? ((x - a.x) * dx + (y - a.y) * dy) / len2 : 0.0, 0.0, 1.0);
+    const double ex = a.x + t * dx - x, ey = a.y + t * dy - y;
+    if (ex == 0.0 && ey == 0.0) return 2;
+    if (near) continue;
+    const double d2 = ex * ex + ey * ey;
+    near = d2 < reach2 * (1.0 - 1e-12) || (d2 <= reach2 * (1.0 + 1e-12) && std::hypot(ex, ey) <= reach);
+  }
+  return near ? 1 : 0;
+}
+
 // Newell's normal of a 3D polygon: its length is the polygon's area.
 struct Vec3 {
   double x, y, z;
