@@ -247,21 +247,22 @@ class ColumnIndex {
     size_ = std::max(0.5, std::sqrt(std::max(w * h, w * w / 64 + h * h / 64) / wanted));
     x0_ = x0, y0_ = y0;
     nx_ = static_cast<long>(w / size_) + 1, ny_ = static_cast<long>(h / size_) + 1;
-    std::vector<std::vector<std::uint32_t>> columns(static_cast<std::size_t>(nx_ * ny_));
+    // (column, triangle) pairs, then the triangles sorted by column (counting), each column's in order.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
     for (std::uint32_t k = 0; k < facets_.size(); ++k) {
       const Facet& t = facets_[k];
       const auto [i0, i1] = std::minmax({column_x(t.v[0].x), column_x(t.v[1].x), column_x(t.v[2].x)});
       const auto [j0, j1] = std::minmax({column_y(t.v[0].y), column_y(t.v[1].y), column_y(t.v[2].y)});
       for (long j = j0; j <= j1; ++j)
         for (long i = i0; i <= i1; ++i)
-          if (may_overlap(t, i, j)) columns[static_cast<std::size_t>(j * nx_ + i)].push_back(k);
+          if (may_overlap(t, i, j)) pairs.emplace_back(static_cast<std::uint32_t>(j * nx_ + i), k);
     }
-    first_.reserve(columns.size() + 1);
-    first_.push_back(0);
-    for (const auto& c : columns) {
-      items_.insert(items_.end(), c.begin(), c.end());
-      first_.push_back(static_cast<std::uint32_t>(items_.size()));
-    }
+    first_.assign(static_cast<std::size_t>(nx_ * ny_) + 1, 0);
+    for (const auto& [c, k] : pairs) ++first_[c + 1];
+    for (std::size_t c = 1; c < first_.size(); ++c) first_[c] += first_[c - 1];
+    items_.resize(pairs.size());
+    std::vector<std::uint32_t> next(first_.begin(), first_.end() - 1);
+    for (const auto& [c, k] : pairs) items_[next[c]++] = k;
     seen_.assign(facets_.size(), 0);
   }
 
@@ -276,7 +277,17 @@ class ColumnIndex {
     double best = std::numeric_limits<double>::infinity(), second = best, sliver = best, reach = best;
     double reach_distance = best;
     long winner = -1;
+    // How far p is inside its own column: ring r >= 1 lies that far and r - 1 columns more away.
+    const double border = std::max(0.0, std::min({p.x - (x0_ + static_cast<double>(ci) * size_),
+                                                  x0_ + static_cast<double>(ci + 1) * size_ - p.x,
+                                                  p.y - (y0_ + static_cast<double>(cj) * size_),
+                                                  y0_ + static_cast<double>(cj + 1) * size_ - p.y}) -
+                                            1e-9 * size_);
     for (long r = 0; r <= rings; ++r) {
+      if (r > 0) {
+        const double away = border + static_cast<double>(r - 1) * size_;
+        if (away * away > reach) break;
+      }
       bool any = false;  // a column of this ring within reach
       for (long j = cj - r; j <= cj + r; ++j) {
         if (j < 0 || j >= ny_) continue;
