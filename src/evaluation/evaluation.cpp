@@ -208,7 +208,7 @@ bool certainly_not_flat(const DistanceTriangle& t) {
 // triangles of the columns around the point, ring by ring, until the next ring lies farther than the
 // nearest triangle found, each distance in doubles (Ericson's closest point on a triangle). The
 // answer is given only when every other triangle is farther by far more than the rounding of those
-// distances (and the nearest is no sliver, whose distance rounds worse): the CGAL projection onto it is
+// distances (and no sliver, whose distance rounds worse, is within reach): the CGAL projection onto it is
 // then the closest point the AABB tree's search would give, the same bits. Ties (a point nearest to an
 // edge or a corner two triangles share) are left to the tree. On a building's model a point meets a
 // few triangles of its own column (its roof, the floor, walls beside it) where the tree tests about a
@@ -330,7 +330,8 @@ class ColumnIndex {
 
  private:
   // Triangles whose doubled area is below this share of their longest edge squared are slivers: their
-  // normal and Ericson's distance round too coarsely to be trusted, so they are bounded by their box.
+  // normal and Ericson's distance round too coarsely to be trusted, so a sliver is only bounded (by its
+  // longest edge and its width), and one within reach leaves the point to the tree.
   static constexpr double kSliver = 1e-8;
   // Distances that differ by less than this are a tie: far above the rounding of the distances of the
   // other triangles (a ten-thousandth of their longest edge or more across), about 1e-10 m here.
