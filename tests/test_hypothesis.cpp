@@ -21,6 +21,7 @@
 #include "city3d/mesh_check.hpp"
 #include "city3d/model.hpp"
 #include "city3d/selection.hpp"
+#include "hypothesis/geometry.hpp"
 
 namespace city3d {
 namespace {
@@ -861,6 +862,35 @@ TEST(Hypothesis, unmeasured_ground_drops_a_plane_that_dips_metres_below_it) {
   double deep_low = std::numeric_limits<double>::infinity();
   for (const auto& p : deep.vertices) deep_low = std::min(deep_low, p.z);
   EXPECT_LT(deep_low, -18.0);
+}
+
+// The cell supports' test (polygon_reach) must answer as distance_to_polygon does: 2 at distance 0
+// (inside, or on an edge or corner), 1 within the reach, 0 beyond it. Points around an L-shaped ring
+// with a slanted edge, on its corners and edges, and exactly at the reach beside its axis-aligned
+// edges, where the squared distance alone could misjudge.
+TEST(CellPlanes, polygon_reach_answers_as_the_distance_to_the_polygon_does) {
+  const std::vector<Point2> ring{{0.0, 0.0}, {10.0, 0.0}, {10.0, 4.0}, {4.3, 4.0}, {3.7, 9.1}, {0.0, 9.1}};
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-2.0, 12.0), pick(0.0, 1.0);
+  for (const double reach : {0.0, 0.3, 0.7, 1.0}) {
+    std::vector<Point2> points;
+    for (int i = 0; i < 4000; ++i) points.push_back({u(rng), u(rng)});
+    for (std::size_t k = 0; k < ring.size(); ++k) {
+      const Point2 &a = ring[k], &b = ring[(k + 1) % ring.size()];
+      points.push_back(a);
+      const double t = pick(rng);
+      points.push_back({a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)});
+    }
+    for (const double x : {2.0, 5.0, 9.9})
+      points.push_back({x, -reach}), points.push_back({x, -std::nextafter(reach, 2.0)});
+    for (const double y : {0.5, 2.0, 3.9}) points.push_back({10.0 + reach, y});
+    for (const Point2& p : points) {
+      const double d = detail::distance_to_polygon(ring, p.x, p.y);
+      const int expected = d <= 0.0 ? 2 : d <= reach ? 1 : 0;
+      ASSERT_EQ(detail::polygon_reach(ring, p.x, p.y, reach), expected)
+          << "(" << p.x << ", " << p.y << ") at distance " << d << ", reach " << reach;
+    }
+  }
 }
 
 }  // namespace
