@@ -343,6 +343,37 @@ TEST(StepLines, two_roofs_at_different_heights_give_a_step_line_along_the_step) 
   EXPECT_GT(std::abs(lines[0][1].y - lines[0][0].y), 6.0);
 }
 
+// A higher block in one corner of a lower roof: the step turns a corner, so its boundary samples
+// form two legs. The search takes one leg, removes its samples, and must find the other among the
+// samples left, whose neighbourhoods near the corner lost samples (and whose lines changed) while
+// those far from it kept theirs.
+TEST(StepLines, a_step_around_a_corner_gives_a_line_along_each_leg) {
+  SyntheticBuilding b(5);
+  const auto high = [](double x, double y) { return x < 5.0 && y < 5.0; };
+  b.roof(0, 0, 12, 12, [&](double x, double y) { return high(x, y) ? 7.0 : 4.0; });
+  const auto& points = b.points;
+  std::vector<PlanarSegment> segments(2);
+  for (std::uint32_t k = 0; k < points.size(); ++k)
+    segments[high(points[k].x, points[k].y) ? 0 : 1].points.push_back(k);
+  segments[0].plane = {0.0, 0.0, 1.0, -7.0};
+  segments[1].plane = {0.0, 0.0, 1.0, -4.0};
+  const auto lines = detect_step_lines(points, segments, std::sqrt(1.0 / kDensity), StepLineParams{});
+  bool along_x = false, along_y = false;  // the leg y = 5 (0 <= x <= 5) and the leg x = 5 (0 <= y <= 5)
+  for (const auto& line : lines) {
+    ASSERT_EQ(line.size(), 2u);
+    const Point2 &p = line[0], &q = line[1];
+    const bool on_y5 = std::abs(p.y - 5.0) < 0.35 && std::abs(q.y - 5.0) < 0.35;
+    const bool on_x5 = std::abs(p.x - 5.0) < 0.35 && std::abs(q.x - 5.0) < 0.35;
+    EXPECT_TRUE(on_y5 || on_x5) << "a line off the step: (" << p.x << ", " << p.y << ") - (" << q.x << ", "
+                                << q.y << ")";
+    for (const Point2& e : line) EXPECT_TRUE(e.x < 5.4 && e.y < 5.4) << "a line past the corner";
+    along_x = along_x || (on_y5 && std::abs(q.x - p.x) > 3.5);
+    along_y = along_y || (on_x5 && std::abs(q.y - p.y) > 3.5);
+  }
+  EXPECT_TRUE(along_x) << "no line along y = 5";
+  EXPECT_TRUE(along_y) << "no line along x = 5";
+}
+
 TEST(StepLines, a_ridge_is_a_crease_not_a_step) {
   const auto points = gable_roof(2);
   const auto segments = detect_planes(points, PlaneParams{});

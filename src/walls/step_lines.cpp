@@ -70,18 +70,38 @@ class Radius {
   double surely_in_ = -1.0, surely_out_ = std::numeric_limits<double>::infinity();
 };
 
-// A uniform grid over xy positions for radius searches.
+// A uniform grid over xy positions for radius searches: each bin's points in one array (a bin's
+// points ascending, or, with labels, grouped by label and ascending within a label).
 class Grid {
  public:
-  Grid(const std::vector<Point2>& xy, double cell) : xy_(xy), cell_(cell) {
+  // With `labels` (one per point), near_other() can pass over a bin's points of one label in a step.
+  Grid(const std::vector<Point2>& xy, double cell, const std::vector<int>* labels = nullptr)
+      : xy_(xy), labels_(labels), cell_(cell) {
     Box2 box;
     for (const Point2& p : xy) box.add(p);
     if (box.empty()) return;
     origin_ = box.min;
     nx_ = static_cast<long>((box.max.x - box.min.x) / cell_) + 1;
     ny_ = static_cast<long>((box.max.y - box.min.y) / cell_) + 1;
-    bins_.assign(static_cast<std::size_t>(nx_ * ny_), {});
-    for (std::size_t i = 0; i < xy.size(); ++i) bins_[index(xy[i])].push_back(static_cast<std::uint32_t>(i));
+    start_.assign(static_cast<std::size_t>(nx_ * ny_) + 1, 0);
+    std::vector<std::uint32_t> bin_of(xy.size());
+    for (std::size_t i = 0; i < xy.size(); ++i)
+      ++start_[(bin_of[i] = static_cast<std::uint32_t>(index(xy[i]))) + 1];
+    std::partial_sum(start_.begin(), start_.end(), start_.begin());
+    ids_.resize(xy.size());
+    std::vector<std::uint32_t> next(start_.begin(), start_.end() - 1);
+    for (std::size_t i = 0; i < xy.size(); ++i) ids_[next[bin_of[i]]++] = static_cast<std::uint32_t>(i);
+    if (!labels) return;
+    run_end_.resize(xy.size());
+    for (std::size_t b = 0; b + 1 < start_.size(); ++b) {
+      const auto first = ids_.begin() + start_[b], last = ids_.begin() + start_[b + 1];
+      std::stable_sort(first, last,
+                       [labels](std::uint32_t u, std::uint32_t v) { return (*labels)[u] < (*labels)[v]; });
+      for (std::uint32_t pos = start_[b + 1]; pos-- > start_[b];)
+        run_end_[pos] = pos + 1 < start_[b + 1] && (*labels)[ids_[pos + 1]] == (*labels)[ids_[pos]]
+                            ? run_end_[pos + 1]
+                            : pos + 1;
+    }
   }
   // visit(k, distance) for every point k within `radius` of p.
   template <typename Visit>
@@ -91,30 +111,61 @@ class Grid {
   // The same for the points k with wanted(k), which is tested first (it is cheaper).
   template <typename Wanted, typename Visit>
   void near(const Point2& p, double radius, Wanted wanted, Visit visit) const {
-    if (bins_.empty()) return;
+    for_bins(p, radius, [&](std::uint32_t begin, std::uint32_t end, const Radius& within) {
+      for (std::uint32_t pos = begin; pos < end; ++pos) {
+        const std::uint32_t k = ids_[pos];
+        if (!wanted(k)) continue;
+        const Distance d(xy_[k].x - p.x, xy_[k].y - p.y);
+        if (within.contains(d)) visit(k, d);
+      }
+    });
+  }
+  // The same for the points whose label is not `own` (a grid made with labels): the points of label
+  // `own` are passed over a run at a time, not one by one.
+  template <typename Visit>
+  void near_other(const Point2& p, double radius, int own, Visit visit) const {
+    const std::vector<int>& label = *labels_;
+    for_bins(p, radius, [&](std::uint32_t begin, std::uint32_t end, const Radius& within) {
+      for (std::uint32_t pos = begin; pos < end;) {
+        const std::uint32_t k = ids_[pos];
+        if (label[k] == own) {
+          pos = run_end_[pos];
+          continue;
+        }
+        ++pos;
+        const Distance d(xy_[k].x - p.x, xy_[k].y - p.y);
+        if (within.contains(d)) visit(k, d);
+      }
+    });
+  }
+
+ private:
+  // bin(begin, end, within) for every bin within `radius` of p, as positions into ids_.
+  template <typename Bin>
+  void for_bins(const Point2& p, double radius, Bin bin) const {
+    if (start_.empty()) return;
     const Radius within(radius);
     const long i0 = std::max(0L, col(p.x - radius)), i1 = std::min(nx_ - 1, col(p.x + radius));
     const long j0 = std::max(0L, row(p.y - radius)), j1 = std::min(ny_ - 1, row(p.y + radius));
     for (long j = j0; j <= j1; ++j)
-      for (long i = i0; i <= i1; ++i)
-        for (std::uint32_t k : bins_[static_cast<std::size_t>(j * nx_ + i)]) {
-          if (!wanted(k)) continue;
-          const Distance d(xy_[k].x - p.x, xy_[k].y - p.y);
-          if (within.contains(d)) visit(k, d);
-        }
+      for (long i = i0; i <= i1; ++i) {
+        const auto b = static_cast<std::size_t>(j * nx_ + i);
+        bin(start_[b], start_[b + 1], within);
+      }
   }
-
- private:
   long col(double x) const { return static_cast<long>(std::floor((x - origin_.x) / cell_)); }
   long row(double y) const { return static_cast<long>(std::floor((y - origin_.y) / cell_)); }
   std::size_t index(const Point2& p) const {
     return static_cast<std::size_t>(std::clamp(row(p.y), 0L, ny_ - 1) * nx_ + std::clamp(col(p.x), 0L, nx_ - 1));
   }
   const std::vector<Point2>& xy_;
+  const std::vector<int>* labels_;
   double cell_;
   Point2 origin_;
   long nx_ = 0, ny_ = 0;
-  std::vector<std::vector<std::uint32_t>> bins_;
+  std::vector<std::uint32_t> start_;    // per bin, where its points begin in ids_ (and one past the last)
+  std::vector<std::uint32_t> ids_;      // the points, bin after bin
+  std::vector<std::uint32_t> run_end_;  // with labels: per position, the end of its label's run in its bin
 };
 
 using Line = std::pair<Point2, Point2>;  // centre and unit direction
@@ -141,64 +192,70 @@ bool near_line(const Point2& p, const Line& line, double tolerance) {
 // Straight pieces through the boundary samples of one pair of planes: repeatedly the line with most
 // samples within `tolerance` (candidate lines: the local fit around each sample), refitted, cut at
 // gaps wider than `max_gap`; the longest run is kept when long enough, its samples removed.
-// A sample's candidate line and its count carry over to the next round while the sample's
-// neighbourhood stays the same (the line is then the same): the count only loses the removed
-// samples near the line. Counting every sample for every candidate in every round was quadratic.
+// A sample's neighbourhood (the samples left within max_gap) only loses the removed samples near it,
+// so only the samples within max_gap of a removed one look at theirs again (the test is symmetric:
+// Distance of the negated offset is the same bits). The others keep their line, and its count only
+// loses the removed samples near the line. Counting every sample for every candidate in every round
+// was quadratic, and so was searching every neighbourhood again every round.
 template <typename Separates>
 void extract_lines(const std::vector<Point2>& samples, const StepLineParams& params, double max_gap,
                    Separates separates, std::vector<Polyline2>& out) {
-  std::vector<std::uint32_t> left(samples.size());
+  std::vector<std::uint32_t> left(samples.size());  // the samples not yet removed, ascending
   std::iota(left.begin(), left.end(), 0u);
+  std::vector<char> alive(samples.size(), 1);
+  const auto is_alive = [&alive](std::uint32_t k) { return alive[k] != 0; };
   const double tol = params.line_tolerance;
+  const Grid grid(samples, std::max(tol, max_gap));
   struct Candidate {
-    std::vector<std::uint32_t> local;  // the neighbourhood the line was fitted to (sample ids, ascending)
-    Line line;
+    Line line;              // fitted to the sample's neighbourhood
     std::size_t count = 0;  // samples left near the line
-    int round = -1;         // the round the count is for (-1: none)
+    bool fitted = false;    // false: no line yet, or fewer than 3 samples around it (for good)
   };
   std::vector<Candidate> candidates(samples.size());
-  std::vector<std::uint32_t> removed;  // the samples the last round removed
-  std::vector<std::uint32_t> local, local_ids;
+  std::vector<char> look_again(samples.size(), 1);  // the neighbourhood may have changed
+  std::vector<std::uint32_t> removed;               // the samples the last round removed
+  std::vector<std::uint32_t> local;
   for (int round = 0; left.size() >= static_cast<std::size_t>(params.min_samples); ++round) {
-    std::vector<Point2> xy;
-    for (auto k : left) xy.push_back(samples[k]);
-    const Grid grid(xy, std::max(tol, max_gap));
     std::size_t best_count = 0;
     Line best_line;
-    for (std::uint32_t i = 0; i < xy.size(); ++i) {
-      local.clear();
-      grid.near(xy[i], max_gap, [&](std::uint32_t k, const Distance&) { local.push_back(k); });
-      if (local.size() < 3) continue;
-      std::sort(local.begin(), local.end());
-      local_ids.clear();
-      for (auto k : local) local_ids.push_back(left[k]);  // left is ascending: so are the ids
-      Candidate& c = candidates[left[i]];
-      if (c.round == round - 1 && c.local == local_ids) {
+    for (std::uint32_t i : left) {
+      Candidate& c = candidates[i];
+      if (!look_again[i]) {
+        if (!c.fitted) continue;
         for (auto k : removed) c.count -= near_line(samples[k], c.line, tol);
       } else {
-        c.local = local_ids;
-        c.line = fit_line(xy, local);
+        look_again[i] = 0;
+        local.clear();
+        grid.near(samples[i], max_gap, is_alive,
+                  [&](std::uint32_t k, const Distance&) { local.push_back(k); });
+        if (local.size() < 3) {  // neighbourhoods only shrink: never a candidate again
+          c.fitted = false;
+          continue;
+        }
+        std::sort(local.begin(), local.end());
+        c.line = fit_line(samples, local);
         c.count = 0;
-        for (const Point2& p : xy) c.count += near_line(p, c.line, tol);
+        for (auto k : left) c.count += near_line(samples[k], c.line, tol);
+        c.fitted = true;
       }
-      c.round = round;
       if (c.count > best_count) best_count = c.count, best_line = c.line;
     }
     if (best_count < static_cast<std::size_t>(params.min_samples)) return;
     const auto inliers_of = [&](const Line& line) {
       std::vector<std::uint32_t> in;
-      for (std::uint32_t k = 0; k < xy.size(); ++k)
-        if (near_line(xy[k], line, tol)) in.push_back(k);
+      for (auto k : left)
+        if (near_line(samples[k], line, tol)) in.push_back(k);
       return in;
     };
     std::vector<std::uint32_t> in = inliers_of(best_line);
-    const auto line = fit_line(xy, in);
+    const auto line = fit_line(samples, in);
     in = inliers_of(line);
     if (in.size() < 2) return;
     // Runs along the line, cut at gaps.
     std::vector<std::pair<double, std::uint32_t>> along;
     for (auto k : in)
-      along.push_back({(xy[k].x - line.first.x) * line.second.x + (xy[k].y - line.first.y) * line.second.y, k});
+      along.push_back(
+          {(samples[k].x - line.first.x) * line.second.x + (samples[k].y - line.first.y) * line.second.y, k});
     std::sort(along.begin(), along.end());
     std::size_t best_begin = 0, best_end = 0, begin = 0;
     for (std::size_t k = 1; k <= along.size(); ++k)
@@ -213,13 +270,17 @@ void extract_lines(const std::vector<Point2>& samples, const StepLineParams& par
         separates(a, b))
       out.push_back({a, b});
     // Remove the run's samples (also when too short: the search moves on to other lines).
-    std::vector<bool> drop(xy.size(), false);
-    for (std::size_t k = best_begin; k < best_end; ++k) drop[along[k].second] = true;
-    std::vector<std::uint32_t> rest;
+    if (best_end - best_begin == 0) return;
     removed.clear();
-    for (std::uint32_t k = 0; k < xy.size(); ++k) (drop[k] ? removed : rest).push_back(left[k]);
-    if (rest.size() == left.size()) return;
-    left = std::move(rest);
+    for (std::size_t k = best_begin; k < best_end; ++k) {
+      removed.push_back(along[k].second);
+      alive[along[k].second] = 0;
+    }
+    std::sort(removed.begin(), removed.end());
+    left.erase(std::remove_if(left.begin(), left.end(), [&](std::uint32_t k) { return !alive[k]; }),
+               left.end());
+    for (auto k : removed)
+      grid.near(samples[k], max_gap, is_alive, [&](std::uint32_t i, const Distance&) { look_again[i] = 1; });
   }
 }
 
@@ -255,7 +316,7 @@ std::vector<Polyline2> detect_step_lines(const std::vector<Point3>& points, cons
     }
   }
   const double radius = params.search_spacings * point_spacing;
-  const Grid grid(xy, radius);
+  const Grid grid(xy, radius, &label);
   // Boundary samples per pair of planes (a < b): from every roof point, the midpoint to the nearest
   // point of each other plane within `radius`, when the two planes' heights differ by min_step or
   // more on both sides. The samples form a band a few spacings wide along the boundary; the line
@@ -267,8 +328,7 @@ std::vector<Polyline2> detect_step_lines(const std::vector<Point3>& points, cons
   std::vector<char> found(R);
   for (std::uint32_t i = 0; i < xy.size(); ++i) {
     std::fill(found.begin(), found.end(), 0);
-    const auto other_plane = [&](std::uint32_t k) { return label[k] != label[i]; };
-    grid.near(xy[i], radius, other_plane, [&](std::uint32_t k, const Distance& d) {
+    grid.near_other(xy[i], radius, label[i], [&](std::uint32_t k, const Distance& d) {
       const auto b = static_cast<std::size_t>(label[k]);
       // The nearest, ties to the lowest index (distances within the radius are not NaN).
       if (!found[b] || d < nearest[b] || (!(nearest[b] < d) && k < nearest_point[b]))
