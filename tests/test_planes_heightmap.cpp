@@ -523,6 +523,22 @@ TEST(Heightmap, automatic_resolution_is_about_twenty_centimetres_at_ahn3_density
   EXPECT_THROW(city3d::automatic_resolution(0.0), city3d::ConfigError);
 }
 
+// The density behind the automatic resolution counts the points of the kept TIN triangles once each,
+// over the kept triangles' area: a 41 x 41 grid 0.25 m apart (1,681 points on 100 m2, each in up to
+// six triangles), a point on top of another (merged, the higher kept) and two far outliers, whose
+// triangles' edges are longer than max_edge_length, so neither they nor their area count.
+TEST(Heightmap, the_automatic_resolution_counts_the_points_of_the_kept_triangles_once) {
+  std::vector<Point3> points;
+  for (int i = 0; i <= 40; ++i)
+    for (int j = 0; j <= 40; ++j) points.push_back({0.25 * i, 0.25 * j, 5.0 + 0.01 * i});
+  points.push_back({2.5, 2.5, 9.0});  // the same xy as a grid point
+  points.push_back({60.0, 5.0, 5.0});
+  points.push_back({5.0, -70.0, 5.0});
+  const city3d::HeightmapParams params;
+  const Heightmap map = city3d::rasterise_tin(points, params);
+  EXPECT_DOUBLE_EQ(map.resolution, city3d::automatic_resolution(1681.0 / 100.0, params));
+}
+
 // The automatic resolution's three numbers are parameters: twice the spacings give twice the pixel,
 // and the bounds clamp it.
 TEST(Heightmap, the_automatic_resolution_follows_its_parameters) {

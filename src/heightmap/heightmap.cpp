@@ -5,6 +5,7 @@
 #include <CGAL/Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Projection_traits_xy_3.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -34,7 +35,12 @@ constexpr double kSobelGain = 4.0;
 
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Traits = CGAL::Projection_traits_xy_3<Kernel>;
-using Tin = CGAL::Delaunay_triangulation_2<Traits>;
+// Each vertex carries whether a kept triangle uses it (the density counts those vertices).
+struct UsedMark {
+  bool used = false;
+};
+using TinVertex = CGAL::Triangulation_vertex_base_with_info_2<UsedMark, Traits>;
+using Tin = CGAL::Delaunay_triangulation_2<Traits, CGAL::Triangulation_data_structure_2<TinVertex>>;
 
 std::string format_number(double value) {
   std::ostringstream out;
@@ -159,7 +165,7 @@ Heightmap rasterise_tin(const std::vector<Point3>& local_points, const Heightmap
     return dx * dx + dy * dy;
   };
   double area = 0.0;
-  std::vector<Tin::Vertex_handle> used_vertices;
+  std::size_t used_vertices = 0;
   for (auto face = tin.finite_faces_begin(); face != tin.finite_faces_end(); ++face) {
     const Triangle t{face->vertex(0)->point(), face->vertex(1)->point(), face->vertex(2)->point()};
     if (squared_xy(t[0], t[1]) > max_edge_squared || squared_xy(t[1], t[2]) > max_edge_squared ||
@@ -167,16 +173,18 @@ Heightmap rasterise_tin(const std::vector<Point3>& local_points, const Heightmap
       continue;
     area += 0.5 * std::abs((t[1].x() - t[0].x()) * (t[2].y() - t[0].y()) -
                            (t[2].x() - t[0].x()) * (t[1].y() - t[0].y()));
-    for (int k = 0; k < 3; ++k) used_vertices.push_back(face->vertex(k));
+    for (int k = 0; k < 3; ++k) {
+      UsedMark& mark = face->vertex(k)->info();
+      used_vertices += !mark.used;
+      mark.used = true;
+    }
     triangles.push_back(t);
   }
-  std::sort(used_vertices.begin(), used_vertices.end());
-  used_vertices.erase(std::unique(used_vertices.begin(), used_vertices.end()), used_vertices.end());
   if (triangles.empty() || !(area > 0.0))
     throw ReconstructionError(ReconstructionStage::heightmap, "no TIN triangle with all edges below max_edge_length = " +
                               format_number(params.max_edge_length) + " m");
 
-  const double density = static_cast<double>(used_vertices.size()) / area;
+  const double density = static_cast<double>(used_vertices) / area;
   const double r = params.resolution > 0.0 ? params.resolution : automatic_resolution(density, params);
 
   double min_x = std::numeric_limits<double>::infinity(), min_y = min_x;
