@@ -335,6 +335,27 @@ TEST(Percentile, interpolates_linearly_between_closest_ranks) {
   EXPECT_DOUBLE_EQ(percentile(one, 70), 7.0);
 }
 
+// The LoD1.3 clusters keep their heights sorted and take the percentile of the sorted list: it must be
+// percentile()'s number, bit for bit, whatever order percentile() gets the values in.
+TEST(Percentile, of_sorted_values_is_the_same_number_as_of_the_values_in_any_order) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> height(2.0, 30.0);
+  for (std::size_t n : {1u, 2u, 3u, 7u, 50u, 1001u}) {
+    std::vector<double> values(n);
+    for (double& v : values) v = height(rng);
+    for (std::size_t k = 0; k + 1 < n; k += 3) values[k + 1] = values[k];  // ties
+    std::vector<double> sorted = values;
+    std::sort(sorted.begin(), sorted.end());
+    for (double p : {0.0, 10.0, 33.3, 50.0, 70.0, 99.9, 100.0}) {
+      std::shuffle(values.begin(), values.end(), rng);
+      std::vector<double> any_order = values;
+      const double expected = percentile(any_order, p);
+      EXPECT_EQ(sorted_percentile(sorted, p), expected) << n << " values, p = " << p;
+    }
+  }
+  EXPECT_EQ(sorted_percentile({1, 2, 3, 4, 5}, 70), 3.8);
+}
+
 TEST(Crop, ground_height_is_the_10th_percentile_of_ground_points_in_the_buffer) {
   // 20 ground points 1 m south of the square at z = 1..20, plus ground points that must not count:
   // one inside the footprint (z = -50), one 5 m away (beyond the 3 m buffer, z = -40).
@@ -830,6 +851,27 @@ TEST(Lod13, part_heights_come_from_the_points_above_them) {
     if (blocks.surfaces[f] == SurfaceType::roof && blocks.mesh.vertices[blocks.mesh.faces[f][0]].x >= 10.0)
       b_roof = blocks.mesh.vertices[blocks.mesh.faces[f][0]].z;
   EXPECT_DOUBLE_EQ(b_roof, 6.0);
+}
+
+// Parts merged into one cluster stand at the percentile of all their points together, not of one
+// part's: A's ten points at 10.0-10.9 m and C's five at 9.0-9.4 m make one block (1 m apart, under the
+// 3 m step) at the 70th percentile of the fifteen; B's points at 4 m keep B apart.
+TEST(Lod13, a_cluster_stands_at_the_percentile_of_all_its_parts_points) {
+  std::vector<Point3> points;
+  std::vector<double> a_and_c;
+  for (int i = 0; i < 10; ++i)
+    points.push_back({1.0 + 0.8 * i, 5.0, 10.0 + 0.1 * i}), a_and_c.push_back(points.back().z);
+  for (int i = 0; i < 5; ++i)
+    points.push_back({2.0 + 1.5 * i, 15.0, 9.0 + 0.1 * i}), a_and_c.push_back(points.back().z);
+  for (int i = 0; i < 6; ++i) points.push_back({12.0 + 1.0 * i, 5.0, 4.0});
+  const BuildingModel blocks = make_lod13_blocks(three_roof_parts(), points, 0.0, 3.0);
+  std::set<double> roofs;
+  for (std::size_t f = 0; f < blocks.mesh.faces.size(); ++f)
+    if (blocks.surfaces[f] == SurfaceType::roof)
+      roofs.insert(blocks.mesh.vertices[blocks.mesh.faces[f][0]].z);
+  ASSERT_EQ(roofs.size(), 2u);
+  EXPECT_EQ(*roofs.begin(), 4.0);
+  EXPECT_EQ(*roofs.rbegin(), percentile(a_and_c, 70.0));
 }
 
 TEST(Lod13, roof_parts_made_once_give_both_levels_as_the_model_does) {

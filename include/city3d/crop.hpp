@@ -173,4 +173,8 @@ FootprintCoverage footprint_coverage(const BuildingInput& input, const std::vect
 /// numpy's default). Precondition: `values` is not empty. The vector is reordered.
 double percentile(std::vector<double>& values, double p);
 
+/// The same of values already sorted ascending, without reordering them: the same number as
+/// percentile() gives for any order of these values.
+double sorted_percentile(const std::vector<double>& sorted, double p);
+
 }  // namespace city3d

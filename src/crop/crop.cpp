@@ -209,17 +209,37 @@ void CropParams::validate() const {
   throw ConfigError(message);
 }
 
+namespace {
+
+// Linear interpolation between closest ranks: rank h = (n - 1) p / 100, between the values of ranks
+// floor(h) and floor(h) + 1.
+double rank_of(std::size_t n, double p) {
+  return (static_cast<double>(n) - 1.0) * std::clamp(p, 0.0, 100.0) / 100.0;
+}
+double between(double below, double above, double h, std::size_t lower) {
+  return below + (h - static_cast<double>(lower)) * (above - below);
+}
+
+}  // namespace
+
 double percentile(std::vector<double>& values, double p) {
   assert(!values.empty());
-  // Linear interpolation between closest ranks: rank h = (n - 1) p / 100.
-  const double h = (static_cast<double>(values.size()) - 1.0) * std::clamp(p, 0.0, 100.0) / 100.0;
+  const double h = rank_of(values.size(), p);
   const auto lower = static_cast<std::size_t>(std::floor(h));
   std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(lower), values.end());
   const double below = values[lower];
   if (lower + 1 >= values.size()) return below;
   const double above =
       *std::min_element(values.begin() + static_cast<std::ptrdiff_t>(lower) + 1, values.end());
-  return below + (h - static_cast<double>(lower)) * (above - below);
+  return between(below, above, h, lower);
+}
+
+double sorted_percentile(const std::vector<double>& sorted, double p) {
+  assert(!sorted.empty());
+  const double h = rank_of(sorted.size(), p);
+  const auto lower = static_cast<std::size_t>(std::floor(h));
+  if (lower + 1 >= sorted.size()) return sorted[lower];
+  return between(sorted[lower], sorted[lower + 1], h, lower);
 }
 
 Cropper::Cropper(std::vector<Footprint> footprints, CropParams params)

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <map>
 #include <set>
 #include <sstream>
@@ -15,6 +16,16 @@
 
 namespace city3d {
 namespace {
+
+// Moves the sorted `from` into the sorted `into`, which stays sorted.
+template <typename T>
+void merge_sorted(std::vector<T>& into, std::vector<T>& from) {
+  std::vector<T> out;
+  out.reserve(into.size() + from.size());
+  std::merge(into.begin(), into.end(), from.begin(), from.end(), std::back_inserter(out));
+  into = std::move(out);
+  std::vector<T>().swap(from);
+}
 
 using Loop = std::vector<std::uint32_t>;  // indices into the polygon's 2D vertices
 
@@ -508,19 +519,30 @@ BuildingModel make_lod13_blocks(const Lod13Parts& roof, double floor_z, double s
   const auto& adjacent = roof.adjacent;
 
   // Clusters: merge the adjacent pair of clusters with the smallest height difference while it is
-  // below the step height.
+  // below the step height. A cluster keeps its parts (ascending) and its points' heights sorted, so
+  // that a merge is a merge of sorted lists and its height needs no selection over all of them.
   std::vector<std::size_t> cluster(parts.size());
-  for (std::size_t p = 0; p < parts.size(); ++p) cluster[p] = p;
+  std::vector<std::vector<std::size_t>> members(parts.size());
+  std::vector<std::vector<double>> sorted_z(parts.size());
+  for (std::size_t p = 0; p < parts.size(); ++p) {
+    cluster[p] = p;
+    members[p] = {p};
+    sorted_z[p] = part_z[p];
+    std::sort(sorted_z[p].begin(), sorted_z[p].end());
+  }
   const auto cluster_height = [&](std::size_t c) {
-    std::vector<double> zs;
+    if (!sorted_z[c].empty()) return sorted_percentile(sorted_z[c], roof_percentile);
     double weighted = 0, total = 0;
-    for (std::size_t p = 0; p < parts.size(); ++p)
-      if (cluster[p] == c) {
-        zs.insert(zs.end(), part_z[p].begin(), part_z[p].end());
-        weighted += mean_z[p] * area[p];
-        total += area[p];
-      }
-    return zs.empty() ? weighted / total : percentile(zs, roof_percentile);
+    for (std::size_t p : members[c]) {
+      weighted += mean_z[p] * area[p];
+      total += area[p];
+    }
+    return weighted / total;
+  };
+  const auto merge_into = [&](std::size_t into, std::size_t from) {
+    for (std::size_t p : members[from]) cluster[p] = into;
+    merge_sorted(members[into], members[from]);
+    merge_sorted(sorted_z[into], sorted_z[from]);
   };
   std::map<std::size_t, double> height;
   for (std::size_t p = 0; p < parts.size(); ++p) height[p] = cluster_height(p);
@@ -539,8 +561,7 @@ BuildingModel make_lod13_blocks(const Lod13Parts& roof, double floor_z, double s
       }
     }
     if (!found) break;
-    for (std::size_t& c : cluster)
-      if (c == pair.second) c = pair.first;
+    merge_into(pair.first, pair.second);
     height.erase(pair.second);
     height[pair.first] = cluster_height(pair.first);
   }
