@@ -7,9 +7,17 @@ memory, seconds per million points of both, and their ratio.
 
     python3 bench/synthetic_tile.py --city3d build/city3d [--grid 6x5] [--jobs 2] [--runs 1] [--work build/synthetic_tile]
     python3 bench/synthetic_tile.py --outputs "--gpkg --3dtiles"   # issue 25: what these outputs add
+    python3 bench/synthetic_tile.py --city3d NEW/city3d --baseline OLD/city3d --runs 3   # side by side
 
 With --outputs, each run also reconstructs the tile with those options (side by side, in alternation with
-the run without them) and the summary gives the peak memory and time they add.
+the run without them) and the summary gives the peak memory and time they add. With --baseline OTHER_BINARY,
+each run also times that build on the same inputs, in alternation, and the summary gives the ratios.
+
+Nothing is deleted between the timed runs: each run writes to a folder of its own, and the folders (and any left
+from an earlier invocation, moved aside first) are deleted at the end. On ext4, creating a file searches past every
+inode freed in the last minutes (a file per building: 4,800 after deleting the previous run's 4,800 cost 2-4 s of
+CPU against 0.2 s on a file system with no recent deletions; docs/BENCHMARKS.md, "twelfth step"), a cost of the
+benchmark's own clean-up, not of the run it times.
 
 The generated tile (about 0.7 GB of LAS) goes to --work (build/ by default), never into git. Needs
 python3 and ogr2ogr (gdal-bin) only.
@@ -126,39 +134,57 @@ def main():
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--runs", type=int, default=1, help="runs of each, medians reported")
     p.add_argument("--work", default=os.path.join(HERE, "..", "build", "synthetic_tile"))
-    p.add_argument("--keep", action="store_true", help="keep the generated tile and outputs")
+    p.add_argument("--keep", action="store_true", help="keep the generated tile and every run's outputs")
     p.add_argument("--outputs", default="", help="options of more outputs (\"--gpkg --3dtiles\"): the tile is also "
                    "reconstructed with them, and what they add to peak memory and time is printed")
+    p.add_argument("--baseline", default="", help="another city3d binary, timed in alternation on the same inputs")
     a = p.parse_args()
     nx, ny = (int(v) for v in a.grid.lower().split("x"))
     os.makedirs(a.work, exist_ok=True)
+    # Outputs of an earlier invocation are moved aside (a rename frees no inode) and deleted after the timing.
+    trash = os.path.join(a.work, f"trash-{os.getpid()}")
+    for entry in sorted(os.listdir(a.work)):
+        if entry.startswith("out_"):
+            os.makedirs(trash, exist_ok=True)
+            os.rename(os.path.join(a.work, entry), os.path.join(trash, entry))
     las, gpkg, points, footprints = make_tile(a.work, nx, ny)
     print(f"synthetic tile: {points:,} points, {footprints:,} footprints ({nx} x {ny} copies of the Delft block), "
           f"{os.path.getsize(las) / 2**20:.0f} MB LAS")
     delft_points = sum(read_las(t)["count"] for t in TILES)
     jobs = ["--id-field", "gml_id", "-j", str(a.jobs), "--no-progress", "-q", "--no-resume"]
-    results = {"tile": [], "delft": [], "tile+": []}
+    builds = [("", a.city3d)] + ([("baseline ", a.baseline)] if a.baseline else [])
     runs = [("delft", TILES + ["-f", FOOTPRINTS]), ("tile", [las, "-f", gpkg])]
     if a.outputs:
         runs.append(("tile+", [las, "-f", gpkg] + a.outputs.split()))
+    results = {label + name: [] for label, _ in builds for name, _ in runs}
+    written = []
     for run in range(a.runs):
-        for name, cmd in runs:
-            out = os.path.join(a.work, "out_" + name)
-            shutil.rmtree(out, ignore_errors=True)
-            r = timed([a.city3d, "reconstruct"] + cmd + jobs + ["-o", out])
-            results[name].append(r)
-            print(f"run {run + 1} {name}: {r[0]:.1f} s wall, {r[1]:.1f} s CPU, {r[2]:.0f} MB peak; {report_counts(out)}",
-                  flush=True)
+        for label, binary in builds:
+            for name, cmd in runs:
+                out = os.path.join(a.work, f"out_{label.strip() or 'city3d'}_{name}_{run + 1}")
+                written.append(out)
+                r = timed([binary, "reconstruct"] + cmd + jobs + ["-o", out])
+                results[label + name].append(r)
+                print(f"run {run + 1} {label}{name}: {r[0]:.1f} s wall, {r[1]:.1f} s CPU, {r[2]:.0f} MB peak; "
+                      f"{report_counts(out)}", flush=True)
     print()
-    for name, n, fp in (("delft", delft_points, 160), ("tile", points, footprints)):
-        wall = median([r[0] for r in results[name]])
-        cpu = median([r[1] for r in results[name]])
-        rss = median([r[2] for r in results[name]])
-        print(f"{name:5s}: {n / 1e6:.2f} M points, {fp} footprints, -j {a.jobs}: wall {wall:.1f} s, CPU {cpu:.1f} s, "
-              f"peak RSS {rss:.0f} MB; {wall / (n / 1e6):.2f} s wall and {cpu / (n / 1e6):.2f} s CPU per M points, "
-              f"{cpu / fp * 1000:.0f} ms CPU per footprint")
-    ratio = (median([r[0] for r in results["tile"]]) / points) / (median([r[0] for r in results["delft"]]) / delft_points)
-    print(f"tile / Delft block, wall time per M points: {ratio:.2f}")
+    for label, _ in builds:
+        for name, n, fp in (("delft", delft_points, 160), ("tile", points, footprints)):
+            rs = results[label + name]
+            wall, cpu, rss = (median([r[k] for r in rs]) for k in range(3))
+            print(f"{label}{name:5s}: {n / 1e6:.2f} M points, {fp} footprints, -j {a.jobs}: wall {wall:.1f} s, "
+                  f"CPU {cpu:.1f} s, peak RSS {rss:.0f} MB; {wall / (n / 1e6):.2f} s wall and {cpu / (n / 1e6):.2f} s "
+                  f"CPU per M points, {cpu / fp * 1000:.0f} ms CPU per footprint")
+        ratio = ((median([r[0] for r in results[label + "tile"]]) / points) /
+                 (median([r[0] for r in results[label + "delft"]]) / delft_points))
+        print(f"{label}tile / Delft block, wall time per M points: {ratio:.2f}")
+    if a.baseline:
+        for name in ("delft", "tile"):
+            new, old = results[name], results["baseline " + name]
+            print(f"{name} against the baseline (medians of the runs' ratios): wall "
+                  f"{median([n[0] / o[0] for n, o in zip(new, old)]):.3f}, CPU "
+                  f"{median([n[1] / o[1] for n, o in zip(new, old)]):.3f}, peak RSS "
+                  f"{median([n[2] / o[2] for n, o in zip(new, old)]):.3f}")
     if a.outputs:
         plain, more = results["tile"], results["tile+"]
         print(f"tile with {a.outputs}: wall {median([r[0] for r in more]):.1f} s, CPU {median([r[1] for r in more]):.1f} s, "
@@ -166,9 +192,12 @@ def main():
               f"{median([m[0] - t[0] for t, m in zip(plain, more)]):+.1f} s wall, "
               f"{median([m[1] - t[1] for t, m in zip(plain, more)]):+.1f} s CPU, peak RSS x"
               f"{median([m[2] / t[2] for t, m in zip(plain, more)]):.3f} (medians of the runs' differences)")
-    if not a.keep:
-        shutil.rmtree(a.work, ignore_errors=True)
-
+    shutil.rmtree(trash, ignore_errors=True)
+    if a.keep:
+        return
+    for out in written:
+        shutil.rmtree(out, ignore_errors=True)
+    shutil.rmtree(a.work, ignore_errors=True)
 
 if __name__ == "__main__":
     main()
