@@ -1,20 +1,21 @@
 #!/usr/bin/env bash
 # Are two builds' outputs byte-identical? For a change that must not change any output (a refactoring,
 # an optimisation: issues 26 and 27). Runs both binaries on the Delft block (both LAS tiles, 160
-# footprints, every default output plus --gpkg --3dtiles --cityjsonseq) and on every single-building
+# footprints, every default output plus --gpkg --3dtiles --cityjsonseq; and from both LAZ tiles in 14
+# cropping passes, --group-area 0 --block-size 60, with -j 1 and -j 2) and on every single-building
 # cloud of city3d_dev, city3d_dev_large and City3D's building instances, then compares every output
 # file byte for byte; report.csv and report.json (parsed) up to their timings (cpu_seconds, seconds),
 # and report.html up to each building's seconds: the page as text, its embedded data parsed (the
 # JSON's layout is not compared). Prints each difference and exits 1 if there is one.
 #
-# Usage: bench/compare_builds.sh OLD_CITY3D NEW_CITY3D [SETS]   (SETS: comma-separated of delft, dev,
-#        dev_large, instances; default all). Work files in $TMPDIR (or /tmp). Needs bash, python3, cmp.
+# Usage: bench/compare_builds.sh OLD_CITY3D NEW_CITY3D [SETS]   (SETS: comma-separated of delft, delft_laz,
+#        dev, dev_large, instances; default all). Work files in $TMPDIR (or /tmp). Needs bash, python3, cmp.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
-[[ $# -ge 2 ]] || { sed -n '2,11p' "$0" >&2; exit 2; }
+[[ $# -ge 2 ]] || { sed -n '2,12p' "$0" >&2; exit 2; }
 old="$(realpath "$1")"
 new="$(realpath "$2")"
-sets="${3:-delft,dev,dev_large,instances}"
+sets="${3:-delft,delft_laz,dev,dev_large,instances}"
 shared="$here/../../shared/data"
 work="$(mktemp -d "${TMPDIR:-/tmp}/city3d_compare.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
@@ -84,10 +85,16 @@ for s in "${wanted[@]}"; do
       d="$shared/ahn3_delft"
       run_both delft "$d/ahn3_cropped_1.las" "$d/ahn3_cropped_2.las" -f "$d/footprints/bgt_pand_laz_area.gpkg" \
         --id-field gml_id --gpkg --3dtiles --cityjsonseq -j 2 ;;
+    delft_laz)  # the LAZ tiles in 14 cropping passes: later passes decode only the chunks they need
+      d="$shared/ahn3_delft"
+      for j in 1 2; do
+        run_both "delft_laz_j$j" "$d/ahn3_cropped_1.laz" "$d/ahn3_cropped_2.laz" -f "$d/footprints/bgt_pand_laz_area.gpkg" \
+          --id-field gml_id --group-area 0 --block-size 60 -j "$j"
+      done ;;
     dev) mapfile -t c < <(clouds "$shared/city3d_dev"); run_both dev "${c[@]}" -j 2 ;;
     dev_large) mapfile -t c < <(clouds "$shared/city3d_dev_large"); run_both dev_large "${c[@]}" -j 2 ;;
     instances) run_both instances "$shared/city3d_repo/building_instances" -j 2 ;;
-    *) echo "compare_builds.sh: unknown set '$s' (delft, dev, dev_large, instances)" >&2; exit 2 ;;
+    *) echo "compare_builds.sh: unknown set '$s' (delft, delft_laz, dev, dev_large, instances)" >&2; exit 2 ;;
   esac
 done
 if [[ $differences -gt 0 ]]; then

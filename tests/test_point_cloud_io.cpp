@@ -460,6 +460,83 @@ TEST(LasReader, destroying_a_laz_reader_mid_file_with_4_decode_threads_stops_its
   std::remove(path.c_str());
 }
 
+/// Reads `path` to the end through open_point_cloud(path, fields, threads, extents, regions).
+PointCloud read_regions(const std::string& path, unsigned threads, ChunkExtents& extents,
+                        const std::vector<Box2>& regions) {
+  auto reader = open_point_cloud(path, kFieldAll, threads, extents, regions);
+  PointCloud cloud;
+  while (reader->read(cloud, 7000) > 0) {
+  }
+  return cloud;
+}
+
+/// The points of `whole` in the given chunks of 50,000 (AHN3's), in order.
+std::vector<Point3> points_of_chunks(const PointCloud& whole, const std::vector<std::size_t>& chunks) {
+  std::vector<Point3> out;
+  for (std::size_t c : chunks)
+    out.insert(out.end(), whole.points.begin() + static_cast<std::ptrdiff_t>(50000 * c),
+               whole.points.begin() +
+                   static_cast<std::ptrdiff_t>(std::min<std::size_t>(50000 * (c + 1), whole.size())));
+  return out;
+}
+
+bool same_points(const std::vector<Point3>& a, const std::vector<Point3>& b) {
+  return a.size() == b.size() &&
+         std::equal(a.begin(), a.end(), b.begin(),
+                    [](const Point3& p, const Point3& q) { return p.x == q.x && p.y == q.y && p.z == q.z; });
+}
+
+TEST(LasReader,
+     a_whole_laz_read_learns_where_its_chunks_lie_and_a_later_one_decodes_only_those_a_region_meets) {
+  const PointCloud whole = read_point_cloud(kAhn3Laz);
+  ASSERT_EQ(whole.size(), 640510u);  // 13 chunks: 12 of 50,000 and one of 40,510
+  for (const unsigned threads : {1u, 2u}) {
+    SCOPED_TRACE(std::to_string(threads) + " decode threads");
+    // A read while the extents are unknown hands out every point and learns the bounds of each chunk.
+    ChunkExtents extents;
+    const std::vector<Box2> nowhere;
+    const PointCloud first = read_regions(kAhn3Laz, threads, extents, nowhere);
+    EXPECT_TRUE(same_points(first.points, whole.points));
+    ASSERT_EQ(extents.boxes.size(), 13u);
+    for (std::size_t c = 0; c < 13; ++c) {
+      Box2 box;
+      for (const Point3& p : points_of_chunks(whole, {c})) box.add({p.x, p.y});
+      EXPECT_TRUE(extents.boxes[c].min.x == box.min.x && extents.boxes[c].min.y == box.min.y &&
+                  extents.boxes[c].max.x == box.max.x && extents.boxes[c].max.y == box.max.y)
+          << "chunk " << c;
+    }
+    // A small region around the last point of chunk 9: only the chunks whose bounds it meets are read,
+    // whole and in file order, with their attributes.
+    const Point3 at = whole.points[50000 * 9 + 49999];
+    const std::vector<Box2> region{{{at.x - 0.5, at.y - 0.5}, {at.x + 0.5, at.y + 0.5}}};
+    std::vector<std::size_t> meeting;
+    for (std::size_t c = 0; c < 13; ++c)
+      if (extents.boxes[c].intersects(region[0])) meeting.push_back(c);
+    ASSERT_FALSE(meeting.empty());
+    ASSERT_LT(meeting.size(), 6u);  // the test must leave chunks out
+    ChunkExtents known = extents;
+    const PointCloud part = read_regions(kAhn3Laz, threads, known, region);
+    EXPECT_TRUE(same_points(part.points, points_of_chunks(whole, meeting)));
+    ASSERT_EQ(part.classification.size(), part.size());
+    EXPECT_EQ(part.classification.front(), whole.classification[50000 * meeting.front()]);
+    EXPECT_EQ(known.boxes.size(), 13u);  // kept as it was
+    // No region: no point.
+    EXPECT_EQ(read_regions(kAhn3Laz, threads, known, nowhere).size(), 0u);
+  }
+  // A read stopped before the end learns nothing.
+  ChunkExtents unfinished;
+  {
+    auto reader = open_point_cloud(kAhn3Laz, kFieldXyz, 2, unfinished, {});
+    PointCloud cloud;
+    ASSERT_EQ(reader->read(cloud, 120000), 120000u);
+  }
+  EXPECT_TRUE(unfinished.boxes.empty());
+  // A LAS file has no chunks: it is read whole, and nothing is learnt.
+  ChunkExtents las;
+  EXPECT_EQ(read_regions(kAhn3, 2, las, {}).size(), 640510u);
+  EXPECT_TRUE(las.boxes.empty());
+}
+
 TEST(LasReader, rejects_compression_bit_without_laszip_vlr) {
   expect_contains(read_error(kTestLas + "broken/laz_bit_set.las"),
                   {"laz_bit_set.las", "compression bit set but there is no LASzip VLR"});

@@ -732,6 +732,44 @@ TEST_F(Shards, one_cropping_pass_streams_each_tile_once_and_changes_no_output) {
   expect_same_outputs(dir_ / "per_block", dir_ / "one_pass");
 }
 
+TEST_F(Shards, later_cropping_passes_decode_only_the_laz_chunks_they_need_and_change_no_output) {
+  // The Delft block from its two LAZ tiles. In one cropping pass each tile is decoded once. With a pass
+  // per block of 60 m, the first pass that reads a tile learns where its chunks lie, and the later
+  // passes decode only the chunks that meet their blocks. The outputs are the same either way.
+  const std::string d = std::string(CITY3D_SHARED_DATA) + "/ahn3_delft";
+  if (!fs::exists(d + "/ahn3_cropped_1.laz")) GTEST_SKIP() << "no ../shared/data/ahn3_delft";
+  const auto job = [&](const fs::path& out, const std::string& more) {
+    return run("reconstruct " + d + "/ahn3_cropped_1.laz " + d + "/ahn3_cropped_2.laz -f " + d +
+               "/footprints/bgt_pand_laz_area.gpkg --id-field gml_id --cityjsonseq --merged --gpkg --3dtiles "
+               "--no-progress -v -o " +
+               out.string() + " " + more);
+  };
+  // The points streamed from ahn3_cropped_1.laz (640,510 in 13 chunks), pass by pass.
+  const auto streamed = [](const std::string& output) {
+    std::vector<std::uint64_t> passes;
+    for (const std::string& line : lines_of(output))
+      if (contains(line, "ahn3_cropped_1.laz: ") && contains(line, " points streamed"))
+        passes.push_back(std::stoull(line.substr(line.find(".laz: ") + 6)));
+    return passes;
+  };
+  const Result one = job(dir_ / "one_pass", "-j 2");
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  EXPECT_EQ(streamed(one.output), std::vector<std::uint64_t>{640510}) << one.output;
+  const Result many = job(dir_ / "many_passes", "-j 1 --group-area 0 --block-size 60");
+  ASSERT_EQ(many.exit_code, 0) << many.output;
+  const std::vector<std::uint64_t> passes = streamed(many.output);
+  ASSERT_GT(passes.size(), 3u) << many.output;
+  EXPECT_EQ(passes.front(), 640510u);  // the pass that learns reads every point
+  std::uint64_t later = 0;
+  for (std::size_t k = 1; k < passes.size(); ++k) {
+    EXPECT_EQ(passes[k] % 50000 == 0 || passes[k] % 50000 == 40510, true)
+        << "whole chunks only: " << passes[k];
+    later += passes[k];
+  }
+  EXPECT_LT(later, (passes.size() - 1) * 640510 / 2) << many.output;
+  expect_same_outputs(dir_ / "one_pass", dir_ / "many_passes");
+}
+
 TEST_F(Shards, outputs_are_the_same_for_any_jobs_and_on_a_loaded_core) {
   const std::vector<std::string> clouds = determinism_clouds();
   if (clouds.empty()) GTEST_SKIP() << "no ../shared/data/city3d_smoke or city3d_dev";

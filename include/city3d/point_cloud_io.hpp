@@ -62,6 +62,21 @@ PointCloud read_point_cloud(const std::string& path, PointFields fields = kField
 std::unique_ptr<PointCloudReader> open_point_cloud(const std::string& path, PointFields fields,
                                                    unsigned decode_threads);
 
+/// Where the chunks of a LAZ file lie, learnt by one read of the whole file for later reads of parts
+/// of it (a batch crops a large tile in several passes, each needing the points of a few regions).
+struct ChunkExtents {
+  std::vector<Box2> boxes;  ///< the xy bounds of each chunk's points, in file order; empty until learnt
+};
+
+/// As open_point_cloud(path, fields, decode_threads), for a reader that needs only the points within
+/// `regions`. While `extents` is empty, every point is read and a read to the end of a LAZ file of
+/// several chunks fills `extents`. Once it is filled, only the chunks whose bounds meet one of
+/// `regions` are decoded: read() hands out their points, in file order, and none of the others'.
+/// LAS, PLY and single-chunk LAZ files are read whole and leave `extents` empty.
+std::unique_ptr<PointCloudReader> open_point_cloud(const std::string& path, PointFields fields,
+                                                   unsigned decode_threads, ChunkExtents& extents,
+                                                   const std::vector<Box2>& regions);
+
 /// As read_point_cloud(path, fields), decoding LAZ on `decode_threads` threads (see above).
 PointCloud read_point_cloud(const std::string& path, PointFields fields, unsigned decode_threads);
 

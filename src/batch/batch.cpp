@@ -19,32 +19,32 @@
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <future>
-#include <fstream>
 #include <iterator>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <numeric>
 #include <set>
 #include <sstream>
 #include <system_error>
 #include <thread>
 
-#include <nlohmann/json.hpp>
-
+#include "batch/advice.hpp"
+#include "batch/crop_tiles.hpp"
+#include "batch/finalise.hpp"
+#include "batch/input_check.hpp"
+#include "batch/journal.hpp"
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
-#include "city3d/rings.hpp"
 #include "city3d/model_io.hpp"
 #include "city3d/point_cloud_io.hpp"
-#include "batch/advice.hpp"
-#include "batch/input_check.hpp"
-#include "files/output_folder.hpp"
+#include "city3d/rings.hpp"
 #include "files/atomic_file.hpp"
-#include "batch/finalise.hpp"
-#include "batch/journal.hpp"
+#include "files/output_folder.hpp"
 #include "reports/report.hpp"
 
 namespace city3d {
@@ -149,55 +149,6 @@ double area(const Footprint& f) {
     for (const Ring2& h : p.holes) a -= ring_area_world(h);
   }
   return std::max(a, 0.0);
-}
-
-// Streams every tile that overlaps one of `regions` (the blocks' footprints and their ground buffers)
-// into the cropper. A tile whose header has no bounds (PLY) gets them from its points, in `bounds`; a tile
-// streamed the first time adds its classes to `classes`.
-void crop_tiles(const std::vector<std::string>& files, const std::vector<Box2>& regions, unsigned threads, Cropper& cropper,
-                std::vector<Box3>& bounds, detail::ClassCounts& classes) {
-  // Small chunks kept from tile to tile: their pages are faulted in once. With threads the next chunk is
-  // read while this one is cropped. The crop does not depend on the chunking.
-  constexpr std::size_t chunk_points = std::size_t{1} << 16;
-  PointCloud chunk, next;
-  for (std::size_t t = 0; t < files.size(); ++t) {
-    const std::string& file = files[t];
-    // Cropping runs between reconstructions, so every thread can decode LAZ chunks meanwhile.
-    auto reader = open_point_cloud(file, kFieldClassification, threads);
-    const PointCloudInfo& info = reader->info();
-    if (!info.bounds.empty()) {
-      Box2 tile;
-      tile.add({info.bounds.min.x, info.bounds.min.y});
-      tile.add({info.bounds.max.x, info.bounds.max.y});
-      if (std::none_of(regions.begin(), regions.end(), [&](const Box2& r) { return tile.intersects(r); })) {
-        log_debug("crop: " + file + " does not overlap the block, skipped");
-        continue;
-      }
-    }
-    Box3 seen;
-    std::uint64_t n = 0;
-    const auto read = [&reader](PointCloud& into) {
-      into.clear();
-      return reader->read(into, chunk_points);
-    };
-    for (std::size_t got = read(chunk); got > 0;) {
-      std::future<std::size_t> ahead;
-      if (threads > 1) ahead = std::async(std::launch::async, read, std::ref(next));
-      n += got;
-      if (info.bounds.empty())
-        for (const Point3& p : chunk.points) seen.add(p);
-      if (!classes.counted[t]) {
-        classes.any = classes.any || !chunk.classification.empty();
-        for (std::uint8_t c : chunk.classification) ++classes.n[c];
-      }
-      cropper.add(chunk);
-      got = ahead.valid() ? ahead.get() : read(next);
-      std::swap(chunk, next);
-    }
-    classes.counted[t] = true;
-    if (info.bounds.empty()) bounds[t] = seen;
-    log_info("crop: " + file + ": " + std::to_string(n) + " points streamed");
-  }
 }
 
 // What the coverage of a footprint (FootprintCoverage) says about its building, in its report row.
@@ -499,6 +450,8 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   for (const PointCloudInfo& info : infos) tile_bounds.push_back(info.bounds);
   detail::ClassCounts classes;
   classes.counted.assign(files.size(), false);
+  // Where each LAZ tile's chunks lie, once a cropping pass has read it (crop_tiles).
+  std::vector<ChunkExtents> chunk_extents(files.size());
   log_info("parameters:\n" + readable_numbers(parameters_text(options.reconstruction)));
 
   // The plan: every building of the run, in output order, and its block.
@@ -760,7 +713,8 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
       for (std::size_t k = 0; k < indices.size(); ++k) outlines.push_back(footprints[k].polygons);
     Cropper cropper(std::move(footprints), options.crop);
     progress.reading(files.size(), indices.size());
-    crop_tiles(files, regions, static_cast<unsigned>(options.threads), cropper, tile_bounds, classes);
+    crop_tiles(files, regions, static_cast<unsigned>(options.threads), cropper, tile_bounds, classes,
+               chunk_extents);
     // Keep only the group's own inputs (the first indices.size()).
     std::vector<BuildingInput> inputs = cropper.finish();
     inputs.resize(indices.size());

@@ -1,25 +1,24 @@
 // LAS reader: validates the public header (collecting every problem before throwing once), walks
 // VLRs and EVLRs with bounds checks, and streams point records (formats 0-10) into PointCloud.
-// Raw records come from a RecordSource: a plain file read, or the LAZ decoder (src/laz/).
+// Raw records come from a RecordSource: a plain file read, or the LAZ decoder (src/laz/) through the
+// record sources of laz_records.hpp.
 #include "points/las_reader.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <condition_variable>
 #include <cstdint>
 #include <cstring>
-#include <exception>
-#include <mutex>
+#include <numeric>
 #include <sstream>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
-#include "points/input_file.hpp"
 #include "laz/laz_decoder.hpp"
+#include "points/input_file.hpp"
+#include "points/laz_records.hpp"
 
 // Fields are copied straight out of the little-endian records with memcpy.
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the LAS reader assumes a little-endian host");
@@ -357,14 +356,6 @@ LasHeader read_header(InputFile& file, PointCloudInfo& info) {
   return h;
 }
 
-/// Where raw point records come from: the reader converts whatever a source hands it.
-class RecordSource {
- public:
-  virtual ~RecordSource() = default;
-  /// Writes at most `max_records` raw records to `out`; returns how many, 0 at the end.
-  virtual std::size_t read_records(std::uint8_t* out, std::size_t max_records) = 0;
-};
-
 /// Uncompressed LAS: the records are a contiguous block read with large freads.
 class FileRecordSource final : public RecordSource {
  public:
@@ -391,168 +382,21 @@ class FileRecordSource final : public RecordSource {
   std::uint64_t done_ = 0;
 };
 
-/// LAZ: the LASzip decoder hands out the same raw records, chunk by chunk.
-class LazRecordSource final : public RecordSource {
- public:
-  explicit LazRecordSource(std::unique_ptr<detail::LazDecoder> decoder) : decoder_(std::move(decoder)) {}
-  std::size_t read_records(std::uint8_t* out, std::size_t max_records) override {
-    return decoder_->decode(out, max_records);
-  }
-  const detail::LazDecoder& decoder() const { return *decoder_; }
-
- private:
-  std::unique_ptr<detail::LazDecoder> decoder_;
+/// What a read does with the chunks of a LAZ file (open_point_cloud with ChunkExtents).
+struct ChunkPlan {
+  ChunkExtents* extents = nullptr;             ///< learnt bounds to use, or empty ones to fill
+  const std::vector<Box2>* regions = nullptr;  ///< what the reader needs, once the bounds are known
+  std::vector<std::uint64_t> fill;      ///< set by make_record_source: points per chunk, to learn the bounds
+  std::size_t chunks = 0, decoded = 0;  ///< set by make_record_source: the file's chunks, those read
 };
-
-/// LAZ on several threads: workers decode the chunks after the one being handed out, and the
-/// records still leave in file order, so the output is the same bytes as with one thread. Chunk c
-/// goes to slot c % slots; a slot is refilled only after all its records have been handed out, so
-/// at most `slots` decoded chunks are held. More slots than workers let the workers run ahead
-/// while the reader's caller converts and crops the records it was handed (with one slot per
-/// worker they could only decode the next chunk each, and waited for the rest of the caller's
-/// work). An error in a chunk is kept in its slot and thrown
-/// when that chunk's records are due (the records before it are handed out first). The destructor
-/// stops the workers and joins them; a worker in the middle of a chunk finishes that chunk first.
-class ParallelLazRecordSource final : public RecordSource {
- public:
-  ParallelLazRecordSource(std::unique_ptr<detail::LazDecoder> decoder, std::size_t record_length,
-                          unsigned threads, std::size_t slots)
-      : decoder_(std::move(decoder)),
-        record_length_(record_length),
-        chunk_count_(decoder_->chunk_count()),
-        slots_(std::max<std::size_t>(slots, threads)) {
-    try {
-      for (unsigned i = 0; i < threads; ++i) workers_.emplace_back([this] { work(); });
-    } catch (...) {  // a thread could not be started: stop the ones that were
-      stop();
-      throw;
-    }
-  }
-  ~ParallelLazRecordSource() override { stop(); }
-  ParallelLazRecordSource(const ParallelLazRecordSource&) = delete;
-  ParallelLazRecordSource& operator=(const ParallelLazRecordSource&) = delete;
-
-  std::size_t read_records(std::uint8_t* out, std::size_t max_records) override {
-    if (error_) std::rethrow_exception(error_);  // every call after an error throws it again
-    std::size_t produced = 0;
-    while (produced < max_records && next_chunk_ < chunk_count_) {
-      Slot& slot = slots_[next_chunk_ % slots_.size()];
-      {
-        std::unique_lock<std::mutex> lock(mutex_);
-        decoded_.wait(lock, [&] { return slot.state == Slot::kDecoded; });
-      }
-      if (slot.error) {
-        if (produced > 0) return produced;  // the records before the broken chunk first
-        error_ = slot.error;
-        std::rethrow_exception(error_);
-      }
-      const std::uint64_t chunk_points = decoder_->chunk_points(next_chunk_);
-      const auto n = static_cast<std::size_t>(
-          std::min<std::uint64_t>(max_records - produced, chunk_points - handed_out_));
-      std::memcpy(out + produced * record_length_, slot.records.data() + handed_out_ * record_length_,
-                  n * record_length_);
-      produced += n;
-      handed_out_ += n;
-      if (handed_out_ == chunk_points) {
-        {
-          std::lock_guard<std::mutex> lock(mutex_);
-          slot.state = Slot::kFree;
-        }
-        free_.notify_all();
-        ++next_chunk_;
-        handed_out_ = 0;
-      }
-    }
-    return produced;
-  }
-
- private:
-  /// One decoded chunk. `records` and `error` belong to the worker while kDecoding and to the
-  /// reader while kDecoded; `state` changes under the mutex.
-  struct Slot {
-    enum State { kFree, kDecoding, kDecoded };
-    State state = kFree;
-    std::vector<std::uint8_t> records;
-    std::exception_ptr error;
-  };
-
-  /// Worker loop: claim the next chunk in file order as soon as its slot is free, decode it
-  /// outside the lock, publish it.
-  void work() {
-    for (;;) {
-      std::size_t chunk = 0;
-      Slot* slot = nullptr;
-      {
-        std::unique_lock<std::mutex> lock(mutex_);
-        // chunks are claimed in order and at most slots_.size() are ahead of the reader, so the
-        // slot of the next chunk is the one the reader frees next
-        free_.wait(lock, [&] {
-          return stopping_ || next_to_decode_ == chunk_count_ ||
-                 slots_[next_to_decode_ % slots_.size()].state == Slot::kFree;
-        });
-        if (stopping_ || next_to_decode_ == chunk_count_) return;
-        chunk = next_to_decode_++;
-        slot = &slots_[chunk % slots_.size()];
-        slot->state = Slot::kDecoding;
-      }
-      slot->error = nullptr;
-      try {
-        slot->records.resize(static_cast<std::size_t>(decoder_->chunk_points(chunk)) * record_length_);
-        decoder_->decode_chunk(chunk, slot->records.data());
-      } catch (...) {
-        slot->error = std::current_exception();
-      }
-      {
-        std::lock_guard<std::mutex> lock(mutex_);
-        slot->state = Slot::kDecoded;
-      }
-      decoded_.notify_all();
-    }
-  }
-
-  void stop() {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      stopping_ = true;
-    }
-    free_.notify_all();
-    for (std::thread& worker : workers_) worker.join();
-    workers_.clear();
-  }
-
-  std::unique_ptr<detail::LazDecoder> decoder_;  // only its const decode_chunk() is used, from every worker
-  std::size_t record_length_;
-  std::size_t chunk_count_;
-  std::vector<Slot> slots_;
-
-  std::mutex mutex_;
-  std::condition_variable free_;     ///< a slot became free, or stopping_
-  std::condition_variable decoded_;  ///< a slot became kDecoded
-  std::size_t next_to_decode_ = 0;   ///< next chunk a worker claims (guarded by mutex_)
-  bool stopping_ = false;            ///< guarded by mutex_
-
-  // reader side (the thread calling read_records)
-  std::size_t next_chunk_ = 0;    ///< chunk whose records are handed out next
-  std::uint64_t handed_out_ = 0;  ///< records of next_chunk_ already handed out
-  std::exception_ptr error_;      ///< the error of a broken chunk, once it was due
-
-  std::vector<std::thread> workers_;  // last: started after everything they use exists
-};
-
-/// Decoded chunks larger than this are decoded by the streaming path even when threads are asked
-/// for: the parallel path holds at least `threads` whole chunks (a file may have one chunk of 100M
-/// points).
-constexpr std::uint64_t kMaxParallelChunkBytes = 256u << 20;
-
-/// Decoded chunks the parallel path may hold ahead of the reader, in bytes, beyond one per thread
-/// (AHN3's chunks of 50,000 points are 1.7 MB each: up to eight per thread).
-constexpr std::uint64_t kReadAheadBytes = 32u << 20;
-constexpr std::size_t kMaxSlotsPerThread = 8;
 
 /// Picks the record source for a validated header: the file itself, or the LAZ decoder, on
-/// `decode_threads` threads when the file has several chunks (0 counts as 1).
-std::unique_ptr<RecordSource> make_record_source(InputFile file, const LasHeader& h,
-                                                 unsigned decode_threads) {
+/// `decode_threads` threads when the file has several chunks (0 counts as 1). With a plan whose
+/// bounds are known, only the chunks that meet its regions; with one whose bounds are empty, every
+/// chunk, and the plan says how many points each holds. A file whose coordinates may overflow
+/// (LasHeader::may_overflow) is always read whole, so that an error names the point's index in the file.
+std::unique_ptr<RecordSource> make_record_source(InputFile file, const LasHeader& h, unsigned decode_threads,
+                                                 ChunkPlan* plan = nullptr) {
   if (!h.compressed) return std::make_unique<FileRecordSource>(std::move(file), h);
   detail::check_laszip_vlr_present(!h.laszip_vlr.empty(), static_cast<std::uint8_t>(h.point_format | 0x80),
                                    file.path());
@@ -567,15 +411,22 @@ std::unique_ptr<RecordSource> make_record_source(InputFile file, const LasHeader
   layout.file_size = file.size();
   auto decoder = std::make_unique<detail::LazDecoder>(vlr, layout);
   const std::size_t chunks = decoder->chunk_count();
-  std::uint64_t largest = 0;
-  for (std::size_t i = 0; i < chunks; ++i) largest = std::max(largest, decoder->chunk_points(i));
-  const auto threads = static_cast<unsigned>(std::min<std::size_t>(std::max(decode_threads, 1u), chunks));
-  if (threads <= 1 || largest * h.record_length > kMaxParallelChunkBytes)
-    return std::make_unique<LazRecordSource>(std::move(decoder));
-  const std::uint64_t chunk_bytes = std::max<std::uint64_t>(largest * h.record_length, 1);
-  const auto slots = static_cast<std::size_t>(
-      std::min<std::uint64_t>(kMaxSlotsPerThread * threads, std::max<std::uint64_t>(threads, kReadAheadBytes / chunk_bytes)));
-  return std::make_unique<ParallelLazRecordSource>(std::move(decoder), h.record_length, threads, slots);
+  std::vector<std::size_t> wanted(chunks);
+  std::iota(wanted.begin(), wanted.end(), std::size_t{0});
+  if (plan && plan->extents && chunks > 1 && !h.may_overflow) {
+    const std::vector<Box2>& boxes = plan->extents->boxes;
+    if (boxes.empty()) {
+      for (std::size_t i = 0; i < chunks; ++i) plan->fill.push_back(decoder->chunk_points(i));
+    } else if (boxes.size() == chunks && plan->regions) {
+      wanted.clear();
+      for (std::size_t i = 0; i < chunks; ++i)
+        if (std::any_of(plan->regions->begin(), plan->regions->end(),
+                        [&](const Box2& r) { return r.intersects(boxes[i]); }))
+          wanted.push_back(i);
+    }
+  }
+  if (plan) plan->chunks = chunks, plan->decoded = wanted.size();
+  return make_laz_record_source(std::move(decoder), std::move(wanted), h.record_length, decode_threads);
 }
 
 /// Grows a vector geometrically, so that many small appends stay linear.
@@ -595,11 +446,20 @@ T* extend(std::vector<T>& v, std::size_t old_size, std::size_t n) {
 
 class LasReader final : public PointCloudReader {
  public:
-  LasReader(PointCloudInfo info, const LasHeader& h, std::unique_ptr<RecordSource> source,
-            PointFields fields)
-      : info_(std::move(info)), scale_(h.scale), offset_(h.offset),
-        layout_(PointLayout::of(h.point_format)), record_length_(h.record_length),
-        check_finite_(h.may_overflow), fields_(fields & info_.fields), source_(std::move(source)) {
+  /// With `learn` (a LAZ read of every chunk, `chunk_points` per chunk), the read learns where the
+  /// chunks lie and, once it has read to the end, puts their bounds in `learn`.
+  LasReader(PointCloudInfo info, const LasHeader& h, std::unique_ptr<RecordSource> source, PointFields fields,
+            ChunkExtents* learn = nullptr, std::vector<std::uint64_t> chunk_points = {})
+      : info_(std::move(info)),
+        scale_(h.scale),
+        offset_(h.offset),
+        layout_(PointLayout::of(h.point_format)),
+        record_length_(h.record_length),
+        check_finite_(h.may_overflow),
+        fields_(fields & info_.fields),
+        source_(std::move(source)),
+        learn_(learn),
+        chunk_points_(std::move(chunk_points)) {
     block_records_ = std::max<std::size_t>(1, kReadBlockBytes / record_length_);
     block_records_ = static_cast<std::size_t>(std::min<std::uint64_t>(block_records_, std::max<std::uint64_t>(1, info_.point_count)));
     buffer_.resize(block_records_ * record_length_);
@@ -617,10 +477,17 @@ class LasReader final : public PointCloudReader {
       if (buffer_pos_ == buffer_count_) {
         buffer_count_ = source_->read_records(buffer_.data(), block_records_);
         buffer_pos_ = 0;
-        if (buffer_count_ == 0) break;
+        if (buffer_count_ == 0) {
+          if (learn_ && bounds_.size() == chunk_points_.size() && left_in_chunk_ == 0)
+            learn_->boxes = std::move(bounds_);
+          learn_ = nullptr;
+          break;
+        }
       }
       const std::size_t n = std::min(max_points - appended, buffer_count_ - buffer_pos_);
+      const std::size_t before = out.points.size();
       convert(buffer_.data() + buffer_pos_ * record_length_, n, out);
+      if (learn_) learn_bounds(out.points.data() + before, n);
       buffer_pos_ += n;
       appended += n;
       next_index_ += n;
@@ -629,6 +496,23 @@ class LasReader final : public PointCloudReader {
   }
 
  private:
+  /// Adds `n` points just read, in file order, to the bounds of their chunks.
+  void learn_bounds(const Point3* p, std::size_t n) {
+    while (n > 0) {
+      if (left_in_chunk_ == 0) {
+        if (bounds_.size() == chunk_points_.size()) return;  // more points than the chunks hold: not learnt
+        bounds_.emplace_back();
+        left_in_chunk_ = chunk_points_[bounds_.size() - 1];
+      }
+      const auto take = static_cast<std::size_t>(std::min<std::uint64_t>(n, left_in_chunk_));
+      Box2& box = bounds_.back();
+      for (std::size_t i = 0; i < take; ++i) box.add({p[i].x, p[i].y});
+      p += take;
+      n -= take;
+      left_in_chunk_ -= take;
+    }
+  }
+
   void reserve_all(PointCloud& out, std::size_t needed) {
     reserve_for(out.points, needed);
     if (fields_ & kFieldIntensity) reserve_for(out.intensity, needed);
@@ -717,17 +601,28 @@ class LasReader final : public PointCloudReader {
   std::size_t buffer_count_ = 0;
   std::size_t buffer_pos_ = 0;
   std::uint64_t next_index_ = 0;
+  ChunkExtents* learn_;                      ///< where the chunks' bounds go at the end, or null
+  std::vector<std::uint64_t> chunk_points_;  ///< points per chunk, for learning their bounds
+  std::vector<Box2> bounds_;                 ///< the bounds of the chunks read so far
+  std::uint64_t left_in_chunk_ = 0;          ///< points of the last of them still to come
 };
 
 }  // namespace
 
 std::unique_ptr<PointCloudReader> open_las(const std::string& path, PointFields fields,
-                                          unsigned decode_threads) {
+                                           unsigned decode_threads, ChunkExtents* extents,
+                                           const std::vector<Box2>* regions) {
   InputFile file(path, "las");
   PointCloudInfo info;
   const LasHeader h = read_header(file, info);
-  auto source = make_record_source(std::move(file), h, decode_threads);
-  return std::make_unique<LasReader>(std::move(info), h, std::move(source), fields);
+  ChunkPlan plan{extents, regions, {}, 0, 0};
+  auto source = make_record_source(std::move(file), h, decode_threads, &plan);
+  if (plan.decoded < plan.chunks)
+    log_debug("las: " + path + ": " + std::to_string(plan.decoded) + " of " + std::to_string(plan.chunks) +
+              " chunks meet the regions read");
+  ChunkExtents* learn = plan.fill.empty() ? nullptr : extents;
+  return std::make_unique<LasReader>(std::move(info), h, std::move(source), fields, learn,
+                                     std::move(plan.fill));
 }
 
 PointCloudInfo read_las_info(const std::string& path) {

@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "city3d/point_cloud_io.hpp"
 
@@ -11,9 +12,11 @@ namespace city3d::detail {
 
 /// Opens a LAS or LAZ file whose signature has been checked by the caller. Throws IoError on any
 /// header problem (all of them in one message) and on an unusable LASzip VLR or chunk table. A LAZ
-/// file with several chunks is decoded on `decode_threads` threads (1: in the calling thread).
+/// file with several chunks is decoded on `decode_threads` threads (1: in the calling thread). With
+/// `extents` and `regions`, as open_point_cloud(path, fields, threads, extents, regions).
 std::unique_ptr<PointCloudReader> open_las(const std::string& path, PointFields fields,
-                                           unsigned decode_threads = 1);
+                                           unsigned decode_threads = 1, ChunkExtents* extents = nullptr,
+                                           const std::vector<Box2>* regions = nullptr);
 
 /// Header facts of a LAS or LAZ file (LAZ works: compressed = true, format "LAZ").
 PointCloudInfo read_las_info(const std::string& path);

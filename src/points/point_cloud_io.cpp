@@ -58,6 +58,13 @@ std::unique_ptr<PointCloudReader> open_point_cloud(const std::string& path, Poin
                                       : detail::open_ply(path, fields);
 }
 
+std::unique_ptr<PointCloudReader> open_point_cloud(const std::string& path, PointFields fields,
+                                                   unsigned decode_threads, ChunkExtents& extents,
+                                                   const std::vector<Box2>& regions) {
+  return sniff(path) == FileKind::las ? detail::open_las(path, fields, decode_threads, &extents, &regions)
+                                      : detail::open_ply(path, fields);
+}
+
 PointCloud read_point_cloud(const std::string& path, PointFields fields) {
   return read_point_cloud(path, fields, 1);
 }

@@ -1,0 +1,62 @@
+#include "batch/crop_tiles.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <functional>
+#include <future>
+
+#include "city3d/log.hpp"
+
+namespace city3d::detail {
+
+void crop_tiles(const std::vector<std::string>& files, const std::vector<Box2>& regions, unsigned threads,
+                Cropper& cropper, std::vector<Box3>& bounds, ClassCounts& classes,
+                std::vector<ChunkExtents>& extents) {
+  // Small chunks kept from tile to tile: their pages are faulted in once. With threads the next chunk is
+  // read while this one is cropped. The crop does not depend on the chunking.
+  constexpr std::size_t chunk_points = std::size_t{1} << 16;
+  PointCloud chunk, next;
+  for (std::size_t t = 0; t < files.size(); ++t) {
+    const std::string& file = files[t];
+    // Cropping runs between reconstructions, so every thread can decode LAZ chunks meanwhile.
+    // A read that learns where the chunks lie reads every point (so its bounds and classes hold for
+    // the whole tile); once they are known, only the chunks that meet the regions are decoded.
+    const bool whole = extents[t].boxes.empty();
+    auto reader = open_point_cloud(file, kFieldClassification, threads, extents[t], regions);
+    const PointCloudInfo& info = reader->info();
+    if (!info.bounds.empty()) {
+      Box2 tile;
+      tile.add({info.bounds.min.x, info.bounds.min.y});
+      tile.add({info.bounds.max.x, info.bounds.max.y});
+      if (std::none_of(regions.begin(), regions.end(), [&](const Box2& r) { return tile.intersects(r); })) {
+        log_debug("crop: " + file + " does not overlap the block, skipped");
+        continue;
+      }
+    }
+    Box3 seen;
+    std::uint64_t n = 0;
+    const auto read = [&reader](PointCloud& into) {
+      into.clear();
+      return reader->read(into, chunk_points);
+    };
+    for (std::size_t got = read(chunk); got > 0;) {
+      std::future<std::size_t> ahead;
+      if (threads > 1) ahead = std::async(std::launch::async, read, std::ref(next));
+      n += got;
+      if (info.bounds.empty())
+        for (const Point3& p : chunk.points) seen.add(p);
+      if (!classes.counted[t]) {
+        classes.any = classes.any || !chunk.classification.empty();
+        for (std::uint8_t c : chunk.classification) ++classes.n[c];
+      }
+      cropper.add(chunk);
+      got = ahead.valid() ? ahead.get() : read(next);
+      std::swap(chunk, next);
+    }
+    if (whole) classes.counted[t] = true;
+    if (info.bounds.empty() && whole) bounds[t] = seen;
+    log_info("crop: " + file + ": " + std::to_string(n) + " points streamed");
+  }
+}
+
+}  // namespace city3d::detail
