@@ -72,7 +72,8 @@ struct ChunkExtents {
 /// `regions`. While `extents` is empty, every point is read and a read to the end of a LAZ file of
 /// several chunks fills `extents`. Once it is filled, only the chunks whose bounds meet one of
 /// `regions` are decoded: read() hands out their points, in file order, and none of the others'.
-/// LAS, PLY and single-chunk LAZ files are read whole and leave `extents` empty.
+/// LAS, PLY and single-chunk LAZ files are read whole and leave `extents` empty, and so are LAZ files
+/// whose chunks are too large to hold one decoded (over 256 MB) or whose coordinates may overflow.
 std::unique_ptr<PointCloudReader> open_point_cloud(const std::string& path, PointFields fields,
                                                    unsigned decode_threads, ChunkExtents& extents,
                                                    const std::vector<Box2>& regions);

@@ -19,32 +19,32 @@
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
-#include <fstream>
 #include <functional>
-#include <future>
+#include <fstream>
 #include <iterator>
 #include <map>
 #include <memory>
 #include <mutex>
-#include <nlohmann/json.hpp>
 #include <numeric>
 #include <set>
 #include <sstream>
 #include <system_error>
 #include <thread>
 
-#include "batch/advice.hpp"
-#include "batch/crop_tiles.hpp"
-#include "batch/finalise.hpp"
-#include "batch/input_check.hpp"
-#include "batch/journal.hpp"
+#include <nlohmann/json.hpp>
+
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
+#include "city3d/rings.hpp"
 #include "city3d/model_io.hpp"
 #include "city3d/point_cloud_io.hpp"
-#include "city3d/rings.hpp"
-#include "files/atomic_file.hpp"
+#include "batch/advice.hpp"
+#include "batch/crop_tiles.hpp"
+#include "batch/input_check.hpp"
 #include "files/output_folder.hpp"
+#include "files/atomic_file.hpp"
+#include "batch/finalise.hpp"
+#include "batch/journal.hpp"
 #include "reports/report.hpp"
 
 namespace city3d {

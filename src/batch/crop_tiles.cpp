@@ -1,3 +1,4 @@
+// A cropping pass: each tile that meets the pass's regions streamed into the cropper (crop_tiles.hpp).
 #include "batch/crop_tiles.hpp"
 
 #include <algorithm>

@@ -394,7 +394,8 @@ struct ChunkPlan {
 /// `decode_threads` threads when the file has several chunks (0 counts as 1). With a plan whose
 /// bounds are known, only the chunks that meet its regions; with one whose bounds are empty, every
 /// chunk, and the plan says how many points each holds. A file whose coordinates may overflow
-/// (LasHeader::may_overflow) is always read whole, so that an error names the point's index in the file.
+/// (LasHeader::may_overflow) is always read whole, so that an error names the point's index in the file,
+/// and so is one whose chunks are too large to hold one decoded (kMaxHeldChunkBytes).
 std::unique_ptr<RecordSource> make_record_source(InputFile file, const LasHeader& h, unsigned decode_threads,
                                                  ChunkPlan* plan = nullptr) {
   if (!h.compressed) return std::make_unique<FileRecordSource>(std::move(file), h);
@@ -413,7 +414,9 @@ std::unique_ptr<RecordSource> make_record_source(InputFile file, const LasHeader
   const std::size_t chunks = decoder->chunk_count();
   std::vector<std::size_t> wanted(chunks);
   std::iota(wanted.begin(), wanted.end(), std::size_t{0});
-  if (plan && plan->extents && chunks > 1 && !h.may_overflow) {
+  std::uint64_t largest = 0;
+  for (std::size_t i = 0; i < chunks; ++i) largest = std::max(largest, decoder->chunk_points(i));
+  if (plan && plan->extents && chunks > 1 && !h.may_overflow && largest * h.record_length <= kMaxHeldChunkBytes) {
     const std::vector<Box2>& boxes = plan->extents->boxes;
     if (boxes.empty()) {
       for (std::size_t i = 0; i < chunks; ++i) plan->fill.push_back(decoder->chunk_points(i));

@@ -188,11 +188,6 @@ class ChunkListRecordSource final : public RecordSource {
   std::uint64_t left_ = 0;             ///< its records not handed out yet
 };
 
-/// Decoded chunks larger than this are decoded by the streaming path even when threads are asked
-/// for: the parallel path holds at least `threads` whole chunks (a file may have one chunk of 100M
-/// points).
-constexpr std::uint64_t kMaxParallelChunkBytes = 256u << 20;
-
 /// Decoded chunks the parallel path may hold ahead of the reader, in bytes, beyond one per thread
 /// (AHN3's chunks of 50,000 points are 1.7 MB each: up to eight per thread).
 constexpr std::uint64_t kReadAheadBytes = 32u << 20;
@@ -207,7 +202,7 @@ std::unique_ptr<RecordSource> make_laz_record_source(std::unique_ptr<LazDecoder>
   for (std::size_t i : wanted) largest = std::max(largest, decoder->chunk_points(i));
   const auto threads =
       static_cast<unsigned>(std::min<std::size_t>(std::max(decode_threads, 1u), wanted.size()));
-  const bool serial = threads <= 1 || largest * record_length > kMaxParallelChunkBytes;
+  const bool serial = threads <= 1 || largest * record_length > kMaxHeldChunkBytes;
   if (serial && wanted.size() == decoder->chunk_count())
     return std::make_unique<LazRecordSource>(std::move(decoder));
   if (serial)

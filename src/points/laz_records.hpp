@@ -32,10 +32,15 @@ class LazRecordSource final : public RecordSource {
   std::unique_ptr<LazDecoder> decoder_;
 };
 
+/// Decoded chunks larger than this are never held whole: such a file is decoded by the streaming path
+/// even when threads are asked for (the parallel path holds at least `threads` whole chunks), and read
+/// whole rather than chunk by chunk (a file may have one chunk of 100M points).
+constexpr std::uint64_t kMaxHeldChunkBytes = 256u << 20;
+
 /// The records of chunks `wanted` (indices into the decoder's chunks, in file order), decoded on
 /// `decode_threads` threads (0 and 1: in the calling thread). Every chunk in one thread streams
-/// through the file (LazRecordSource); chunks too large to hold `threads` of them decoded (256 MB
-/// each) are decoded in the calling thread too.
+/// through the file (LazRecordSource), and so do chunks over kMaxHeldChunkBytes; a part of the chunks
+/// in one thread is decoded chunk by chunk. `wanted` must be every chunk when one is over that size.
 std::unique_ptr<RecordSource> make_laz_record_source(std::unique_ptr<LazDecoder> decoder,
                                                      std::vector<std::size_t> wanted,
                                                      std::size_t record_length, unsigned decode_threads);
