@@ -304,12 +304,8 @@ def read_laz(path):
     return dict(data=data, offset=offset, chunk_size=chunk_size, chunks=list(zip(starts, sizes, points)))
 
 
-def main():
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("out")
-    p.add_argument("--grid", default="6x5", help="copies in x and y (default 6x5: 480 chunks, 24 M points)")
-    a = p.parse_args()
-    nx, ny = (int(v) for v in a.grid.lower().split("x"))
+def make_laz(out_path, nx, ny):
+    """Writes the LAZ of nx x ny copies to out_path; returns (points, chunks)."""
     tiles = [read_laz(t) for t in TILES]
     first = tiles[0]["data"]
     if any(t["data"][131:179] != first[131:179] or t["chunk_size"] != tiles[0]["chunk_size"] for t in tiles):
@@ -339,15 +335,24 @@ def main():
                      max(b[2] for b in bounds) + (ny - 1) * STEP_Y, min(b[3] for b in bounds),
                      max(b[4] for b in bounds), min(b[5] for b in bounds))
     table_at = len(header) + 8 + len(body)
-    with open(a.out, "wb") as out:
+    with open(out_path, "wb") as out:
         out.write(header)
         out.write(struct.pack("<q", table_at))
         out.write(body)
         out.write(struct.pack("<II", 0, len(sizes)))
         out.write(encode_chunk_table(sizes))
-    print(f"{a.out}: {total:,} points in {len(sizes)} chunks ({nx} x {ny} copies of the Delft block's full chunks), "
-          f"{os.path.getsize(a.out) / 2**20:.0f} MB")
+    return total, len(sizes)
 
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("out")
+    p.add_argument("--grid", default="6x5", help="copies in x and y (default 6x5: 480 chunks, 24 M points)")
+    a = p.parse_args()
+    nx, ny = (int(v) for v in a.grid.lower().split("x"))
+    total, chunks = make_laz(a.out, nx, ny)
+    print(f"{a.out}: {total:,} points in {chunks} chunks ({nx} x {ny} copies of the Delft block's full chunks), "
+          f"{os.path.getsize(a.out) / 2**20:.0f} MB")
 
 if __name__ == "__main__":
     main()

@@ -8,6 +8,7 @@ memory, seconds per million points of both, and their ratio.
     python3 bench/synthetic_tile.py --city3d build/city3d [--grid 6x5] [--jobs 2] [--runs 1] [--work build/synthetic_tile]
     python3 bench/synthetic_tile.py --outputs "--gpkg --3dtiles"   # issue 25: what these outputs add
     python3 bench/synthetic_tile.py --city3d NEW/city3d --baseline OLD/city3d --runs 3   # side by side
+    python3 bench/synthetic_tile.py --laz ...   # the tile as LAZ (bench/synthetic_laz.py), the same footprints
 
 With --outputs, each run also reconstructs the tile with those options (side by side, in alternation with
 the run without them) and the summary gives the peak memory and time they add. With --baseline OTHER_BINARY,
@@ -32,6 +33,7 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
+from synthetic_laz import make_laz  # noqa: E402  (bench/synthetic_laz.py)
 from timed import run_timed  # noqa: E402  (bench/timed.py)
 
 DELFT = os.path.join(HERE, "..", "..", "shared", "data", "ahn3_delft")
@@ -138,6 +140,8 @@ def main():
     p.add_argument("--outputs", default="", help="options of more outputs (\"--gpkg --3dtiles\"): the tile is also "
                    "reconstructed with them, and what they add to peak memory and time is printed")
     p.add_argument("--baseline", default="", help="another city3d binary, timed in alternation on the same inputs")
+    p.add_argument("--laz", action="store_true", help="the tile as LAZ (bench/synthetic_laz.py: the full chunks of "
+                   "both tiles, 24.0 M points in 480 chunks) instead of LAS")
     a = p.parse_args()
     nx, ny = (int(v) for v in a.grid.lower().split("x"))
     os.makedirs(a.work, exist_ok=True)
@@ -148,8 +152,11 @@ def main():
             os.makedirs(trash, exist_ok=True)
             os.rename(os.path.join(a.work, entry), os.path.join(trash, entry))
     las, gpkg, points, footprints = make_tile(a.work, nx, ny)
+    if a.laz:
+        las = os.path.join(a.work, "tile.laz")
+        points, _ = make_laz(las, nx, ny)
     print(f"synthetic tile: {points:,} points, {footprints:,} footprints ({nx} x {ny} copies of the Delft block), "
-          f"{os.path.getsize(las) / 2**20:.0f} MB LAS")
+          f"{os.path.getsize(las) / 2**20:.0f} MB {'LAZ' if a.laz else 'LAS'}")
     delft_points = sum(read_las(t)["count"] for t in TILES)
     jobs = ["--id-field", "gml_id", "-j", str(a.jobs), "--no-progress", "-q", "--no-resume"]
     builds = [("", a.city3d)] + ([("baseline ", a.baseline)] if a.baseline else [])
