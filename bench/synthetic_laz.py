@@ -29,7 +29,8 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 DELFT = os.path.join(HERE, "..", "..", "shared", "data", "ahn3_delft")
 TILES = [os.path.join(DELFT, "ahn3_cropped_1.laz"), os.path.join(DELFT, "ahn3_cropped_2.laz")]
-# A copy every 300 m in x and 250 m in y, as bench/synthetic_tile.py: the block spans 264 x 229 m.
+# A copy every 300 m in x and 250 m in y (bench/synthetic_tile.py moves the LAS points and the footprints
+# by these too): the block spans 264 x 229 m, so copies never overlap.
 STEP_X, STEP_Y = 300.0, 250.0
 
 MASK = 0xFFFFFFFF

@@ -33,14 +33,14 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from synthetic_laz import make_laz  # noqa: E402  (bench/synthetic_laz.py)
+# The copies' spacing (300 m by 250 m) is synthetic_laz.py's, so that the LAZ tile's points and these
+# footprints are moved alike.
+from synthetic_laz import STEP_X, STEP_Y, make_laz  # noqa: E402  (bench/synthetic_laz.py)
 from timed import run_timed  # noqa: E402  (bench/timed.py)
 
 DELFT = os.path.join(HERE, "..", "..", "shared", "data", "ahn3_delft")
 TILES = [os.path.join(DELFT, "ahn3_cropped_1.las"), os.path.join(DELFT, "ahn3_cropped_2.las")]
 FOOTPRINTS = os.path.join(DELFT, "footprints", "bgt_pand_laz_area.gpkg")
-# A copy every 300 m in x and 250 m in y: the block spans 264 x 229 m, so copies never overlap.
-STEP_X, STEP_Y = 300.0, 250.0
 
 
 def read_las(path):
