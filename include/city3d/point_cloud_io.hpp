@@ -70,7 +70,8 @@ struct ChunkExtents {
 
 /// As open_point_cloud(path, fields, decode_threads), for a reader that needs only the points within
 /// `regions`. While `extents` is empty, every point is read and a read to the end of a LAZ file of
-/// several chunks fills `extents`. Once it is filled, only the chunks whose bounds meet one of
+/// several chunks fills `extents`. Once it is filled (by a read of this same file: bounds of another
+/// chunk count are ignored and the file is read whole), only the chunks whose bounds meet one of
 /// `regions` are decoded: read() hands out their points, in file order, and none of the others'.
 /// LAS, PLY and single-chunk LAZ files are read whole and leave `extents` empty, and so are LAZ files
 /// whose chunks are too large to hold one decoded (over 256 MB) or whose coordinates may overflow.
