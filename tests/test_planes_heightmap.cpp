@@ -1,5 +1,8 @@
 // Tests of planes.hpp and heightmap.hpp: synthetic buildings sampled like AHN3 (15 points/m2,
 // 0.03 m Gaussian noise, fixed seeds) with known geometry, plus the AHN3 smoke buildings.
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Shape_detection/Region_growing/Region_growing_on_point_set/K_neighbor_query.h>
+#include <CGAL/property_map.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,6 +15,7 @@
 #include <iterator>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "city3d/debug_output.hpp"
@@ -22,6 +26,7 @@
 #include "city3d/polylines.hpp"
 #include "city3d/regularise.hpp"
 #include "city3d/walls.hpp"
+#include "planes/neighbours.hpp"
 #include "read_png.hpp"
 
 namespace {
@@ -129,6 +134,91 @@ float height_at(const Heightmap& map, double x, double y) {
 
 // ---------------------------------------------------------------------------------------------
 // Parameters
+
+namespace {
+
+// The lists CGAL's own search gives (planes.cpp searched with it until k_nearest_lists).
+std::vector<std::uint32_t> tree_lists(const std::vector<city3d::Point3>& points, std::size_t k) {
+  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using PointWithNormal = std::pair<Kernel::Point_3, Kernel::Vector_3>;
+  using Range = std::vector<PointWithNormal>;
+  using Query =
+      CGAL::Shape_detection::Point_set::K_neighbor_query<Kernel, Range,
+                                                         CGAL::First_of_pair_property_map<PointWithNormal>>;
+  Range range;
+  for (const auto& p : points) range.emplace_back(Kernel::Point_3(p.x, p.y, p.z), Kernel::Vector_3(0, 0, 1));
+  const Query search(range, k);
+  std::vector<std::uint32_t> lists;
+  std::vector<std::size_t> neighbours;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    search(i, neighbours);
+    lists.insert(lists.end(), neighbours.begin(), neighbours.end());
+  }
+  return lists;
+}
+
+}  // namespace
+
+TEST(Neighbours, the_grid_gives_the_lists_of_cgals_kd_tree_search_entry_for_entry) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  const auto mm = [](double v) { return std::round(v * 1000.0) / 1000.0; };
+  struct Case {
+    std::string name;
+    std::vector<city3d::Point3> points;
+    bool mostly_grid;  // the grid settles at least 90% of the lists
+    bool some_tree;    // at least one list goes to the tree
+  };
+  std::vector<Case> cases;
+  {  // a gable roof of an AHN-like survey: 10 points per m2, mm coordinates, a few wall points
+    Case c{"roof", {}, true, false};
+    for (int i = 0; i < 3000; ++i) {
+      const double x = 20.0 * u(rng), y = 15.0 * u(rng);
+      c.points.push_back(
+          {mm(x + 85000.0), mm(y + 447000.0), mm(8.0 + 0.6 * (7.5 - std::abs(y - 7.5)) + noise(rng))});
+    }
+    for (int i = 0; i < 200; ++i)
+      c.points.push_back({mm(85000.0 + 20.0 * u(rng)), 447000.0, mm(8.0 * u(rng))});
+    cases.push_back(std::move(c));
+  }
+  {  // points in a cube: neighbours above and below as well as beside
+    Case c{"cube", {}, true, false};
+    for (int i = 0; i < 2000; ++i) c.points.push_back({u(rng), u(rng), u(rng)});
+    cases.push_back(std::move(c));
+  }
+  {  // a lattice: every distance tied many times over, so the tree decides
+    Case c{"lattice", {}, false, true};
+    for (int i = 0; i < 20; ++i)
+      for (int j = 0; j < 20; ++j) c.points.push_back({0.5 * i, 0.5 * j, 3.0});
+    cases.push_back(std::move(c));
+  }
+  {  // points above one another only: no area, no length in plan
+    Case c{"column", {}, false, true};
+    for (int i = 0; i < 50; ++i) c.points.push_back({1.0, 2.0, 0.1 * i + 0.01 * u(rng)});
+    cases.push_back(std::move(c));
+  }
+  {  // a thin strip (a wall's points): cells capped in number
+    Case c{"strip", {}, true, false};
+    for (int i = 0; i < 1000; ++i) c.points.push_back({30.0 * u(rng), 1e-7 * u(rng), 6.0 * u(rng)});
+    cases.push_back(std::move(c));
+  }
+  {  // fewer points than k + 2
+    Case c{"few", {}, false, true};
+    for (int i = 0; i < 13; ++i) c.points.push_back({u(rng), u(rng), u(rng)});
+    cases.push_back(std::move(c));
+  }
+  for (const Case& c : cases)
+    for (std::size_t k : {std::size_t{12}, std::size_t{3}, std::size_t{30}}) {
+      SCOPED_TRACE(c.name + ", k = " + std::to_string(k));
+      city3d::detail::NeighbourStats stats;
+      const std::vector<std::uint32_t> lists = city3d::detail::k_nearest_lists(c.points, k, &stats);
+      EXPECT_EQ(lists, tree_lists(c.points, k));
+      EXPECT_EQ(stats.from_grid + stats.from_tree, c.points.size());
+      if (c.mostly_grid) EXPECT_GE(stats.from_grid, c.points.size() * 9 / 10);
+      if (c.some_tree && k == 12) EXPECT_GT(stats.from_tree, 0u);
+    }
+}
 
 TEST(PlaneParams, defaults_are_pinned) {
   const PlaneParams p;

@@ -8,7 +8,6 @@
 #include <CGAL/property_map.h>
 
 #include <Eigen/Dense>
-
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -22,6 +21,7 @@
 
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
+#include "planes/neighbours.hpp"
 
 namespace city3d {
 
@@ -59,24 +59,16 @@ using PointMap = CGAL::First_of_pair_property_map<PointWithNormal>;
 using NormalMap = CGAL::Second_of_pair_property_map<PointWithNormal>;
 
 namespace sd = CGAL::Shape_detection;
-using KdTreeQuery = sd::Point_set::K_neighbor_query<Kernel, PointRange, PointMap>;
 
 /// Each point's k nearest neighbours, searched once, in the order CGAL's K_neighbor_query gives them
-/// (nearest first, the point itself among them; its kd-tree decides ties). The normals, the seed
-/// ordering, the growing and the refitting all ask for the same lists, the growing once per point a
-/// region reaches and again whenever a region too small is undone, so that the searches took more
-/// than half of the planes' CPU; handed out from here they are byte-for-byte the lists a search gives.
+/// (nearest first, the point itself among them; k_nearest_lists, neighbours.hpp, gives that search's
+/// lists, entry for entry). The normals, the seed ordering, the growing and the refitting all ask for
+/// the same lists, the growing once per point a region reaches and again whenever a region too small
+/// is undone: handed out from here, each list is searched once.
 class StoredNeighbors {
  public:
-  StoredNeighbors(const PointRange& range, std::size_t k) : count_(std::min(k, range.size())) {
-    const KdTreeQuery search(range, k, PointMap());
-    lists_.reserve(range.size() * count_);
-    std::vector<std::size_t> neighbors;
-    for (std::size_t i = 0; i < range.size(); ++i) {
-      search(i, neighbors);  // always min(k, n) of them: the search fills its k from the whole tree
-      lists_.insert(lists_.end(), neighbors.begin(), neighbors.end());
-    }
-  }
+  StoredNeighbors(const std::vector<Point3>& points, std::size_t k)
+      : count_(std::min(k, points.size())), lists_(k_nearest_lists(points, k)) {}
 
   /// The neighbours of point i.
   struct List {
@@ -342,7 +334,8 @@ PlaneDetector::PlaneDetector(const std::vector<Point3>& local_points, int k_neig
     for (const Point3& p : points)
       n->range.emplace_back(detail::Kernel::Point_3(p.x, p.y, p.z), detail::Kernel::Vector_3(0, 0, 1));
     // One search per point serves the normals, the seed order, the growing and the refitting.
-    const detail::StoredNeighbors& neighbors = n->neighbors.emplace(n->range, static_cast<std::size_t>(k_neighbors));
+    const detail::StoredNeighbors& neighbors =
+        n->neighbors.emplace(points, static_cast<std::size_t>(k_neighbors));
 
     // PCA normals: smallest-eigenvalue direction of the k-neighbourhood (at least 3 points). Their
     // sign is irrelevant to the growing (CGAL compares |cos|), so they are left as the solver gives them.
