@@ -33,12 +33,14 @@ constexpr double kTieGap = 1e-9;
 /// The points sorted into square cells over x and y (a counting sort: within a cell, by index).
 class Grid {
  public:
-  /// False when the points span no area and no length in plan (all above one another).
+  /// False when the points span no area and no length in plan (all above one another), or one of
+  /// them is not finite.
   bool build(const std::vector<Point3>& points) {
     const std::size_t n = points.size();
     x0_ = y0_ = std::numeric_limits<double>::infinity();
     double x1 = -x0_, y1 = -y0_;
     for (const Point3& p : points) {
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return false;
       x0_ = std::min(x0_, p.x);
       y0_ = std::min(y0_, p.y);
       x1 = std::max(x1, p.x);
@@ -49,14 +51,14 @@ class Grid {
     if (!(cell_ > 0.0)) cell_ = std::max(w, h) * kPointsPerCell / static_cast<double>(n);
     if (!(cell_ > 0.0) || !std::isfinite(cell_)) return false;
     // A thin strip gives tiny cells: at most about four per point.
-    const double max_cells = 4.0 * static_cast<double>(n) + 64.0;
+    const double max_cells = std::min(4.0 * static_cast<double>(n) + 64.0, double{1 << 28});
     while ((std::floor(w / cell_) + 1.0) * (std::floor(h / cell_) + 1.0) > max_cells) cell_ *= 1.5;
     nx_ = static_cast<int>(std::floor(w / cell_)) + 1;
     ny_ = static_cast<int>(std::floor(h / cell_)) + 1;
-    std::vector<std::uint32_t> cell_of(n);
+    std::vector<std::size_t> cell_of(n);
     start_.assign(static_cast<std::size_t>(nx_) * ny_ + 1, 0);
     for (std::size_t i = 0; i < n; ++i) {
-      cell_of[i] = static_cast<std::uint32_t>(row(points[i].y) * nx_ + column(points[i].x));
+      cell_of[i] = cell(column(points[i].x), row(points[i].y));
       ++start_[cell_of[i] + 1];
     }
     for (std::size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
@@ -90,7 +92,7 @@ class Grid {
         const double sx = std::max(gx - kMargin, 0.0), sy = std::max(gy - kMargin, 0.0);
         if (sx * sx + sy * sy > d[k1 - 1]) return;
       }
-      scan(q, iy * nx_ + ix, k1, d, id, found);
+      scan(q, cell(ix, iy), k1, d, id, found);
     };
     for (int r = 0;; ++r) {
       const int ix0 = std::max(cx - r, 0), ix1 = std::min(cx + r, nx_ - 1);
@@ -123,7 +125,8 @@ class Grid {
 
  private:
   // Offers cell c's points to the sorted k1 nearest so far.
-  void scan(const Point3& q, int c, std::size_t k1, double* d, std::uint32_t* id, std::size_t& found) const {
+  void scan(const Point3& q, std::size_t c, std::size_t k1, double* d, std::uint32_t* id,
+            std::size_t& found) const {
     for (std::uint32_t j = start_[c]; j < start_[c + 1]; ++j) {
       // CGAL's Euclidean_distance in 3D: square(q - p) per coordinate, added x, y, z.
       const double dx = q.x - x_[j], dy = q.y - y_[j], dz = q.z - z_[j];
@@ -142,6 +145,9 @@ class Grid {
     }
   }
 
+  std::size_t cell(int ix, int iy) const {
+    return static_cast<std::size_t>(iy) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(ix);
+  }
   int column(double x) const { return std::min(static_cast<int>((x - x0_) / cell_), nx_ - 1); }
   int row(double y) const { return std::min(static_cast<int>((y - y0_) / cell_), ny_ - 1); }
 

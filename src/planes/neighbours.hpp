@@ -16,10 +16,10 @@ struct NeighbourStats {
   std::size_t from_tree = 0;  ///< lists handed to CGAL's kd-tree (a tie, a near tie, or too few points)
 };
 
-/// For each of `points` (no two equal), the indices of its min(k, n) nearest points, nearest first
-/// and itself among them: point i's at [i * min(k, n), (i + 1) * min(k, n)). The lists are those
-/// of CGAL's Shape_detection::Point_set::K_neighbor_query (an Orthogonal_k_neighbor_search on a
-/// sliding-midpoint kd-tree, exact, sorted), entry for entry.
+/// For each of `points` (no two equal, fewer than 2^32), the indices of its min(k, n) nearest points, nearest
+/// first and itself among them: point i's at [i * min(k, n), (i + 1) * min(k, n)). The lists are those of
+/// CGAL's Shape_detection::Point_set::K_neighbor_query (an Orthogonal_k_neighbor_search on a sliding-midpoint
+/// kd-tree, exact, sorted), entry for entry.
 ///
 /// A grid over x and y answers first: it finds the k + 1 nearest by the same squared distance, in
 /// the same arithmetic as CGAL's Euclidean_distance, so when those k + 1 distances are distinct its
