@@ -23,8 +23,8 @@ using TreeQuery = CGAL::Shape_detection::Point_set::K_neighbor_query<Kernel, Poi
 // The grid's cells hold about this many points, so that the 3 x 3 cells around a point usually
 // hold the k + 1 = 13 the search needs at the default k.
 constexpr double kPointsPerCell = 2.0;
-// Metres taken off every distance in plan to a cell: a point's cell and the cell bounds are rounded
-// apart (by far less).
+// Metres taken off every distance in plan to a cell, at least: a point's cell and the cell bounds are
+// rounded apart by a few units in the last place of the coordinates (Grid::margin_ grows with them).
 constexpr double kMargin = 1e-9;
 // Relative gap below which the k-th and (k+1)-th distances count as tied (neighbours.hpp): far
 // above the rounding of the tree's incremental box distances (a few units in the last place).
@@ -47,6 +47,8 @@ class Grid {
       y1 = std::max(y1, p.y);
     }
     const double w = x1 - x0_, h = y1 - y0_;
+    margin_ = kMargin + 16.0 * std::numeric_limits<double>::epsilon() *
+                            std::max({std::abs(x0_), std::abs(x1), std::abs(y0_), std::abs(y1)});
     cell_ = std::sqrt(w * h * kPointsPerCell / static_cast<double>(n));
     if (!(cell_ > 0.0)) cell_ = std::max(w, h) * kPointsPerCell / static_cast<double>(n);
     if (!(cell_ > 0.0) || !std::isfinite(cell_)) return false;
@@ -89,7 +91,7 @@ class Grid {
         const int ox = ix - cx, oy = iy - cy;
         const double gx = ox > 0 ? ox * cell_ - fx : ox < 0 ? fx - (ox + 1) * cell_ : 0.0;
         const double gy = oy > 0 ? oy * cell_ - fy : oy < 0 ? fy - (oy + 1) * cell_ : 0.0;
-        const double sx = std::max(gx - kMargin, 0.0), sy = std::max(gy - kMargin, 0.0);
+        const double sx = std::max(gx - margin_, 0.0), sy = std::max(gy - margin_, 0.0);
         if (sx * sx + sy * sy > d[k1 - 1]) return;
       }
       scan(q, cell(ix, iy), k1, d, id, found);
@@ -112,7 +114,7 @@ class Grid {
       if (cy - r > 0) gap = std::min(gap, fy + r * cell_);
       if (cy + r < ny_ - 1) gap = std::min(gap, (r + 1) * cell_ - fy);
       if (gap == std::numeric_limits<double>::infinity()) return;  // every cell searched
-      const double safe = gap - kMargin;
+      const double safe = gap - margin_;
       if (found == k1 && safe > 0.0 && safe * safe > d[k1 - 1]) return;
     }
   }
@@ -151,7 +153,7 @@ class Grid {
   int column(double x) const { return std::min(static_cast<int>((x - x0_) / cell_), nx_ - 1); }
   int row(double y) const { return std::min(static_cast<int>((y - y0_) / cell_), ny_ - 1); }
 
-  double x0_ = 0.0, y0_ = 0.0, cell_ = 0.0;
+  double x0_ = 0.0, y0_ = 0.0, cell_ = 0.0, margin_ = kMargin;
   int nx_ = 0, ny_ = 0;
   std::vector<std::uint32_t> start_;  // cell c's points at [start_[c], start_[c + 1])
   std::vector<double> x_, y_, z_;     // by cell
