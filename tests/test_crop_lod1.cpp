@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <set>
@@ -727,6 +728,35 @@ TEST(MeshCheck, two_cubes_sharing_only_a_vertex_make_a_non_manifold_vertex) {
   EXPECT_EQ(check.non_manifold_vertices, 1u);
   EXPECT_FALSE(check.manifold);
   EXPECT_EQ(check.shell_count, 2u);
+}
+
+TEST(MeshCheck, signed_volume_alone_is_check_meshs_number_bit_for_bit) {
+  // The levels' volumes come from signed_volume(): the same sum in the same order as check_mesh's.
+  std::vector<PolygonMesh> meshes{PolygonMesh{}, unit_cube()};
+  PolygonMesh far_away = make_lod1_block(building({{l_shape(85012.3, 447001.7), {}}}, 0.37, {9.81})).mesh;
+  meshes.push_back(far_away);
+  PolygonMesh broken = far_away;
+  broken.faces.push_back({0, 1, 999});  // out of range: left out by both
+  std::reverse(broken.faces[1].begin(), broken.faces[1].end());
+  meshes.push_back(broken);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-50.0, 50.0);
+  for (int m = 0; m < 20; ++m) {  // polygon soups of random faces: no topology to speak of
+    PolygonMesh soup;
+    for (int v = 0; v < 30; ++v) soup.vertices.push_back({1000.0 + u(rng), 2000.0 + u(rng), u(rng)});
+    for (int f = 0; f < 25; ++f) {
+      std::vector<std::uint32_t> face;
+      for (int k = 0; k < 3 + f % 4; ++k) face.push_back(static_cast<std::uint32_t>(rng() % 30));
+      soup.faces.push_back(face);
+    }
+    meshes.push_back(soup);
+  }
+  for (std::size_t m = 0; m < meshes.size(); ++m) {
+    const double alone = signed_volume(meshes[m]), checked = check_mesh(meshes[m]).signed_volume;
+    EXPECT_EQ(std::memcmp(&alone, &checked, sizeof(double)), 0)
+        << "mesh " << m << ": " << alone << " against " << checked;
+  }
+  EXPECT_NEAR(signed_volume(unit_cube()), 1.0, 1e-12);
 }
 
 TEST(MeshCheck, counts_degenerate_faces) {

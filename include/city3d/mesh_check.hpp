@@ -32,4 +32,8 @@ struct MeshCheck {
 /// on bad topology (that is what it reports); out-of-range indices count as degenerate faces.
 MeshCheck check_mesh(const PolygonMesh& mesh);
 
+/// check_mesh(mesh).signed_volume, the same number, without the topology checks (faces with
+/// out-of-range indices are left out, as there).
+double signed_volume(const PolygonMesh& mesh);
+
 }  // namespace city3d

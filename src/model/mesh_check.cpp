@@ -23,6 +23,24 @@ using detail::Vec;
 
 std::uint64_t key(std::uint32_t a, std::uint32_t b) { return (std::uint64_t{a} << 32) | b; }
 
+// The centre of the box (the origin for an empty one): the volume sum's reference point.
+Point3 centre_of(const Box3& bounds) {
+  return bounds.empty() ? Point3{}
+                        : Point3{0.5 * (bounds.min.x + bounds.max.x), 0.5 * (bounds.min.y + bounds.max.y),
+                                 0.5 * (bounds.min.z + bounds.max.z)};
+}
+
+// Adds the signed volume of the tetrahedra from `centre` to the fan triangles of `face` to `volume`.
+void add_fan_volume(const std::vector<Point3>& vertices, const std::vector<std::uint32_t>& face,
+                    const Point3& centre, double& volume) {
+  for (std::size_t k = 1; k + 1 < face.size(); ++k) {
+    const Vec a = sub(vertices[face[0]], centre);
+    const Vec b = sub(vertices[face[k]], centre);
+    const Vec c = sub(vertices[face[k + 1]], centre);
+    volume += dot(a, cross(b, c)) / 6.0;
+  }
+}
+
 std::size_t find_root(std::vector<std::size_t>& parent, std::size_t i) {
   while (parent[i] != i) i = parent[i] = parent[parent[i]];
   return i;
@@ -40,10 +58,7 @@ MeshCheck check_mesh(const PolygonMesh& mesh) {
   // not lose digits to large coordinates.
   Box3 bounds;
   for (const Point3& v : vertices) bounds.add(v);
-  const Point3 centre = bounds.empty()
-                            ? Point3{}
-                            : Point3{0.5 * (bounds.min.x + bounds.max.x), 0.5 * (bounds.min.y + bounds.max.y),
-                                     0.5 * (bounds.min.z + bounds.max.z)};
+  const Point3 centre = centre_of(bounds);
   const double diagonal2 =
       bounds.empty() ? 0.0 : dot(sub(bounds.max, bounds.min), sub(bounds.max, bounds.min));
   const double min_area = 1e-12 * std::max(1.0, diagonal2);
@@ -66,12 +81,7 @@ MeshCheck check_mesh(const PolygonMesh& mesh) {
     check.area += area;
     if (face.size() < 3 || repeated || area <= min_area) ++check.degenerate_faces;
 
-    for (std::size_t k = 1; k + 1 < face.size(); ++k) {
-      const Vec a = sub(vertices[face[0]], centre);
-      const Vec b = sub(vertices[face[k]], centre);
-      const Vec c = sub(vertices[face[k + 1]], centre);
-      check.signed_volume += dot(a, cross(b, c)) / 6.0;
-    }
+    add_fan_volume(vertices, face, centre, check.signed_volume);
   }
 
   std::sort(directed.begin(), directed.end());
@@ -161,6 +171,16 @@ MeshCheck check_mesh(const PolygonMesh& mesh) {
   check.manifold = check.non_manifold_edges == 0 && check.non_manifold_vertices == 0;
   check.outward = check.signed_volume > 0.0;
   return check;
+}
+
+double signed_volume(const PolygonMesh& mesh) {
+  Box3 bounds;
+  for (const Point3& v : mesh.vertices) bounds.add(v);
+  const Point3 centre = centre_of(bounds);
+  double volume = 0.0;
+  for (const auto& face : mesh.faces)
+    if (indices_in_range(face, mesh.vertices)) add_fan_volume(mesh.vertices, face, centre, volume);
+  return volume;
 }
 
 }  // namespace city3d

@@ -136,7 +136,7 @@ void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams
   if (kept.empty()) kept.push_back({lod2 ? "2.2" : "1.2", primary});
   std::optional<std::pair<const BuildingModel*, ModelFit>> measured;  // the last level measured
   for (const LodModel& m : kept) {
-    const double volume = check_mesh(m.model.mesh).signed_volume;
+    const double volume = signed_volume(m.model.mesh);
     if (!(lod2 && m.lod == "2.2" && lod2_fit) && !(measured && same_model(m.model, *measured->first)))
       measured.emplace(&m.model, [&] {
         const StageTimer stage(Stage::measure);
