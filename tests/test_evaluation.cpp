@@ -391,6 +391,35 @@ TEST(SurfaceSupport, local_top_is_the_highest_point_within_the_radius_as_brute_f
   }
 }
 
+TEST(SurfaceSupport, the_raster_says_a_height_is_above_the_local_top_as_its_top_does) {
+  // above() skips the search where the lower bound already answers; its answer must be at()'s.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> xy(-20.0, 20.0), z(0.0, 15.0);
+  std::vector<Point3> points(2500);
+  for (auto& p : points) p = {xy(rng), xy(rng), z(rng)};
+  points.push_back({0.3, 0.3, 6.0});
+  const LocalTop top(points, 1.5);
+  Box2 region;
+  region.add({-22.0, -22.0});
+  region.add({22.0, 22.0});
+  const LocalTopRaster asked(top, region, 0.25), searched(top, region, 0.25);
+  std::uniform_real_distribution<double> q(-24.0, 24.0), h(-1.0, 17.0);
+  std::size_t above = 0, below = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const double x = q(rng), y = q(rng), height = h(rng);
+    const double t = searched.at(x, y);
+    const bool expected = !std::isnan(t) && height - t > 0.5;
+    EXPECT_EQ(asked.above(x, y, height, 0.5), expected) << x << " " << y << " " << height;
+    (expected ? above : below) += 1;
+  }
+  EXPECT_GT(above, 1000u);
+  EXPECT_GT(below, 1000u);
+  // Exactly at the tolerance above the top is not above it.
+  const double t = searched.at(0.3, 0.3);
+  EXPECT_FALSE(asked.above(0.3, 0.3, t + 0.5, 0.5));
+  EXPECT_TRUE(asked.above(0.3, 0.3, t + 0.5 + 1e-9, 0.5));
+}
+
 TEST(SurfaceSupport, local_top_counts_a_point_exactly_on_the_radius_and_none_beyond) {
   const LocalTop top({{0.0, 0.0, 3.0}, {10.0, 0.0, 7.0}}, 1.5);
   EXPECT_EQ(top.at(1.5, 0.0), 3.0);

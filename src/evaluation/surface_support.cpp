@@ -238,6 +238,19 @@ double LocalTopRaster::lower_bound_in(const Box2& box) const {
   return local_top_->lower_bound_in(grown);
 }
 
+bool LocalTopRaster::above(double x, double y, double z, double tolerance) const {
+  const long k = cell_of(x, y);
+  if (k < 0) return false;  // at() is NaN outside the region
+  const double cx = origin_.x + (static_cast<double>(k % nx_) + 0.5) * cell_;
+  const double cy = origin_.y + (static_cast<double>(k / nx_) + 0.5) * cell_;
+  // LocalTop::at(cx, cy) >= the bound, so its float (at()'s value) >= the bound's float: rounding to
+  // nearest and subtracting are monotone, and z - at() cannot exceed z - that float.
+  const double bound = static_cast<float>(local_top_->lower_bound(cx, cy));
+  if (!(z - bound > tolerance)) return false;
+  const double top = at(x, y);
+  return !std::isnan(top) && z - top > tolerance;
+}
+
 double LocalTopRaster::unsupported_area(const std::vector<Point3>& face, const SurfaceSupportParams& params) const {
   Box2 box;
   double highest = -std::numeric_limits<double>::infinity();

@@ -281,10 +281,8 @@ std::vector<InputCurve> support_cuts(const std::vector<Point3>& points, const st
       std::vector<Point2> bare;
       std::vector<Point3> samples;
       const double piece = sample_polygon(face, sp.sample_spacing, samples);
-      for (const Point3& p : samples) {
-        const double t = local_top.at(p.x, p.y);
-        if (!std::isnan(t) && p.z - t > sp.tolerance) bare.push_back({p.x, p.y});
-      }
+      for (const Point3& p : samples)
+        if (local_top.above(p.x, p.y, p.z, sp.tolerance)) bare.push_back({p.x, p.y});
       const double bare_area = piece * static_cast<double>(bare.size());
       if (!(bare_area > params.support_cut_area)) continue;
       std::vector<Point2> own;
