@@ -10,6 +10,7 @@
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/Triangulation_face_base_with_info_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 
 #include <Eigen/Eigenvalues>
@@ -224,7 +225,9 @@ int ring_contacts(const std::vector<P2>& r, const std::vector<P2>& s) {
 }
 
 using CdtVb = CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, Kernel>;
-using CdtFb = CGAL::Constrained_triangulation_face_base_2<Kernel>;
+// Each face's info: its nesting depth (triangulate_polygon).
+using CdtFb = CGAL::Triangulation_face_base_with_info_2<int, Kernel,
+                                                        CGAL::Constrained_triangulation_face_base_2<Kernel>>;
 using CdtTds = CGAL::Triangulation_data_structure_2<CdtVb, CdtFb>;
 using Cdt = CGAL::Constrained_Delaunay_triangulation_2<Kernel, CdtTds, CGAL::Exact_predicates_tag>;
 
@@ -243,34 +246,36 @@ std::vector<Triangle> triangulate_polygon(const std::vector<Point3>& vertices, c
     for (std::size_t k = 0; k < handles.size(); ++k)
       if (handles[k] != handles[(k + 1) % handles.size()]) cdt.insert_constraint(handles[k], handles[(k + 1) % handles.size()]);
   }
-  // Nesting depth by flooding from the infinite face across edges; constrained edges add one.
-  std::map<Cdt::Face_handle, int> depth;
-  std::vector<Cdt::Face_handle> frontier{cdt.infinite_face()};
-  depth[cdt.infinite_face()] = 0;
-  for (std::size_t k = 0; k < frontier.size(); ++k) {
-    const Cdt::Face_handle f = frontier[k];
+  // Nesting depth by flooding from the infinite face across edges; constrained edges add one. The
+  // depths live in the faces (-1: not reached yet); `reached` lists every face once.
+  for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->info() = -1;
+  std::vector<Cdt::Face_handle> reached{cdt.infinite_face()};
+  cdt.infinite_face()->info() = 0;
+  for (std::size_t k = 0; k < reached.size(); ++k) {
+    const Cdt::Face_handle f = reached[k];
     for (int e = 0; e < 3; ++e) {
       const Cdt::Face_handle g = f->neighbor(e);
-      if (depth.count(g)) continue;
-      depth[g] = depth[f] + (cdt.is_constrained({f, e}) ? 1 : 0);
-      frontier.push_back(g);
+      if (g->info() >= 0) continue;
+      g->info() = f->info() + (cdt.is_constrained({f, e}) ? 1 : 0);
+      reached.push_back(g);
     }
   }
   // Depth by plain flooding over-counts where constrained regions are reached the long way round;
-  // relax until stable (a few rounds for a polygon with holes).
+  // relax until stable (a few rounds for a polygon with holes). The relaxed depths are the fewest
+  // constrained edges crossed from the infinite face, whatever the order of the faces.
   for (bool changed = true; changed;) {
     changed = false;
-    for (auto& [f, d] : depth)
+    for (const Cdt::Face_handle& f : reached)
       for (int e = 0; e < 3; ++e) {
-        const auto it = depth.find(f->neighbor(e));
-        if (it == depth.end()) continue;
-        const int via = it->second + (cdt.is_constrained({f, e}) ? 1 : 0);
-        if (via < d) d = via, changed = true;
+        const int there = f->neighbor(e)->info();
+        if (there < 0) continue;
+        const int via = there + (cdt.is_constrained({f, e}) ? 1 : 0);
+        if (via < f->info()) f->info() = via, changed = true;
       }
   }
   std::vector<Triangle> out;
   for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
-    if (depth[f] % 2 == 0) continue;
+    if (f->info() % 2 == 0) continue;
     out.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});  // CDT faces are CCW
   }
   return out;
@@ -329,52 +334,82 @@ ShellResult check_shell(const std::vector<Point3>& v, const std::vector<SolidPol
   const auto report = [&](int code, int face, const std::string& info) { errors.push_back({code, shell_index, face, info}); };
   if (shell.size() < 4) report(301, -1, std::to_string(shell.size()) + " polygons");
 
-  // Directed edges of every ring, with their polygon.
-  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::size_t>> directed;
+  // Directed edges of every ring with their polygon, sorted by edge; stable, so that an edge's polygons
+  // stay in the order of the polygons. Each edge's entries are one run of `directed`.
+  struct DirectedEdge {
+    std::uint32_t a, b;
+    std::size_t face;
+  };
+  std::vector<DirectedEdge> directed;
   for (std::size_t f = 0; f < shell.size(); ++f)
     for (const Ring& r : shell[f])
-      for (std::size_t k = 0; k < r.size(); ++k) directed[{r[k], r[(k + 1) % r.size()]}].push_back(f);
+      for (std::size_t k = 0; k < r.size(); ++k) directed.push_back({r[k], r[(k + 1) % r.size()], f});
+  const auto edge_less = [](const DirectedEdge& x, const DirectedEdge& y) {
+    return x.a != y.a ? x.a < y.a : x.b < y.b;
+  };
+  std::stable_sort(directed.begin(), directed.end(), edge_less);
+  std::vector<std::size_t> run_start;  // where each edge's run begins, then the end
+  for (std::size_t i = 0; i < directed.size(); ++i)
+    if (i == 0 || edge_less(directed[i - 1], directed[i])) run_start.push_back(i);
+  run_start.push_back(directed.size());
+  // The run of edge (a, b): [first, last), empty when no polygon has it.
+  const auto run_of = [&](std::uint32_t a, std::uint32_t b) {
+    const DirectedEdge key{a, b, 0};
+    const auto range = std::equal_range(directed.begin(), directed.end(), key, edge_less);
+    return std::make_pair(static_cast<std::size_t>(range.first - directed.begin()),
+                          static_cast<std::size_t>(range.second - directed.begin()));
+  };
   std::size_t boundary = 0, overused = 0, same_direction = 0;
   int first_boundary_face = -1, first_overused_face = -1, first_flipped_face = -1;
-  for (const auto& [e, faces] : directed) {
-    const auto opposite = directed.find({e.second, e.first});
-    const std::size_t here = faces.size(), there = opposite == directed.end() ? 0 : opposite->second.size();
-    if (e.first > e.second && there > 0) continue;  // each undirected edge once
+  UnionFind parts(shell.size());  // connected components over shared edges (either direction)
+  for (std::size_t g = 0; g + 1 < run_start.size(); ++g) {
+    const std::size_t first = run_start[g], last = run_start[g + 1];
+    const DirectedEdge& e = directed[first];
+    const auto [opposite_first, opposite_last] = run_of(e.b, e.a);
+    for (std::size_t i = first + 1; i < last; ++i) parts.join(directed[i].face, e.face);
+    if (opposite_first != opposite_last) parts.join(e.face, directed[opposite_first].face);
+    const std::size_t here = last - first, there = opposite_last - opposite_first;
+    if (e.a > e.b && there > 0) continue;  // each undirected edge once
     if (here + there == 1) {
       ++boundary;
-      if (first_boundary_face < 0) first_boundary_face = static_cast<int>(faces.front());
+      if (first_boundary_face < 0) first_boundary_face = static_cast<int>(e.face);
     } else if (here + there > 2) {
       ++overused;
-      if (first_overused_face < 0) first_overused_face = static_cast<int>(faces.front());
+      if (first_overused_face < 0) first_overused_face = static_cast<int>(e.face);
     } else if (here == 2 || there == 2) {
       ++same_direction;
-      if (first_flipped_face < 0) first_flipped_face = static_cast<int>(here == 2 ? faces[1] : opposite->second[1]);
+      if (first_flipped_face < 0)
+        first_flipped_face =
+            static_cast<int>(here == 2 ? directed[first + 1].face : directed[opposite_first + 1].face);
     }
   }
   if (boundary) report(302, first_boundary_face, std::to_string(boundary) + " edges used by one polygon only");
-  if (overused) report(304, first_overused_face, std::to_string(overused) + " edges used by more than two polygons");
-
-  // Connected components over shared edges (either direction).
-  UnionFind parts(shell.size());
-  std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> first_of;
-  for (const auto& [e, faces] : directed) {
-    const auto [it, fresh] = first_of.emplace(std::minmax(e.first, e.second), faces.front());
-    for (std::size_t f : faces) parts.join(f, it->second);
-  }
+  if (overused)
+    report(304, first_overused_face, std::to_string(overused) + " edges used by more than two polygons");
   std::size_t components = 0;
   for (std::size_t f = 0; f < shell.size(); ++f) components += parts.find(f) == f;
   if (components > 1) report(305, -1, std::to_string(components) + " parts joined by no edge");
 
   // Vertex manifoldness: the polygons around a vertex must form one umbrella (connected through
-  // edges at that vertex).
+  // edges at that vertex). Each corner is (vertex, previous, next), sorted by vertex, stable.
   if (!boundary && !overused) {
-    std::map<std::uint32_t, std::vector<std::pair<std::uint32_t, std::uint32_t>>> corners;
+    std::vector<std::array<std::uint32_t, 3>> corners;
     for (const SolidPolygon& p : shell)
       for (const Ring& r : p)
         for (std::size_t k = 0; k < r.size(); ++k)
-          corners[r[k]].push_back({r[(k + r.size() - 1) % r.size()], r[(k + 1) % r.size()]});
+          corners.push_back({r[k], r[(k + r.size() - 1) % r.size()], r[(k + 1) % r.size()]});
+    std::stable_sort(corners.begin(), corners.end(),
+                     [](const auto& x, const auto& y) { return x[0] < y[0]; });
     std::size_t pinched = 0;
-    for (const auto& [vertex, around] : corners) pinched += detail::fans_around(around) > 1;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> around;
+    for (std::size_t i = 0; i < corners.size();) {
+      around.clear();
+      std::size_t j = i;
+      for (; j < corners.size() && corners[j][0] == corners[i][0]; ++j)
+        around.push_back({corners[j][1], corners[j][2]});
+      pinched += detail::fans_around(around) > 1;
+      i = j;
+    }
     if (pinched) report(303, -1, std::to_string(pinched) + " vertices whose polygons form more than one umbrella");
   }
   if (same_direction) report(307, first_flipped_face, std::to_string(same_direction) + " edges used twice in the same direction");
