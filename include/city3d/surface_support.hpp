@@ -58,10 +58,6 @@ class LocalTop {
   double lower_bound(double x, double y) const;
   /// A lower bound of at() over `box`, -inf when none is known somewhere in it.
   double lower_bound_in(const Box2& box) const;
-  /// Whether z lies more than `tolerance` above at(x, y) (false where at() is NaN). Where the lower
-  /// bound of the top at the cell's centre leaves z at most `tolerance` above it, the answer is known
-  /// without a search: at() (a float) is at least that bound rounded to a float.
-  bool above(double x, double y, double z, double tolerance) const;
   double radius() const { return radius_; }
 
  private:
