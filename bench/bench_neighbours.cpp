@@ -20,6 +20,7 @@
 
 #include "city3d/error.hpp"
 #include "city3d/point_cloud_io.hpp"
+#include "local_cloud.hpp"
 #include "planes/neighbours.hpp"
 
 namespace {
@@ -33,13 +34,7 @@ using TreeQuery =
                                                        CGAL::First_of_pair_property_map<PointWithNormal>>;
 
 std::vector<city3d::Point3> local_distinct_points(const std::string& path) {
-  const city3d::PointCloud cloud = city3d::read_point_cloud(path, city3d::kFieldXyz);
-  city3d::Box3 box;
-  for (const auto& p : cloud.points) box.add(p);
-  const city3d::Point3 centre{(box.min.x + box.max.x) / 2, (box.min.y + box.max.y) / 2,
-                              (box.min.z + box.max.z) / 2};
-  std::vector<city3d::Point3> local;
-  for (const auto& p : cloud.points) local.push_back({p.x - centre.x, p.y - centre.y, p.z - centre.z});
+  std::vector<city3d::Point3> local = city3d::bench::local_points(path);
   const auto less = [](const city3d::Point3& a, const city3d::Point3& b) {
     return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
   };

@@ -12,10 +12,11 @@
 
 #include "city3d/error.hpp"
 #include "city3d/heightmap.hpp"
-#include "city3d/polylines.hpp"
-#include "city3d/regularise.hpp"
 #include "city3d/planes.hpp"
 #include "city3d/point_cloud_io.hpp"
+#include "city3d/polylines.hpp"
+#include "city3d/regularise.hpp"
+#include "local_cloud.hpp"
 
 namespace {
 
@@ -23,18 +24,6 @@ using Clock = std::chrono::steady_clock;
 
 double ms_since(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-std::vector<city3d::Point3> local_points(const std::string& path) {
-  const city3d::PointCloud cloud = city3d::read_point_cloud(path, city3d::kFieldXyz);
-  city3d::Box3 box;
-  for (const auto& p : cloud.points) box.add(p);
-  const city3d::Point3 centre{(box.min.x + box.max.x) / 2, (box.min.y + box.max.y) / 2,
-                              (box.min.z + box.max.z) / 2};
-  std::vector<city3d::Point3> local;
-  local.reserve(cloud.points.size());
-  for (const auto& p : cloud.points) local.push_back({p.x - centre.x, p.y - centre.y, p.z - centre.z});
-  return local;
 }
 
 double percentile(std::vector<double> values, double q) {
@@ -73,7 +62,7 @@ int main(int argc, char** argv) {
   for (const auto& file : files) {
     const std::string name = std::filesystem::relative(file, folder).string();
     try {
-      const auto points = local_points(file.string());
+      const auto points = city3d::bench::local_points(file.string());
       auto start = Clock::now();
       const auto segments = city3d::detect_planes(points, plane_params);
       const double t_planes = ms_since(start);
