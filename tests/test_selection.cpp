@@ -715,6 +715,40 @@ TEST(Selection, program_that_made_cbc_abort_is_solved_and_the_process_lives_on) 
   EXPECT_NEAR(cbc.objective, glpk.objective, 1e-9);
 }
 
+// Two programs of the hypotheses whose relaxation is not integral, so that GLPK's branch-and-cut runs:
+// one of the Delft block (590 columns: MIR cuts alone) and one of city3d_dev (3,239 columns: Gomory
+// and MIR cuts; glpk_solver.cpp, kGomoryMinColumns). GLPK reaches CBC's optimum on both, with an
+// integral selection that keeps every row.
+TEST(Selection, glpk_search_reaches_the_optimum_on_either_side_of_the_gomory_threshold) {
+  for (const char* name : {"search_delft_590_columns.txt", "search_city3d_dev_3239_columns.txt"}) {
+    SCOPED_TRACE(name);
+    const detail::MipModel model = read_mip_model(name);
+    const detail::MipSolution glpk = detail::solve_with_glpk(model, detail::MipLimits{});
+    ASSERT_EQ(glpk.status, detail::MipStatus::optimal) << glpk.message;
+    const detail::MipSolution cbc = detail::solve_with_cbc(model, detail::MipLimits{});
+    ASSERT_EQ(cbc.status, detail::MipStatus::optimal) << cbc.message;
+    EXPECT_NEAR(glpk.objective, cbc.objective, 1e-9);
+    ASSERT_EQ(glpk.values.size(), model.columns.size());
+    double cost = 0.0;
+    for (std::size_t j = 0; j < model.columns.size(); ++j) {
+      const double v = glpk.values[j];
+      if (model.columns[j].integer) EXPECT_EQ(v, std::round(v)) << "column " << j;
+      EXPECT_GE(v, model.columns[j].lower - 1e-9) << "column " << j;
+      EXPECT_LE(v, model.columns[j].upper + 1e-9) << "column " << j;
+      cost += model.columns[j].cost * v;
+    }
+    EXPECT_NEAR(cost, glpk.objective, 1e-9);
+    for (std::size_t i = 0; i < model.rows.size(); ++i) {
+      const auto& row = model.rows[i];
+      double activity = 0.0;
+      for (std::size_t k = 0; k < row.columns.size(); ++k)
+        activity += row.values[k] * glpk.values[row.columns[k]];
+      EXPECT_GE(activity, row.lower - 1e-9) << "row " << i;
+      EXPECT_LE(activity, row.upper + 1e-9) << "row " << i;
+    }
+  }
+}
+
 // A program CBC cannot take (a NaN cost: Clp asserts `fabs(obj[i]) < 1.0e25' and aborts) ends CBC's
 // process, not this one, and comes back as a failed solve that says what happened.
 TEST(Selection, cbc_that_dies_inside_is_a_failed_solve_that_says_why) {
