@@ -1,13 +1,17 @@
 // Tests of the val3dity-equivalent validity check: a hand-made invalid solid for every error code
 // the check implements, each caught with its number, and valid solids that pass.
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <random>
 #include <string>
 #include <vector>
 
 #include "city3d/evaluation.hpp"
 #include "city3d/repair.hpp"
+#include "evaluation/validity_shared.hpp"
 
 namespace city3d {
 namespace {
@@ -280,6 +284,86 @@ TEST(Validity, shell_errors_name_the_first_polygon_and_count_the_edges) {
             "309 VERTICES_NOT_USED (4 vertices used by no polygon); "
             "302 SHELL_NOT_CLOSED (shell 0, face 6: 4 edges used by one polygon only); "
             "305 MULTIPLE_CONNECTED_COMPONENTS (shell 0: 2 parts joined by no edge); ");
+}
+
+// The shell check's own test of a triangle soup against CGAL's is_polygon_soup_a_polygon_mesh, which it
+// replaces before the self-intersection test: the same answer on closed surfaces and on soups broken
+// the ways a model can be (a triangle flipped, dropped or doubled, two vertices welded, a component
+// added that touches the first at a vertex or along an edge, a triangle of random vertices).
+TEST(Validity, triangle_soups_form_a_surface_exactly_when_cgal_says_so) {
+  using Tri = std::array<std::uint32_t, 3>;
+  // An octahedron (vertices 0..5) and a triangulated cube (vertices 0..7), both closed and outward.
+  const std::vector<Tri> octahedron = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4},
+                                       {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  const std::vector<Tri> cube = {{0, 3, 2}, {0, 2, 1}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                                 {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+  const auto shifted = [](std::vector<Tri> t, std::uint32_t by) {
+    for (Tri& x : t)
+      for (std::uint32_t& i : x) i += by;
+    return t;
+  };
+  const auto cgal_says = [](const std::vector<Tri>& t) {
+    return CGAL::Polygon_mesh_processing::is_polygon_soup_a_polygon_mesh(t);
+  };
+  std::mt19937 rng(2611);
+  std::size_t surfaces = 0, soups = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    std::vector<Tri> t = trial % 2 ? cube : octahedron;
+    const std::uint32_t n = trial % 2 ? 8 : 6;
+    const int mutations = static_cast<int>(rng() % 3);
+    for (int m = 0; m < mutations && !t.empty(); ++m) {
+      const std::size_t k = rng() % t.size();
+      switch (rng() % 7) {
+        case 0:
+          std::swap(t[k][0], t[k][1]);
+          break;  // flipped
+        case 1:
+          t.erase(t.begin() + static_cast<std::ptrdiff_t>(k));
+          break;
+        case 2:
+          t.push_back(t[k]);
+          break;   // doubled
+        case 3: {  // two vertices welded
+          const std::uint32_t a = rng() % n, b = rng() % n;
+          for (Tri& x : t)
+            for (std::uint32_t& i : x)
+              if (i == a) i = b;
+          break;
+        }
+        case 4: {  // a second octahedron sharing one vertex (a pinch) or an edge with the first
+          std::vector<Tri> other = shifted(octahedron, 100);
+          const bool edge = rng() % 2;
+          for (Tri& x : other)
+            for (std::uint32_t& i : x) {
+              if (i == 100) i = 0;
+              if (edge && i == 102) i = 2;
+            }
+          t.insert(t.end(), other.begin(), other.end());
+          break;
+        }
+        case 5: {  // a second, separate cube: still a surface
+          const std::vector<Tri> other = shifted(cube, 200);
+          t.insert(t.end(), other.begin(), other.end());
+          break;
+        }
+        default:
+          t.push_back({static_cast<std::uint32_t>(rng() % n), static_cast<std::uint32_t>(rng() % n),
+                       static_cast<std::uint32_t>(rng() % n)});
+      }
+    }
+    const bool expected = cgal_says(t);
+    ASSERT_EQ(detail::triangles_form_a_surface(t), expected) << "trial " << trial;
+    (expected ? surfaces : soups) += 1;
+  }
+  // Both answers are exercised, often.
+  EXPECT_GT(surfaces, 1000u);
+  EXPECT_GT(soups, 1000u);
+  EXPECT_TRUE(detail::triangles_form_a_surface({}));
+  // A triangle with a vertex twice, alone (its edges and corners alone would pass), and two triangles
+  // back to back (a closed surface of two faces).
+  for (const std::vector<Tri>& t : {std::vector<Tri>{{0, 0, 1}}, std::vector<Tri>{{0, 1, 2}, {0, 2, 1}}})
+    EXPECT_EQ(detail::triangles_form_a_surface(t), cgal_says(t));
+  EXPECT_FALSE(detail::triangles_form_a_surface({{0, 0, 1}}));
 }
 
 TEST(Validity, catches_309_vertices_not_used) {

@@ -287,9 +287,61 @@ Vec triangle_normal(const std::vector<Point3>& v, const Triangle& t) {
 
 using Mesh = CGAL::Surface_mesh<P3>;
 
-// A triangle soup as a CGAL mesh, or false when it is not a valid polygon mesh.
+}  // namespace
+
+namespace detail {
+
+bool triangles_form_a_surface(const std::vector<std::array<std::uint32_t, 3>>& triangles) {
+  // No triangle with a vertex twice, and no directed edge twice (then no edge has more than two
+  // triangles either: one in each direction).
+  std::vector<std::uint64_t> directed;
+  directed.reserve(3 * triangles.size());
+  for (const Triangle& t : triangles) {
+    if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) return false;
+    for (std::size_t k = 0; k < 3; ++k) directed.push_back(std::uint64_t{t[k]} << 32 | t[(k + 1) % 3]);
+  }
+  std::sort(directed.begin(), directed.end());
+  if (std::adjacent_find(directed.begin(), directed.end()) != directed.end()) return false;
+  // One umbrella per vertex: its corners (vertex, previous, next) joined where one's next is
+  // another's previous (the edge they share) form one part.
+  std::vector<std::array<std::uint32_t, 3>> corners;
+  corners.reserve(3 * triangles.size());
+  for (const Triangle& t : triangles)
+    for (std::size_t k = 0; k < 3; ++k) corners.push_back({t[k], t[(k + 2) % 3], t[(k + 1) % 3]});
+  std::sort(corners.begin(), corners.end());  // by vertex, then by previous: unique (previous, vertex) edges
+  std::vector<std::size_t> parent;
+  for (std::size_t i = 0; i < corners.size();) {
+    std::size_t j = i;
+    while (j < corners.size() && corners[j][0] == corners[i][0]) ++j;
+    parent.resize(j - i);
+    std::iota(parent.begin(), parent.end(), std::size_t{0});
+    const auto find = [&](std::size_t c) {
+      while (parent[c] != c) c = parent[c] = parent[parent[c]];
+      return c;
+    };
+    for (std::size_t c = i; c < j; ++c) {
+      const auto after = std::lower_bound(corners.begin() + static_cast<std::ptrdiff_t>(i),
+                                          corners.begin() + static_cast<std::ptrdiff_t>(j),
+                                          std::array<std::uint32_t, 3>{corners[c][0], corners[c][2], 0});
+      if (after != corners.begin() + static_cast<std::ptrdiff_t>(j) && (*after)[1] == corners[c][2])
+        parent[find(c - i)] = find(static_cast<std::size_t>(after - corners.begin()) - i);
+    }
+    std::size_t parts = 0;
+    for (std::size_t c = 0; c < parent.size(); ++c) parts += find(c) == c;
+    if (parts > 1) return false;
+    i = j;
+  }
+  return true;
+}
+
+}  // namespace detail
+
+namespace {
+
+// A triangle soup as a CGAL mesh, or false when it is not a valid polygon mesh (the conditions of
+// CGAL's is_polygon_soup_a_polygon_mesh, checked by triangles_form_a_surface on sorted vectors).
 bool to_surface_mesh(const std::vector<Point3>& vertices, const std::vector<Triangle>& triangles, Mesh& mesh) {
-  namespace PMP = CGAL::Polygon_mesh_processing;
+  if (!detail::triangles_form_a_surface(triangles)) return false;
   // The soup's points in the order the triangles first use them (the mesh's vertex order).
   constexpr std::size_t kUnused = std::numeric_limits<std::size_t>::max();
   std::vector<P3> points;
@@ -307,8 +359,7 @@ bool to_surface_mesh(const std::vector<Point3>& vertices, const std::vector<Tria
       f[k] = local[i];
     }
   }
-  if (!PMP::is_polygon_soup_a_polygon_mesh(faces)) return false;
-  PMP::polygon_soup_to_polygon_mesh(points, faces, mesh);
+  CGAL::Polygon_mesh_processing::polygon_soup_to_polygon_mesh(points, faces, mesh);
   return true;
 }
 

@@ -2,6 +2,7 @@
 // text with fixed decimals, and val3dity's vertex snapping. Private to the two.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <sstream>
 #include <string>
@@ -30,5 +31,10 @@ std::vector<ValidityError> validate_snapped_solid(const std::vector<Point3>& ver
                                                   const std::vector<std::vector<SolidPolygon>>& shells,
                                                   const std::vector<std::uint32_t>& snapped,
                                                   const ValidityParams& params);
+
+// Whether triangles (vertex ids) form a surface CGAL can hold: no triangle with a vertex twice, no
+// directed edge twice, and the triangles around each vertex one umbrella (joined through the edges they
+// share). The same answer as CGAL's is_polygon_soup_a_polygon_mesh, from sorted vectors instead of sets.
+bool triangles_form_a_surface(const std::vector<std::array<std::uint32_t, 3>>& triangles);
 
 }  // namespace city3d::detail
