@@ -606,6 +606,69 @@ TEST(JournalRecord, footprint_reads_back_with_bit_identical_coordinates_and_ever
   fs::remove_all(dir);
 }
 
+// The finalise takes the records of the journal the run has just written from the journal itself
+// (Journal::written()) instead of parsing every line back: they must be what a reader of the file finds,
+// field for field, for a fresh journal and for a resumed one (its kept lines rewritten, then appends),
+// with an id that is not valid UTF-8 (the line holds it replaced) and an index written twice.
+TEST(JournalRecord, the_records_a_run_wrote_are_those_a_reader_of_its_journal_finds) {
+  using namespace city3d;
+  const fs::path dir = fs::temp_directory_path() / "city3d_journal_written";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  detail::JournalHeader header;
+  header.fingerprint = "test";
+  header.expected = 6;
+  header.layout.records = 6;
+  const auto record = [](std::uint64_t index, std::string id, BuildingStatus status) {
+    detail::BuildingRecord r;
+    r.index = index;
+    r.id = std::move(id);
+    r.status = status;
+    r.report_csv = r.id + ",row";
+    r.report_json = "{\"n\":" + std::to_string(index) + "}";
+    r.feature = "{\"type\":\"CityJSONFeature\"}";
+    return r;
+  };
+  const auto same_records = [&](const std::vector<detail::RecordRef>& written) {
+    const std::string path = (dir / "resume.journal").string();
+    const detail::JournalReader from_file(path);
+    const detail::JournalReader as_written(path, header, written);
+    ASSERT_EQ(as_written.records().size(), from_file.records().size());
+    for (std::size_t k = 0; k < from_file.records().size(); ++k) {
+      const detail::RecordRef &a = as_written.records()[k], &b = from_file.records()[k];
+      SCOPED_TRACE(b.id);
+      EXPECT_EQ(a.index, b.index);
+      EXPECT_EQ(a.id, b.id);
+      EXPECT_EQ(a.status, b.status);
+      EXPECT_EQ(a.model_file, b.model_file);
+      EXPECT_EQ(a.model_hash, b.model_hash);
+      EXPECT_EQ(a.offset, b.offset);
+      EXPECT_EQ(a.length, b.length);
+      EXPECT_EQ(as_written.read(a).report_json, from_file.read(b).report_json);
+    }
+  };
+  {
+    detail::Journal journal(dir.string(), header, false);
+    journal.append(record(2, "b2", BuildingStatus::ok));
+    journal.append(record(0, std::string("b\xff\xfe0 \"\u00e9\""), BuildingStatus::fallback));
+    journal.append(record(1, "b1", BuildingStatus::failed));
+    journal.append(record(2, "b2 again", BuildingStatus::partial));
+    journal.close();
+    EXPECT_EQ(journal.written().size(), 4u);
+    same_records(journal.written());
+  }
+  {
+    detail::Journal journal(dir.string(), header, true);  // resumed: three records kept, rewritten
+    EXPECT_EQ(journal.restored(), 3u);
+    journal.append(record(4, "b4", BuildingStatus::skipped));
+    journal.append(record(0, "b0 recomputed", BuildingStatus::ok));
+    journal.close();
+    EXPECT_EQ(journal.written().size(), 5u);
+    same_records(journal.written());
+  }
+  fs::remove_all(dir);
+}
+
 TEST(FootprintSource, regions_read_through_the_spatial_filter_hold_the_scans_footprints_with_its_numbers) {
   using namespace city3d;
   for (const std::string& path : {std::string(CITY3D_SAMPLE_DATA) + "/delft_sample_footprints.gpkg",

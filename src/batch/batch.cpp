@@ -760,8 +760,8 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   journal.close();
   progress.finish();
 
-  // The run-level files, from the journal's records.
-  const detail::JournalReader reader(journal.path());
+  // The run-level files, from the journal's records (as this run wrote them: not parsed again).
+  const detail::JournalReader reader(journal.path(), header, journal.written());
   std::vector<detail::RecordSource> sources;
   for (const detail::RecordRef& ref : reader.records()) sources.push_back({&reader, &ref});
   std::sort(sources.begin(), sources.end(),

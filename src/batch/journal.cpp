@@ -311,7 +311,6 @@ JournalReader::JournalReader(std::string path) : path_(std::move(path)) {
   std::string line;
   std::uint64_t offset = 0;
   std::size_t number = 0;
-  std::map<std::uint64_t, std::size_t> position_of_index;
   while (std::getline(in, line)) {
     const std::uint64_t line_offset = offset;
     offset += line.size() + 1;
@@ -338,11 +337,7 @@ JournalReader::JournalReader(std::string path) : path_(std::move(path)) {
         parse_record_summary(j, ref);
         ref.offset = line_offset;
         ref.length = line.size();
-        const auto [it, fresh] = position_of_index.emplace(ref.index, records_.size());
-        if (fresh)
-          records_.push_back(std::move(ref));
-        else
-          records_[it->second] = std::move(ref);
+        add_record(std::move(ref));
         continue;
       } catch (const std::exception&) {
       }
@@ -356,6 +351,19 @@ JournalReader::JournalReader(std::string path) : path_(std::move(path)) {
     }
     damaged_.emplace_back(number, id);
   }
+}
+
+JournalReader::JournalReader(std::string path, JournalHeader header, const std::vector<RecordRef>& written)
+    : path_(std::move(path)), header_ok_(true), header_(std::move(header)) {
+  for (const RecordRef& ref : written) add_record(ref);
+}
+
+void JournalReader::add_record(RecordRef ref) {
+  const auto [it, fresh] = position_of_index_.emplace(ref.index, records_.size());
+  if (fresh)
+    records_.push_back(std::move(ref));
+  else
+    records_[it->second] = std::move(ref);
 }
 
 std::string JournalReader::line(const RecordRef& ref) const {
@@ -402,6 +410,7 @@ Journal::Journal(const std::string& output_dir, JournalHeader header, bool resum
         }
         kept.push_back(old.line(ref));
         done_[ref.index] = ref;
+        written_.push_back(ref);  // its offset in the rewritten file below
       }
     } else {
       if (!same)
@@ -414,6 +423,16 @@ Journal::Journal(const std::string& output_dir, JournalHeader header, bool resum
   }
   // Rewrite the journal with its good lines only, then append to it.
   write_journal(path_, header, kept.size(), [&kept](std::size_t k) { return kept[k]; });
+  // The kept lines end the file, in order, after its header line.
+  std::error_code size_error;
+  size_ = fs::file_size(path_, size_error);
+  if (size_error) throw IoError("resume: cannot read " + path_ + ": " + size_error.message());
+  std::uint64_t offset = size_;
+  for (const RecordRef& ref : written_) offset -= ref.length + 1;
+  for (RecordRef& ref : written_) {
+    ref.offset = offset;
+    offset += ref.length + 1;
+  }
   file_ = std::fopen(path_.c_str(), "ab");
   if (!file_) throw IoError("resume: cannot append to " + path_ + ": " + std::strerror(errno));
   if (!done_.empty()) log_info("resume: " + std::to_string(done_.size()) + " finished buildings in " + path_);
@@ -434,9 +453,22 @@ const RecordRef* Journal::find(std::uint64_t index) const {
 
 void Journal::append(const BuildingRecord& record) {
   const std::string line = make_line(record_json(record)) + "\n";
+  // Its summary as a reader parses it back from the line: the strings as the line holds them (invalid
+  // UTF-8 replaced), the status by its name.
+  RecordRef ref;
+  const auto as_written = [](const std::string& s) { return json::parse(dump(json(s))).get<std::string>(); };
+  ref.index = record.index;
+  ref.id = as_written(record.id);
+  ref.status = parse_status(status_name(record.status));
+  ref.model_file = as_written(record.model_file);
+  ref.model_hash = as_written(record.model_hash);
+  ref.length = line.size() - 1;
   std::lock_guard<std::mutex> lock(mutex_);
   if (!file_ || std::fwrite(line.data(), 1, line.size(), file_) != line.size() || std::fflush(file_) != 0)
     throw IoError("resume: cannot append to " + path_ + ": " + std::strerror(errno));
+  ref.offset = size_;
+  size_ += line.size();
+  written_.push_back(std::move(ref));
 }
 
 void write_journal(const std::string& path, const JournalHeader& header, std::size_t count,

@@ -88,6 +88,10 @@ class JournalReader {
  public:
   /// Throws IoError when the file cannot be read.
   explicit JournalReader(std::string path);
+  /// A journal this process has just written (Journal::written()): its records as written, not read
+  /// back and parsed; each is still checked when read(). The same records the constructor above would
+  /// find in the file.
+  JournalReader(std::string path, JournalHeader header, const std::vector<RecordRef>& written);
   const std::string& path() const { return path_; }
   /// False when the first line is missing, damaged or not a city3d journal of this version.
   bool header_ok() const { return header_ok_; }
@@ -106,7 +110,9 @@ class JournalReader {
   bool header_ok_ = false;
   JournalHeader header_;
   std::vector<RecordRef> records_;
+  std::map<std::uint64_t, std::size_t> position_of_index_;  ///< where each index is in records_
   std::vector<std::pair<std::size_t, std::string>> damaged_;
+  void add_record(RecordRef ref);  ///< a later record of an index replaces the earlier one, in its place
   mutable std::ifstream in_;  ///< kept open for read() and line()
   mutable std::mutex in_mutex_;  ///< one reader of in_ at a time (the parsing is outside it)
 };
@@ -132,6 +138,9 @@ class Journal {
   void append(const BuildingRecord& record);
   /// Flushes and closes the file (the destructor does too).
   void close();
+  /// Every record line of the file, in file order, as JournalReader would read it back: the kept
+  /// records of a resumed journal, then those appended. After close(), for the run's finalise.
+  const std::vector<RecordRef>& written() const { return written_; }
   /// Model files (name under models/, content hash) an earlier run of other inputs or parameters
   /// recorded in this folder's journal.
   const std::vector<std::pair<std::string, std::string>>& earlier_models() const { return earlier_models_; }
@@ -141,6 +150,8 @@ class Journal {
   std::FILE* file_ = nullptr;
   std::mutex mutex_;
   std::map<std::uint64_t, RecordRef> done_;
+  std::vector<RecordRef> written_;
+  std::uint64_t size_ = 0;  ///< the file's size: where the next line begins
   std::vector<std::pair<std::string, std::string>> earlier_models_;
 };
 
