@@ -515,17 +515,33 @@ TEST(CityJsonAssembly, features_spliced_into_one_file_equal_write_cityjson_of_th
   fs::remove_all(dir);
 }
 
+namespace {
+
+// A folder of this name in the temporary directory, emptied.
+fs::path empty_folder(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+// The header of a test journal of `records` records.
+city3d::detail::JournalHeader journal_header(std::size_t records) {
+  city3d::detail::JournalHeader header;
+  header.fingerprint = "test";
+  header.expected = records;
+  header.layout.records = records;
+  return header;
+}
+
+}  // namespace
+
 // The overview outputs of a merge (buildings.gpkg, report.html) are made from the records alone, so a
 // record must give back its footprint exactly: coordinates to the bit, every attribute with its type.
 TEST(JournalRecord, footprint_reads_back_with_bit_identical_coordinates_and_every_attribute_type) {
   using namespace city3d;
-  const fs::path dir = fs::temp_directory_path() / "city3d_journal_footprint";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  detail::JournalHeader header;
-  header.fingerprint = "test";
-  header.expected = 1;
-  header.layout.records = 1;
+  const fs::path dir = empty_folder("city3d_journal_footprint");
+  detail::JournalHeader header = journal_header(1);
   header.layout.gpkg = true;
   detail::BuildingRecord record;
   record.index = 0;
@@ -612,13 +628,8 @@ TEST(JournalRecord, footprint_reads_back_with_bit_identical_coordinates_and_ever
 // with an id that is not valid UTF-8 (the line holds it replaced) and an index written twice.
 TEST(JournalRecord, the_records_a_run_wrote_are_those_a_reader_of_its_journal_finds) {
   using namespace city3d;
-  const fs::path dir = fs::temp_directory_path() / "city3d_journal_written";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  detail::JournalHeader header;
-  header.fingerprint = "test";
-  header.expected = 6;
-  header.layout.records = 6;
+  const fs::path dir = empty_folder("city3d_journal_written");
+  const detail::JournalHeader header = journal_header(6);
   const auto record = [](std::uint64_t index, std::string id, BuildingStatus status) {
     detail::BuildingRecord r;
     r.index = index;
