@@ -661,7 +661,7 @@ TEST(JournalRecord, the_records_a_run_wrote_are_those_a_reader_of_its_journal_fi
   {
     detail::Journal journal(dir.string(), header, false);
     journal.append(record(2, "b2", BuildingStatus::ok));
-    journal.append(record(0, std::string("b\xff\xfe0 \"\u00e9\""), BuildingStatus::fallback));
+    journal.append(record(0, std::string("b\xff\xfe" "0 \"\u00e9\""), BuildingStatus::fallback));
     journal.append(record(1, "b1", BuildingStatus::failed));
     journal.append(record(2, "b2 again", BuildingStatus::partial));
     journal.close();
