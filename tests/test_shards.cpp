@@ -623,7 +623,7 @@ TEST(JournalRecord, footprint_reads_back_with_bit_identical_coordinates_and_ever
 }
 
 // The finalise takes the records of the journal the run has just written from the journal itself
-// (Journal::written()) instead of parsing every line back: they must be what a reader of the file finds,
+// (Journal::take_written()) instead of parsing every line back: they must be what a reader of the file finds,
 // field for field, for a fresh journal and for a resumed one (its kept lines rewritten, then appends),
 // with an id that is not valid UTF-8 (the line holds it replaced) and an index written twice.
 TEST(JournalRecord, the_records_a_run_wrote_are_those_a_reader_of_its_journal_finds) {
@@ -640,10 +640,10 @@ TEST(JournalRecord, the_records_a_run_wrote_are_those_a_reader_of_its_journal_fi
     r.feature = "{\"type\":\"CityJSONFeature\"}";
     return r;
   };
-  const auto same_records = [&](const std::vector<detail::RecordRef>& written) {
+  const auto same_records = [&](std::vector<detail::RecordRef> written) {
     const std::string path = (dir / "resume.journal").string();
     const detail::JournalReader from_file(path);
-    const detail::JournalReader as_written(path, header, written);
+    const detail::JournalReader as_written(path, header, std::move(written));
     ASSERT_EQ(as_written.records().size(), from_file.records().size());
     for (std::size_t k = 0; k < from_file.records().size(); ++k) {
       const detail::RecordRef &a = as_written.records()[k], &b = from_file.records()[k];
@@ -665,8 +665,9 @@ TEST(JournalRecord, the_records_a_run_wrote_are_those_a_reader_of_its_journal_fi
     journal.append(record(1, "b1", BuildingStatus::failed));
     journal.append(record(2, "b2 again", BuildingStatus::partial));
     journal.close();
-    EXPECT_EQ(journal.written().size(), 4u);
-    same_records(journal.written());
+    std::vector<detail::RecordRef> written = journal.take_written();
+    EXPECT_EQ(written.size(), 4u);
+    same_records(std::move(written));
   }
   {
     detail::Journal journal(dir.string(), header, true);  // resumed: three records kept, rewritten
@@ -674,8 +675,9 @@ TEST(JournalRecord, the_records_a_run_wrote_are_those_a_reader_of_its_journal_fi
     journal.append(record(4, "b4", BuildingStatus::skipped));
     journal.append(record(0, "b0 recomputed", BuildingStatus::ok));
     journal.close();
-    EXPECT_EQ(journal.written().size(), 5u);
-    same_records(journal.written());
+    std::vector<detail::RecordRef> written = journal.take_written();
+    EXPECT_EQ(written.size(), 5u);
+    same_records(std::move(written));
   }
   fs::remove_all(dir);
 }

@@ -761,7 +761,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   progress.finish();
 
   // The run-level files, from the journal's records (as this run wrote them: not parsed again).
-  const detail::JournalReader reader(journal.path(), header, journal.written());
+  const detail::JournalReader reader(journal.path(), header, journal.take_written());
   std::vector<detail::RecordSource> sources;
   for (const detail::RecordRef& ref : reader.records()) sources.push_back({&reader, &ref});
   std::sort(sources.begin(), sources.end(),

@@ -353,9 +353,10 @@ JournalReader::JournalReader(std::string path) : path_(std::move(path)) {
   }
 }
 
-JournalReader::JournalReader(std::string path, JournalHeader header, const std::vector<RecordRef>& written)
+JournalReader::JournalReader(std::string path, JournalHeader header, std::vector<RecordRef> written)
     : path_(std::move(path)), header_ok_(true), header_(std::move(header)) {
-  for (const RecordRef& ref : written) add_record(ref);
+  records_.reserve(written.size());
+  for (RecordRef& ref : written) add_record(std::move(ref));
 }
 
 void JournalReader::add_record(RecordRef ref) {
@@ -433,6 +434,8 @@ Journal::Journal(const std::string& output_dir, JournalHeader header, bool resum
     ref.offset = offset;
     offset += ref.length + 1;
   }
+  appended_.reserve(header.expected);
+  appended_text_.reserve(header.expected * 128);  // ids, model file names and hashes of about this size
   file_ = std::fopen(path_.c_str(), "ab");
   if (!file_) throw IoError("resume: cannot append to " + path_ + ": " + std::strerror(errno));
   if (!done_.empty()) log_info("resume: " + std::to_string(done_.size()) + " finished buildings in " + path_);
@@ -455,20 +458,43 @@ void Journal::append(const BuildingRecord& record) {
   const std::string line = make_line(record_json(record)) + "\n";
   // Its summary as a reader parses it back from the line: the strings as the line holds them (invalid
   // UTF-8 replaced), the status by its name.
-  RecordRef ref;
   const auto as_written = [](const std::string& s) { return json::parse(dump(json(s))).get<std::string>(); };
-  ref.index = record.index;
-  ref.id = as_written(record.id);
-  ref.status = parse_status(status_name(record.status));
-  ref.model_file = as_written(record.model_file);
-  ref.model_hash = as_written(record.model_hash);
-  ref.length = line.size() - 1;
+  const std::string id = as_written(record.id), model_file = as_written(record.model_file),
+                    model_hash = as_written(record.model_hash);
   std::lock_guard<std::mutex> lock(mutex_);
   if (!file_ || std::fwrite(line.data(), 1, line.size(), file_) != line.size() || std::fflush(file_) != 0)
     throw IoError("resume: cannot append to " + path_ + ": " + std::strerror(errno));
-  ref.offset = size_;
+  Appended a{record.index, size_, line.size() - 1, parse_status(status_name(record.status)), 0, 0, 0};
+  appended_text_ += id;
+  a.id_end = appended_text_.size();
+  appended_text_ += model_file;
+  a.model_file_end = appended_text_.size();
+  appended_text_ += model_hash;
+  a.model_hash_end = appended_text_.size();
+  appended_.push_back(a);
   size_ += line.size();
-  written_.push_back(std::move(ref));
+}
+
+std::vector<RecordRef> Journal::take_written() {
+  std::vector<RecordRef> refs = std::move(written_);
+  refs.reserve(refs.size() + appended_.size());
+  std::size_t begin = 0;
+  for (const Appended& a : appended_) {
+    RecordRef ref;
+    ref.index = a.index;
+    ref.status = a.status;
+    ref.offset = a.offset;
+    ref.length = a.length;
+    ref.id = appended_text_.substr(begin, a.id_end - begin);
+    ref.model_file = appended_text_.substr(a.id_end, a.model_file_end - a.id_end);
+    ref.model_hash = appended_text_.substr(a.model_file_end, a.model_hash_end - a.model_file_end);
+    begin = a.model_hash_end;
+    refs.push_back(std::move(ref));
+  }
+  written_.clear();
+  std::vector<Appended>().swap(appended_);
+  std::string().swap(appended_text_);
+  return refs;
 }
 
 void write_journal(const std::string& path, const JournalHeader& header, std::size_t count,
