@@ -3,15 +3,15 @@
 // restored model is bit-identical to the computed one.
 #include "batch/journal.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <sstream>
-
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
@@ -434,8 +434,11 @@ Journal::Journal(const std::string& output_dir, JournalHeader header, bool resum
     ref.offset = offset;
     offset += ref.length + 1;
   }
-  appended_.reserve(header.expected);
-  appended_text_.reserve(header.expected * 128);  // ids, model file names and hashes of about this size
+  // Room for the records to come, reserved here on the main thread (up to 131,072 records: beyond that
+  // the lists grow, in large blocks).
+  const std::size_t room = static_cast<std::size_t>(std::min<std::uint64_t>(header.expected, 1u << 17));
+  appended_.reserve(room);
+  appended_text_.reserve(room * 128);  // ids, model file names and hashes of about this size
   file_ = std::fopen(path_.c_str(), "ab");
   if (!file_) throw IoError("resume: cannot append to " + path_ + ": " + std::strerror(errno));
   if (!done_.empty()) log_info("resume: " + std::to_string(done_.size()) + " finished buildings in " + path_);

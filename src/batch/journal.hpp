@@ -88,7 +88,7 @@ class JournalReader {
  public:
   /// Throws IoError when the file cannot be read.
   explicit JournalReader(std::string path);
-  /// A journal this process has just written (Journal::written()): its records as written, not read
+  /// A journal this process has just written (Journal::take_written()): its records as written, not read
   /// back and parsed; each is still checked when read(). The same records the constructor above would
   /// find in the file.
   JournalReader(std::string path, JournalHeader header, std::vector<RecordRef> written);

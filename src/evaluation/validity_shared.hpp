@@ -1,5 +1,6 @@
 // What the validity check (validity.cpp) and the repair (src/repair/repair.cpp) share: a measurement as
-// text with fixed decimals, and val3dity's vertex snapping. Private to the two.
+// text with fixed decimals, and val3dity's vertex snapping; and the check's test of a shell's triangles,
+// for tests/test_validity.cpp. Private to these.
 #pragma once
 
 #include <array>
