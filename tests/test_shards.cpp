@@ -640,7 +640,11 @@ TEST(JournalRecord, the_records_a_run_wrote_are_those_a_reader_of_its_journal_fi
     r.feature = "{\"type\":\"CityJSONFeature\"}";
     return r;
   };
-  const auto same_records = [&](std::vector<detail::RecordRef> written) {
+  // Closes the journal and compares what it wrote (`count` records) with a reader of its file.
+  const auto same_records = [&](detail::Journal& journal, std::size_t count) {
+    journal.close();
+    std::vector<detail::RecordRef> written = journal.take_written();
+    EXPECT_EQ(written.size(), count);
     const std::string path = (dir / "resume.journal").string();
     const detail::JournalReader from_file(path);
     const detail::JournalReader as_written(path, header, std::move(written));
@@ -664,20 +668,14 @@ TEST(JournalRecord, the_records_a_run_wrote_are_those_a_reader_of_its_journal_fi
     journal.append(record(0, std::string("b\xff\xfe" "0 \"\u00e9\""), BuildingStatus::fallback));
     journal.append(record(1, "b1", BuildingStatus::failed));
     journal.append(record(2, "b2 again", BuildingStatus::partial));
-    journal.close();
-    std::vector<detail::RecordRef> written = journal.take_written();
-    EXPECT_EQ(written.size(), 4u);
-    same_records(std::move(written));
+    same_records(journal, 4);
   }
   {
     detail::Journal journal(dir.string(), header, true);  // resumed: three records kept, rewritten
     EXPECT_EQ(journal.restored(), 3u);
     journal.append(record(4, "b4", BuildingStatus::skipped));
     journal.append(record(0, "b0 recomputed", BuildingStatus::ok));
-    journal.close();
-    std::vector<detail::RecordRef> written = journal.take_written();
-    EXPECT_EQ(written.size(), 5u);
-    same_records(std::move(written));
+    same_records(journal, 5);
   }
   fs::remove_all(dir);
 }

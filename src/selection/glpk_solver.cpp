@@ -143,10 +143,10 @@ void run_glpk(GlpkRun& run) {
     // makes it 10-100x slower (building the conflict graph); cover cuts change nothing or slow it.
     // With Gomory + MIR it solves ~2,000 variables in 0.1-0.2 s and ~5,500 in 1.5-2.2 s.
     // On the hypotheses' own programs that reach the search, the Gomory cuts pay only on large ones:
-    // up to kGomoryMinColumns columns MIR alone takes 10-22% less time per size class, with the same
+    // up to kGomoryMinColumns columns MIR alone takes 7-36% less time per size class, with the same
     // solutions (the Delft block, city3d_dev and city3d_dev_large byte-identical); above it,
-    // Gomory cuts save up to 5x (city3d_dev's programs of 3,239 columns: 0.18 s against 1.2 s).
-    // docs/BENCHMARKS.md, "CPU: issue 27, fourteenth step".
+    // Gomory cuts save up to 7x (city3d_dev's programs of 3,239 columns: 0.18 s each against 0.53 and 1.23
+    // s). docs/BENCHMARKS.md, "CPU: issue 27, fourteenth step".
     parm.gmi_cuts = n > kGomoryMinColumns ? GLP_ON : GLP_OFF;
     parm.mir_cuts = GLP_ON;
     parm.tm_lim = run.tm_lim;
