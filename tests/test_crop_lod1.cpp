@@ -520,6 +520,90 @@ TEST(Crop, brute_force_agrees_with_the_grid_on_many_footprints) {
     EXPECT_EQ(inputs[f].points.size(), static_cast<std::size_t>(expected[f])) << f;
 }
 
+TEST(Crop, brute_force_agrees_with_the_grid_on_ground_buffers_and_on_presence_from_every_class) {
+  // 36 L-shaped footprints 14 m apart: their 3 m ground buffers and 12 m wide boxes overlap their
+  // neighbours'. Points on a 0.5 m lattice offset by 0.25 m (none on an edge), of classes 1, 2 and 6
+  // in turn, and ground points exactly 3 m below a footprint's bottom edge and just beyond that.
+  std::vector<Footprint> footprints;
+  std::vector<std::pair<double, double>> corners;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) {
+      corners.push_back({kX + 14.0 * i, kY + 14.0 * j});
+      footprints.push_back(footprint(std::to_string(i) + "_" + std::to_string(j),
+                                     {{l_shape(corners.back().first, corners.back().second), {}}}));
+    }
+  std::vector<Point3> points;
+  std::vector<std::uint8_t> classes;
+  const std::uint8_t cycle[] = {1, 2, 6};
+  for (double x = kX - 14.75; x < kX + 14.0 * 6 + 14; x += 0.5)
+    for (double y = kY - 14.75; y < kY + 14.0 * 6 + 14; y += 0.5) {
+      points.push_back({x, y, static_cast<double>(points.size())});
+      classes.push_back(cycle[points.size() % 3]);
+    }
+  for (const auto& [x0, y0] : corners)
+    for (const double below : {3.0, 3.0 + 1e-9}) {
+      points.push_back({x0 + 2.25, y0 - below, static_cast<double>(points.size())});
+      classes.push_back(2);
+    }
+  CropParams params;
+  params.min_ground_points = 1000000;  // the wide boxes' ground is kept: near ones first, then wide ones
+  const auto inputs = crop(footprints, cloud(points, classes), params);
+
+  // The L of corner (x0, y0): the 10 x 10 square without its top-right 5 x 5 quarter.
+  const auto inside = [](double x, double y, double x0, double y0) {
+    return x > x0 && x < x0 + 10 && y > y0 && y < y0 + 10 && !(x > x0 + 5 && y > y0 + 5);
+  };
+  const auto distance2 = [](double x, double y, double x0, double y0) {
+    const double edges[6][4] = {{x0, y0, x0 + 10, y0},
+                                {x0 + 10, y0, x0 + 10, y0 + 5},
+                                {x0 + 5, y0 + 5, x0 + 10, y0 + 5},
+                                {x0 + 5, y0 + 5, x0 + 5, y0 + 10},
+                                {x0, y0 + 10, x0 + 5, y0 + 10},
+                                {x0, y0, x0, y0 + 10}};
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& e : edges) {  // axis-aligned: the distance along each axis outside the segment
+      const double dx = std::max({e[0] - x, 0.0, x - e[2]}), dy = std::max({e[1] - y, 0.0, y - e[3]});
+      best = std::min(best, dx * dx + dy * dy);
+    }
+    return best;
+  };
+  std::size_t near_total = 0, exactly_at_the_buffer = 0;
+  for (std::size_t f = 0; f < footprints.size(); ++f) {
+    const auto [x0, y0] = corners[f];
+    std::vector<double> building, near, wide;
+    std::set<std::pair<std::int64_t, std::int64_t>> cells;
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      const Point3& p = points[k];
+      if (p.x >= x0 && p.x <= x0 + 10 && p.y >= y0 && p.y <= y0 + 10)
+        cells.insert({static_cast<std::int64_t>(std::floor(p.x / 0.25)),
+                      static_cast<std::int64_t>(std::floor(p.y / 0.25))});
+      if (classes[k] == 6 && inside(p.x, p.y, x0, y0)) building.push_back(p.z);
+      if (classes[k] != 2) continue;
+      if (std::any_of(corners.begin(), corners.end(),
+                      [&](const auto& c) { return inside(p.x, p.y, c.first, c.second); }))
+        continue;
+      if (p.x < x0 - 12 || p.x > x0 + 22 || p.y < y0 - 12 || p.y > y0 + 22) continue;
+      const double d2 = distance2(p.x, p.y, x0, y0);
+      (d2 <= 9.0 ? near : wide).push_back(p.z);
+      exactly_at_the_buffer += d2 == 9.0;
+    }
+    near_total += near.size();
+    std::vector<double> got_building;
+    for (const Point3& q : inputs[f].points) got_building.push_back(q.z + inputs[f].origin.z);
+    EXPECT_EQ(got_building, building) << footprints[f].id;
+    near.insert(near.end(), wide.begin(), wide.end());
+    EXPECT_EQ(inputs[f].ground_heights, near) << footprints[f].id;
+    const PointPresence& presence = inputs[f].presence;
+    std::size_t marked = 0;
+    for (bool m : presence.marked) marked += m;
+    EXPECT_EQ(marked, cells.size()) << footprints[f].id;
+    for (const auto& [i, j] : cells)
+      EXPECT_TRUE(presence.at(i, j)) << footprints[f].id << " " << i << " " << j;
+  }
+  EXPECT_GT(near_total, 1000u);
+  EXPECT_GE(exactly_at_the_buffer, 36u);
+}
+
 // ---------------------------------------------------------------- LoD1 blocks
 
 BuildingInput building(std::vector<Polygon2> polygons, double ground_z, std::vector<double> heights) {

@@ -84,10 +84,12 @@ struct PreparedFootprint {
     return false;
   }
 
-  double boundary_distance2(double x, double y) const {
-    double best = std::numeric_limits<double>::infinity();
-    for (const CanonicalEdge& e : edges) best = std::min(best, segment_distance2(e, x, y));
-    return best;
+  /// Whether (x, y) is within sqrt(d2) of an edge: the least squared distance to an edge is at most
+  /// d2 exactly when one edge's is, so the walk stops at the first.
+  bool near_boundary(double x, double y, double d2) const {
+    for (const CanonicalEdge& e : edges)
+      if (segment_distance2(e, x, y) <= d2) return true;
+    return false;
   }
 };
 
@@ -333,15 +335,14 @@ void Cropper::add(const PointCloud& chunk) {
     const std::size_t k = static_cast<std::size_t>(index.row(p.y) * index.nx + index.column(p.x));
     const std::uint32_t* first = index.cell_items.data() + index.cell_start[k];
     const std::uint32_t* last = index.cell_items.data() + index.cell_start[k + 1];
-    // Every point, whatever its class, says that the tiles have data there (a box test: cheap).
-    for (const std::uint32_t* it = first; it != last; ++it)
-      if (detail::box_contains(index.prepared[*it].box, p.x, p.y)) detail::mark(index.collected[*it].presence, p.x, p.y);
-    if (kind == kOther) continue;
-
+    // One walk over the cell's footprints: every point in a footprint's box, whatever its class, says
+    // that the tiles have data there; building and ground points are then tested against its rings.
     bool inside_any = false;
     for (const std::uint32_t* it = first; it != last; ++it) {
       const detail::PreparedFootprint& f = index.prepared[*it];
-      if (!detail::box_contains(f.box, p.x, p.y) || !f.contains(p.x, p.y)) continue;
+      if (!detail::box_contains(f.box, p.x, p.y)) continue;
+      detail::mark(index.collected[*it].presence, p.x, p.y);
+      if (kind == kOther || !f.contains(p.x, p.y)) continue;
       inside_any = true;
       if (kind == kBuilding) {
         index.collected[*it].building.push_back({p.x - f.origin.x, p.y - f.origin.y, p.z - f.origin.z});
@@ -355,7 +356,7 @@ void Cropper::add(const PointCloud& chunk) {
       if (!detail::box_contains(f.wide_box, p.x, p.y)) continue;
       detail::Collected& c = index.collected[*it];
       const double local_z = p.z - f.origin.z;
-      if (detail::box_contains(f.near_box, p.x, p.y) && f.boundary_distance2(p.x, p.y) <= near2) {
+      if (detail::box_contains(f.near_box, p.x, p.y) && f.near_boundary(p.x, p.y, near2)) {
         c.near_ground.push_back(local_z);
         ++stats_.ground_points;
         // Once the near buffer has enough points the wide buffer can never be used: free it. The
