@@ -3,9 +3,9 @@
 // Usage: bench_crop FOOTPRINTS CLOUD [CLOUD...] [--runs N]   (prints each run and the median)
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
