@@ -762,10 +762,12 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
 
   // The run-level files, from the journal's records (as this run wrote them: not parsed again).
   const detail::JournalReader reader(journal.path(), header, journal.take_written());
-  std::vector<detail::RecordSource> sources;
+  std::vector<detail::RecordInJournal> sources;
   for (const detail::RecordRef& ref : reader.records()) sources.push_back({&reader, &ref});
   std::sort(sources.begin(), sources.end(),
-            [](const detail::RecordSource& a, const detail::RecordSource& b) { return a.ref->index < b.ref->index; });
+            [](const detail::RecordInJournal& a, const detail::RecordInJournal& b) {
+              return a.ref->index < b.ref->index;
+            });
   if (sources.size() != header.expected)
     throw Error("batch: " + journal.path() + " holds " + std::to_string(sources.size()) + " records, " +
                 std::to_string(header.expected) + " expected");

@@ -75,7 +75,7 @@ void remove_temporary_files(const fs::path& folder, bool locked) {
 // several threads (JournalReader reads one line at a time and parses outside its lock).
 class JournalOverview : public OverviewSource {
  public:
-  JournalOverview(const std::vector<RecordSource>& records, const RunLayout& layout)
+  JournalOverview(const std::vector<RecordInJournal>& records, const RunLayout& layout)
       : records_(records), layout_(layout) {}
   std::size_t size() const override { return records_.size(); }
   OverviewRecord at(std::size_t k, bool levels) const override {
@@ -85,7 +85,7 @@ class JournalOverview : public OverviewSource {
   }
 
  private:
-  const std::vector<RecordSource>& records_;
+  const std::vector<RecordInJournal>& records_;
   const RunLayout& layout_;
 };
 
@@ -274,7 +274,7 @@ void OutputFolder::write_manifest(const RunManifest& m) {
 }
 
 BatchSummary finalise_run(const std::string& dir, const RunLayout& layout,
-                          const std::vector<RecordSource>& records, double seconds, std::size_t resumed,
+                          const std::vector<RecordInJournal>& records, double seconds, std::size_t resumed,
                           FinaliseScope scope, std::map<std::string, std::string>& outputs,
                           unsigned threads) {
   const fs::path out(dir);
@@ -290,7 +290,7 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout,
 
   BatchSummary summary;
   summary.buildings = records.size();
-  for (const RecordSource& r : records) {
+  for (const RecordInJournal& r : records) {
     summary.ok += r.ref->status == BuildingStatus::ok;
     summary.fallback += r.ref->status == BuildingStatus::fallback;
     summary.skipped += r.ref->status == BuildingStatus::skipped;

@@ -17,7 +17,7 @@
 namespace city3d::detail {
 
 /// One record to finalise: where it is.
-struct RecordSource {
+struct RecordInJournal {
   const JournalReader* journal = nullptr;
   const RecordRef* ref = nullptr;
 };
@@ -79,7 +79,7 @@ std::string file_stamp_of(const std::string& path);
 /// `outputs` receives the files written. report.html reads its records on up to `threads` threads
 /// (the files do not depend on it). Throws IoError.
 BatchSummary finalise_run(const std::string& dir, const RunLayout& layout,
-                          const std::vector<RecordSource>& records, double seconds, std::size_t resumed,
+                          const std::vector<RecordInJournal>& records, double seconds, std::size_t resumed,
                           FinaliseScope scope, std::map<std::string, std::string>& outputs,
                           unsigned threads = 1);
 

@@ -88,11 +88,13 @@ BatchSummary merge_shards(const MergeOptions& options) {
                         " is missing (give the folders of all " + std::to_string(first.shards) + " shards)");
 
   const detail::RunLayout& layout = first.layout;
-  std::vector<detail::RecordSource> sources;
+  std::vector<detail::RecordInJournal> sources;
   for (const Shard& s : shards)
     for (const detail::RecordRef& ref : s.journal->records()) sources.push_back({s.journal.get(), &ref});
   std::sort(sources.begin(), sources.end(),
-            [](const detail::RecordSource& a, const detail::RecordSource& b) { return a.ref->index < b.ref->index; });
+            [](const detail::RecordInJournal& a, const detail::RecordInJournal& b) {
+              return a.ref->index < b.ref->index;
+            });
   for (std::size_t i = 0; i < sources.size(); ++i)
     if (sources[i].ref->index != i || i >= layout.records)
       throw IoError("merge: record " + std::to_string(i) + " is " +
@@ -114,7 +116,7 @@ BatchSummary merge_shards(const MergeOptions& options) {
   }
   // Model files, copied and checked against the hash their shard recorded.
   if (layout.per_building_files) fs::create_directories(fs::path(options.output_dir) / "models");
-  for (const detail::RecordSource& source : sources) {
+  for (const detail::RecordInJournal& source : sources) {
     const detail::RecordRef& ref = *source.ref;
     if (ref.model_file.empty()) continue;
     const fs::path from = fs::path(source.journal->path()).parent_path() / "models" / ref.model_file;
