@@ -57,7 +57,12 @@ std::string format_number(double value) {
 void opencv_on_calling_thread() {
   static const bool once = [] {
     cv::setNumThreads(0);  // 0: "run all its functions sequentially" (1 would set up a TBB arena)
-    return true;
+    // OpenCV makes the operations of its matrix expressions (Mat::zeros and the like) on first use, by
+    // double-checked locking: a second thread could read the pointer as the first one published it
+    // (ThreadSanitizer, city3d_dev at -j 2). Made here, within this static's initialisation, they are
+    // made before any thread passes this function.
+    const cv::Mat made = cv::Mat::zeros(1, 1, CV_8U);
+    return !made.empty();
   }();
   (void)once;
 }
