@@ -132,7 +132,7 @@ bool decode(const std::string& in, std::size_t columns, MipSolution& solution) {
   std::size_t at = 0;
   const auto take = [&](void* data, std::size_t size) {
     if (in.size() - at < size) return false;
-    std::memcpy(data, in.data() + at, size);
+    if (size > 0) std::memcpy(data, in.data() + at, size);  // an empty vector's data() may be null
     at += size;
     return true;
   };
