@@ -1013,5 +1013,93 @@ TEST(Lod13, roof_parts_made_once_give_both_levels_as_the_model_does) {
   EXPECT_THROW(lod13_parts(BuildingModel{}, points), ReconstructionError);
 }
 
+// Roof faces (flat, counter-clockwise) from plan-view loops at their heights.
+BuildingModel roof_faces(const std::vector<std::pair<std::vector<Point2>, double>>& faces) {
+  BuildingModel m;
+  m.id = "faces";
+  for (const auto& [loop, z] : faces) {
+    std::vector<std::uint32_t> face;
+    for (const Point2& p : loop) {
+      face.push_back(static_cast<std::uint32_t>(m.mesh.vertices.size()));
+      m.mesh.vertices.push_back({p.x, p.y, z});
+    }
+    m.mesh.faces.push_back(std::move(face));
+    m.surfaces.push_back(SurfaceType::roof);
+  }
+  return m;
+}
+
+bool has_code(const std::vector<ValidityError>& errors, int code) {
+  return std::any_of(errors.begin(), errors.end(), [code](const ValidityError& e) { return e.code == code; });
+}
+
+// Two roof parts whose shared wall bends 1 mm into the lower one (two walls nearly in line, as an LoD2
+// model can have them): more than the half millimetre that joins parts by default, so they share no
+// edge, and the blocks have a sliver between them, walled on both sides. Joined within 1 cm, they are
+// neighbours and the blocks are one valid solid.
+TEST(Lod13, parts_a_millimetre_apart_are_joined_within_the_join_distance) {
+  const BuildingModel model = roof_faces({{{{0, 0}, {10, 0}, {10, 10}, {0, 10}}, 10.0},
+                                          {{{10, 0}, {20, 0}, {20, 10}, {10, 10}, {10.001, 5}}, 4.0}});
+  const Lod13Parts apart = lod13_parts(model, {});
+  EXPECT_TRUE(apart.adjacent.empty());
+  EXPECT_FALSE(validate_model(make_lod13_blocks(apart, 0.0, 3.0).mesh).empty());
+
+  const Lod13Parts joined = lod13_parts(model, {}, 0.01);
+  EXPECT_EQ(joined.adjacent, (std::set<std::pair<std::size_t, std::size_t>>{{0, 1}}));
+  ASSERT_EQ(joined.parts.size(), 2u);
+  EXPECT_EQ(joined.parts[0].size(), 5u);  // the bend's vertex is on the taller part's edge too
+  for (const double step : {3.0, std::numeric_limits<double>::infinity()}) {
+    const BuildingModel blocks = make_lod13_blocks(joined, 0.0, step);
+    EXPECT_TRUE(validate_model(blocks.mesh).empty()) << validity_codes(validate_model(blocks.mesh));
+  }
+  const BuildingModel blocks = make_lod13_blocks(joined, 0.0, 3.0);
+  EXPECT_NEAR(check_mesh(blocks.mesh).signed_volume, 100.005 * 10.0 + 99.995 * 4.0, 1e-6);
+}
+
+// A part's corner 2-3 mm inside another's corner is within the join distance of both its edges
+// there; splitting both would fold the part onto itself (a zero-width spike). A vertex as near an
+// end of an edge is a corner of its own and splits nothing.
+TEST(Lod13, a_vertex_near_a_corner_does_not_split_the_edges_there) {
+  const BuildingModel model = roof_faces(
+      {{{{0, 0}, {10, 0}, {10, 10}, {0, 10}}, 10.0}, {{{9.997, 0.002}, {20, 0}, {20, 10}, {10, 10}}, 4.0}});
+  const Lod13Parts joined = lod13_parts(model, {}, 0.01);
+  for (const auto& loop : joined.parts) {
+    std::set<std::uint32_t> distinct(loop.begin(), loop.end());
+    EXPECT_EQ(distinct.size(), loop.size());
+  }
+}
+
+// Around (10, 10): A, B, A, B by height (A's parts joined round the top and the right, B's two
+// parts diagonal). Four step walls meet on the vertical edge there; with no_pinched_clusters the B
+// part nearest in height, the first of equals, joins A.
+TEST(Lod13, a_cluster_meeting_itself_at_a_vertex_takes_in_a_part_between) {
+  const BuildingModel model = roof_faces({
+      {{{0, 10}, {10, 10}, {10, 20}, {0, 20}}, 10.0},                      // 0: A
+      {{{10, 10}, {20, 10}, {20, 20}, {10, 20}}, 4.0},                     // 1: B
+      {{{0, 0}, {10, 0}, {10, 10}, {0, 10}}, 4.0},                         // 2: B
+      {{{10, 0}, {20, 0}, {20, 10}, {10, 10}}, 10.0},                      // 3: A
+      {{{0, 20}, {10, 20}, {20, 20}, {30, 20}, {30, 30}, {0, 30}}, 10.0},  // 4: A
+      {{{20, 0}, {30, 0}, {30, 20}, {20, 20}, {20, 10}}, 10.0},            // 5: A
+  });
+  const Lod13Parts parts = lod13_parts(model, {});
+  const BuildingModel pinched = make_lod13_blocks(parts, 0.0, 3.0);
+  EXPECT_TRUE(has_code(validate_model(pinched.mesh), 304)) << validity_codes(validate_model(pinched.mesh));
+
+  const BuildingModel blocks = make_lod13_blocks(parts, 0.0, 3.0, 70.0, 1.0, true);
+  EXPECT_TRUE(validate_model(blocks.mesh).empty()) << validity_codes(validate_model(blocks.mesh));
+  std::set<double> roofs;
+  for (std::size_t f = 0; f < blocks.mesh.faces.size(); ++f)
+    if (blocks.surfaces[f] == SurfaceType::roof)
+      roofs.insert(blocks.mesh.vertices[blocks.mesh.faces[f][0]].z);
+  // A with part 1: its parts' mean heights weighted by area, (700 x 10 + 100 x 4) / 800.
+  EXPECT_EQ(roofs, (std::set<double>{4.0, 9.25}));
+  EXPECT_NEAR(check_mesh(blocks.mesh).signed_volume, 800 * 9.25 + 100 * 4.0, 1e-9);
+  // Where no cluster meets itself so, the flag changes nothing.
+  const BuildingModel plain = make_lod13_blocks(three_roof_parts(), {}, 0.0, 3.0);
+  const BuildingModel flagged =
+      make_lod13_blocks(lod13_parts(three_roof_parts(), {}), 0.0, 3.0, 70.0, 1.0, true);
+  EXPECT_EQ(plain.mesh.faces, flagged.mesh.faces);
+}
+
 }  // namespace
 }  // namespace city3d

@@ -23,6 +23,11 @@ struct Lod1Params {
   /// Minimum block height in metres (> 0): a roof below ground_z + min_height is raised to it, so a
   /// flat or sunken object still gives a valid solid.
   double min_height = 1.0;
+  /// Metres, > 0. The LoD2 model's roof faces can meet in plan with a vertex a few millimetres off
+  /// its neighbour's edge (two walls nearly in line); blocks made from them then leave a sliver
+  /// between the parts, walled on both sides, and are not a valid solid. Such blocks are made again
+  /// with the parts joined where a vertex lies within this distance of another part's edge.
+  double join_distance = 0.01;
 
   /// Throws ConfigError listing every invalid field.
   void validate() const;
@@ -64,13 +69,20 @@ struct Lod13Parts {
   std::set<std::pair<std::size_t, std::size_t>> adjacent;                        ///< parts sharing an edge
 };
 
-/// The roof parts of `lod22` (see make_lod13_blocks). Throws ReconstructionError when the model has
-/// no roof face.
-Lod13Parts lod13_parts(const BuildingModel& lod22, const std::vector<Point3>& points);
+/// The roof parts of `lod22` (see make_lod13_blocks). A plan-view vertex within `join_distance`
+/// metres of another part's edge splits that edge, so neighbouring parts share whole edges; the
+/// default, half a millimetre, joins what the 0.1 mm output grid keeps apart. Throws
+/// ReconstructionError when the model has no roof face.
+Lod13Parts lod13_parts(const BuildingModel& lod22, const std::vector<Point3>& points,
+                       double join_distance = 5e-4);
 
 /// make_lod13_blocks from parts made once (LoD1.2 and LoD1.3 of one model differ only in the step).
+/// With `no_pinched_clusters`, a cluster whose parts meet at a vertex only across other clusters'
+/// parts (heights A, B, A, B around it: four walls on one vertical edge, no 2-manifold solid) takes
+/// in a part across, the one at that vertex nearest its height, until no cluster is pinched.
 BuildingModel make_lod13_blocks(const Lod13Parts& roof, double floor_z, double step_height,
-                                double roof_percentile = 70.0, double min_height = 1.0);
+                                double roof_percentile = 70.0, double min_height = 1.0,
+                                bool no_pinched_clusters = false);
 
 /// Blocks per roof-height cluster from an LoD2 model (3DBAG's LoD1.3; LoD1.2 with an infinite
 /// step): the model's roof faces, projected to the ground, are the roof parts; each part's height is

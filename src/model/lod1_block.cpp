@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -264,6 +265,8 @@ void Lod1Params::validate() const {
     problems.push_back("roof_percentile = " + std::to_string(roof_percentile) + " (0-100)");
   if (!(min_height > 0.0) || !std::isfinite(min_height))
     problems.push_back("min_height = " + std::to_string(min_height) + " (metres, > 0)");
+  if (!(join_distance > 0.0) || !std::isfinite(join_distance))
+    problems.push_back("join_distance = " + std::to_string(join_distance) + " (metres, > 0)");
   if (problems.empty()) return;
   std::string message = "lod1: invalid parameters: ";
   for (std::size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];
@@ -426,7 +429,7 @@ std::vector<Loop> boundary_loops(const std::vector<Loop>& parts, const std::vect
 
 }  // namespace
 
-Lod13Parts lod13_parts(const BuildingModel& lod22, const std::vector<Point3>& points) {
+Lod13Parts lod13_parts(const BuildingModel& lod22, const std::vector<Point3>& points, double join_distance) {
   const std::vector<SurfaceType> types = surface_types(lod22);
   Lod13Parts out;
   out.id = lod22.id;
@@ -458,7 +461,9 @@ Lod13Parts lod13_parts(const BuildingModel& lod22, const std::vector<Point3>& po
 
   // Plan-view vertices lying on another part's edge split that edge, so neighbouring parts share
   // whole edges (a low roof's eave edge against the vertices of the taller part's step wall). "On"
-  // within half a millimetre: the vertices are rounded to the 0.1 mm output grid.
+  // within join_distance (half a millimetre by default: the vertices are rounded to the 0.1 mm output
+  // grid), but not as near an end of the edge: that is a corner of its own, which would split both
+  // edges there.
   for (Loop& loop : parts) {
     Loop split;
     for (std::size_t k = 0; k < loop.size(); ++k) {
@@ -468,7 +473,10 @@ Lod13Parts lod13_parts(const BuildingModel& lod22, const std::vector<Point3>& po
       for (std::uint32_t v = 0; v < pts.size(); ++v) {
         if (v == loop[k] || v == loop[(k + 1) % loop.size()]) continue;
         double t = 0;
-        if (segment_distance(a, b, pts[v], t) < 5e-4 && t > 0 && t < 1) between.push_back({t, v});
+        if (segment_distance(a, b, pts[v], t) < join_distance && t > 0 && t < 1 &&
+            std::hypot(pts[v].x - a.x, pts[v].y - a.y) >= join_distance &&
+            std::hypot(pts[v].x - b.x, pts[v].y - b.y) >= join_distance)
+          between.push_back({t, v});
       }
       std::sort(between.begin(), between.end());
       for (const auto& [t, v] : between) split.push_back(v);
@@ -508,8 +516,8 @@ Lod13Parts lod13_parts(const BuildingModel& lod22, const std::vector<Point3>& po
   return out;
 }
 
-BuildingModel make_lod13_blocks(const Lod13Parts& roof, double floor_z, double step_height, double roof_percentile,
-                                double min_height) {
+BuildingModel make_lod13_blocks(const Lod13Parts& roof, double floor_z, double step_height,
+                                double roof_percentile, double min_height, bool no_pinched_clusters) {
   const std::vector<Point2>& pts = roof.pts;
   const std::vector<Loop>& parts = roof.parts;
   const std::vector<double>& mean_z = roof.mean_z;
@@ -564,6 +572,63 @@ BuildingModel make_lod13_blocks(const Lod13Parts& roof, double floor_z, double s
     merge_into(pair.first, pair.second);
     height.erase(pair.second);
     height[pair.first] = cluster_height(pair.first);
+  }
+  if (no_pinched_clusters) {
+    // A cluster whose parts meet at a vertex only across other clusters' parts (heights A, B, A, B
+    // around it) puts four walls on the vertical edge there. Of the parts that share an edge through
+    // that vertex with the cluster's, the one whose height is nearest the cluster's (the first of
+    // equals) joins it; again until no cluster is pinched (at most a round per part).
+    for (std::size_t round = 0; round < parts.size(); ++round) {
+      std::size_t pinched = 0;
+      std::uint32_t at = 0;
+      bool found = false;
+      for (const auto& [c, h] : height) {
+        std::map<std::uint32_t, int> leaving;  // boundary edges of the cluster leaving each vertex
+        for (std::size_t p : members[c])
+          for (std::size_t k = 0; k < parts[p].size(); ++k) {
+            const std::uint32_t a = parts[p][k], b = parts[p][(k + 1) % parts[p].size()];
+            const auto across = part_of_edge.find({b, a});
+            if (across == part_of_edge.end() || cluster[across->second] != c) ++leaving[a];
+          }
+        for (const auto& [v, n] : leaving)
+          if (n > 1) {
+            pinched = c, at = v, found = true;
+            break;
+          }
+        if (found) break;
+      }
+      if (!found) break;
+      // The parts at the vertex that share an edge through it with the cluster's parts.
+      std::size_t best = parts.size();
+      double nearest = std::numeric_limits<double>::infinity();
+      for (std::size_t p : members[pinched])
+        for (std::size_t k = 0; k < parts[p].size(); ++k) {
+          const std::uint32_t a = parts[p][k], b = parts[p][(k + 1) % parts[p].size()];
+          if (a != at && b != at) continue;
+          const auto across = part_of_edge.find({b, a});
+          if (across == part_of_edge.end() || cluster[across->second] == pinched) continue;
+          const double d = std::fabs(height[cluster[across->second]] - height[pinched]);
+          if (d < nearest || (d == nearest && across->second < best)) nearest = d, best = across->second;
+        }
+      if (best == parts.size()) break;
+      const std::size_t from = cluster[best];
+      members[from].erase(std::find(members[from].begin(), members[from].end(), best));
+      sorted_z[from].clear();
+      for (std::size_t p : members[from])
+        sorted_z[from].insert(sorted_z[from].end(), part_z[p].begin(), part_z[p].end());
+      std::sort(sorted_z[from].begin(), sorted_z[from].end());
+      if (members[from].empty())
+        height.erase(from);
+      else
+        height[from] = cluster_height(from);
+      std::vector<std::size_t> part{best};
+      std::vector<double> z = part_z[best];
+      std::sort(z.begin(), z.end());
+      cluster[best] = pinched;
+      merge_sorted(members[pinched], part);
+      merge_sorted(sorted_z[pinched], z);
+      height[pinched] = cluster_height(pinched);
+    }
   }
   for (auto& [c, h] : height) h = std::max(h, floor_z + min_height);
 

@@ -87,12 +87,16 @@ void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams
   // A building of one height level has the same blocks at LoD1.3 as at LoD1.2: they are validated
   // (and below measured) once.
   std::optional<std::pair<BuildingModel, BuildingModel>> derived;  // the last blocks, as made and as validated
-  std::optional<Lod13Parts> roof_parts;  // made once for both levels
+  std::optional<Lod13Parts> roof_parts;                            // made once for both levels
+  std::optional<Lod13Parts> joined_parts;  // the same, joined within lod1.join_distance, when needed
   const auto derive = [&](const char* lod, double step) {
     try {
       if (!roof_parts) roof_parts = lod13_parts(primary, input.points);
-      BuildingModel blocks = make_lod13_blocks(*roof_parts, input.ground_z, step, params.lod1.roof_percentile,
-                                               params.lod1.min_height);
+      const auto blocks_of = [&](const Lod13Parts& parts, bool no_pinched_clusters) {
+        return make_lod13_blocks(parts, input.ground_z, step, params.lod1.roof_percentile,
+                                 params.lod1.min_height, no_pinched_clusters);
+      };
+      BuildingModel blocks = blocks_of(*roof_parts, false);
       if (derived && same_model(blocks, derived->first)) {
         made.push_back({lod, derived->second});
         real.push_back(lod);
@@ -101,8 +105,18 @@ void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams
       BuildingModel made_blocks = blocks;
       const WrittenValidity v = validate_as_written(blocks, params.output_grid, params.validity);
       if (!v.remaining.empty()) {
-        add_note(r, std::string("LoD") + lod + " not made: not valid as written: " + v.remaining.front().text());
-        return;
+        // A sliver between two roof parts (lod1.join_distance): the blocks of the joined parts, if
+        // they are valid.
+        if (!joined_parts) joined_parts = lod13_parts(primary, input.points, params.lod1.join_distance);
+        BuildingModel joined = blocks_of(*joined_parts, true);
+        BuildingModel made_joined = joined;
+        if (!validate_as_written(joined, params.output_grid, params.validity).remaining.empty()) {
+          add_note(
+              r, std::string("LoD") + lod + " not made: not valid as written: " + v.remaining.front().text());
+          return;
+        }
+        made_blocks = std::move(made_joined);
+        blocks = std::move(joined);
       }
       derived.emplace(std::move(made_blocks), blocks);
       made.push_back({lod, std::move(blocks)});

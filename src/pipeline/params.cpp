@@ -148,6 +148,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("assemble.merge_coplanar", p.assemble.merge_coplanar);
   put("lod1.roof_percentile", p.lod1.roof_percentile);
   put("lod1.min_height", p.lod1.min_height);
+  put("lod1.join_distance", p.lod1.join_distance);
   put("outline.min_region_area", p.outline.min_region_area);
   put("outline.gap_spacings", p.outline.gap_spacings);
   put("outline.wide_gap_spacings", p.outline.wide_gap_spacings);
