@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <sstream>
 #include <string>
 #include <utility>
 
@@ -57,6 +59,57 @@ bool same_model(const BuildingModel& a, const BuildingModel& b) {
                     same_point);
 }
 
+// A level's blocks as make_lod13_blocks made them and as they will be written (rounded to the output
+// grid, repaired), when the latter pass validation.
+struct ValidBlocks {
+  BuildingModel made;
+  BuildingModel written;
+};
+
+std::optional<ValidBlocks> validated(BuildingModel blocks, const ReconstructionParams& params) {
+  ValidBlocks b{blocks, std::move(blocks)};
+  if (!validate_as_written(b.written, params.output_grid, params.validity).remaining.empty())
+    return std::nullopt;
+  return b;
+}
+
+// The blocks of a level (LoD1.2: an infinite step) whose blocks of `parts` are no valid solid: the
+// roof parts joined within lod1.join_distance (a sliver between two parts, `joined`), with no
+// cluster meeting itself at a vertex; LoD1.3 then with its step height doubled until they are valid,
+// and as one block, as LoD1.2 is; at last the LoD1 rung's block (the footprint, or a cloud's convex
+// hull, extruded). `how` says which, when coarser than asked.
+std::optional<ValidBlocks> remade_blocks(const BuildingInput& input, const ReconstructionParams& params,
+                                         const Lod13Parts& parts, const Lod13Parts& joined, double step,
+                                         std::string& how) {
+  const auto clusters = [&](const Lod13Parts& roof, double step_height, bool no_pinched_clusters) {
+    return make_lod13_blocks(roof, input.ground_z, step_height, params.lod1.roof_percentile,
+                             params.lod1.min_height, no_pinched_clusters);
+  };
+  if (auto b = validated(clusters(joined, step, true), params)) return b;
+  if (std::isfinite(step)) {
+    constexpr int kDoublings = 10;  // 3 m * 2^10: no building's roofs span more
+    double doubled = step;
+    for (int k = 0; k < kDoublings; ++k) {
+      doubled *= 2;
+      if (auto b = validated(clusters(joined, doubled, true), params)) {
+        std::ostringstream text;
+        text << " with a step height of " << doubled << " m";
+        how = text.str();
+        return b;
+      }
+    }
+    if (auto b = validated(clusters(parts, std::numeric_limits<double>::infinity(), false), params)) {
+      how = " as one block, as LoD1.2";
+      return b;
+    }
+  }
+  if (auto b = validated(make_lod1_block(input, params.lod1), params)) {
+    how = input.footprint_given ? " as the footprint's block" : " as the block of the points' convex hull";
+    return b;
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 void describe_points(const BuildingInput& input, const ReconstructionParams& params, BuildingReport& r) {
@@ -92,11 +145,8 @@ void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams
   const auto derive = [&](const char* lod, double step) {
     try {
       if (!roof_parts) roof_parts = lod13_parts(primary, input.points);
-      const auto blocks_of = [&](const Lod13Parts& parts, bool no_pinched_clusters) {
-        return make_lod13_blocks(parts, input.ground_z, step, params.lod1.roof_percentile,
-                                 params.lod1.min_height, no_pinched_clusters);
-      };
-      BuildingModel blocks = blocks_of(*roof_parts, false);
+      BuildingModel blocks = make_lod13_blocks(*roof_parts, input.ground_z, step, params.lod1.roof_percentile,
+                                               params.lod1.min_height);
       if (derived && same_model(blocks, derived->first)) {
         made.push_back({lod, derived->second});
         real.push_back(lod);
@@ -105,18 +155,24 @@ void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams
       BuildingModel made_blocks = blocks;
       const WrittenValidity v = validate_as_written(blocks, params.output_grid, params.validity);
       if (!v.remaining.empty()) {
-        // A sliver between two roof parts (lod1.join_distance): the blocks of the joined parts, if
-        // they are valid.
         if (!joined_parts) joined_parts = lod13_parts(primary, input.points, params.lod1.join_distance);
-        BuildingModel joined = blocks_of(*joined_parts, true);
-        BuildingModel made_joined = joined;
-        if (!validate_as_written(joined, params.output_grid, params.validity).remaining.empty()) {
-          add_note(
-              r, std::string("LoD") + lod + " not made: not valid as written: " + v.remaining.front().text());
+        std::string how;
+        std::optional<ValidBlocks> remade =
+            remade_blocks(input, params, *roof_parts, *joined_parts, step, how);
+        const std::string why = v.remaining.front().text();
+        if (!remade) {
+          add_note(r, std::string("LoD") + lod + " not made: not valid as written: " + why);
           return;
         }
-        made_blocks = std::move(made_joined);
-        blocks = std::move(joined);
+        if (!how.empty()) {
+          std::ostringstream text;
+          text << "LoD" << lod << how << ": ";
+          if (std::isfinite(step)) text << "at " << step << " m ";
+          text << "its blocks are not valid as written: " << why;
+          add_note(r, text.str());
+        }
+        made_blocks = std::move(remade->made);
+        blocks = std::move(remade->written);
       }
       derived.emplace(std::move(made_blocks), blocks);
       made.push_back({lod, std::move(blocks)});
