@@ -85,13 +85,17 @@ std::optional<ValidBlocks> remade_blocks(const BuildingInput& input, const Recon
     return make_lod13_blocks(roof, input.ground_z, step_height, params.lod1.roof_percentile,
                              params.lod1.min_height, no_pinched_clusters);
   };
-  if (auto b = validated(clusters(joined, step, true), params)) return b;
+  BuildingModel last = clusters(joined, step, true);
+  if (auto b = validated(last, params)) return b;
   if (std::isfinite(step)) {
     constexpr int kDoublings = 10;  // 3 m * 2^10: no building's roofs span more
     double doubled = step;
     for (int k = 0; k < kDoublings; ++k) {
       doubled *= 2;
-      if (auto b = validated(clusters(joined, doubled, true), params)) {
+      BuildingModel attempt = clusters(joined, doubled, true);
+      if (same_model(attempt, last)) continue;  // the same clusters: as invalid
+      last = attempt;
+      if (auto b = validated(std::move(attempt), params)) {
         std::ostringstream text;
         text << " with a step height of " << doubled << " m";
         how = text.str();
