@@ -1070,8 +1070,8 @@ TEST(Lod13, a_vertex_near_a_corner_does_not_split_the_edges_there) {
 }
 
 // Around (10, 10): A, B, A, B by height (A's parts joined round the top and the right, B's two
-// parts diagonal). Four step walls meet on the vertical edge there; with no_pinched_clusters the B
-// part nearest in height, the first of equals, joins A.
+// parts diagonal). Four step walls meet on the vertical edge there; with no_overlapping_walls the B
+// part across the least of them, the first of equals, joins A.
 TEST(Lod13, a_cluster_meeting_itself_at_a_vertex_takes_in_a_part_between) {
   const BuildingModel model = roof_faces({
       {{{0, 10}, {10, 10}, {10, 20}, {0, 20}}, 10.0},                      // 0: A
@@ -1099,6 +1099,29 @@ TEST(Lod13, a_cluster_meeting_itself_at_a_vertex_takes_in_a_part_between) {
   const BuildingModel flagged =
       make_lod13_blocks(lod13_parts(three_roof_parts(), {}), 0.0, 3.0, 70.0, 1.0, true);
   EXPECT_EQ(plain.mesh.faces, flagged.mesh.faces);
+}
+
+// Around (10, 10): 10, 2, 6, 2 m, four clusters (no two adjacent parts within the 3 m step). No cluster
+// meets itself, but the walls from 2 m up to 10 m and up to 6 m overlap on the column there, four of
+// them from 2 to 6 m. The part across the least wall (the 2 m part beside the 6 m one, the first of
+// equals) joins the 6 m part's cluster.
+TEST(Lod13, walls_that_overlap_four_deep_on_a_column_are_undone_by_joining_the_part_across_the_least) {
+  const BuildingModel model = roof_faces({
+      {{{0, 10}, {10, 10}, {10, 20}, {0, 20}}, 10.0},   // 0
+      {{{10, 10}, {20, 10}, {20, 20}, {10, 20}}, 2.0},  // 1
+      {{{0, 0}, {10, 0}, {10, 10}, {0, 10}}, 2.0},      // 2
+      {{{10, 0}, {20, 0}, {20, 10}, {10, 10}}, 6.0},    // 3
+  });
+  const Lod13Parts parts = lod13_parts(model, {});
+  EXPECT_TRUE(has_code(validate_model(make_lod13_blocks(parts, 0.0, 3.0).mesh), 304));
+  const BuildingModel blocks = make_lod13_blocks(parts, 0.0, 3.0, 70.0, 1.0, true);
+  EXPECT_TRUE(validate_model(blocks.mesh).empty()) << validity_codes(validate_model(blocks.mesh));
+  std::set<double> roofs;
+  for (std::size_t f = 0; f < blocks.mesh.faces.size(); ++f)
+    if (blocks.surfaces[f] == SurfaceType::roof)
+      roofs.insert(blocks.mesh.vertices[blocks.mesh.faces[f][0]].z);
+  EXPECT_EQ(roofs, (std::set<double>{2.0, 4.0, 10.0}));  // parts 1 and 3: (100 x 2 + 100 x 6) / 200
+  EXPECT_NEAR(check_mesh(blocks.mesh).signed_volume, 100 * 10.0 + 200 * 4.0 + 100 * 2.0, 1e-9);
 }
 
 }  // namespace

@@ -77,12 +77,12 @@ Lod13Parts lod13_parts(const BuildingModel& lod22, const std::vector<Point3>& po
                        double join_distance = 5e-4);
 
 /// make_lod13_blocks from parts made once (LoD1.2 and LoD1.3 of one model differ only in the step).
-/// With `no_pinched_clusters`, a cluster whose parts meet at a vertex only across other clusters'
-/// parts (heights A, B, A, B around it: four walls on one vertical edge, no 2-manifold solid) takes
-/// in a part across, the one at that vertex nearest its height, until no cluster is pinched.
+/// With `no_overlapping_walls`, where more than two walls overlap on a vertex's column (heights A, B,
+/// A, B around it, or high, low, higher, low: an edge of more than two faces, no 2-manifold solid), the
+/// part across the least of those walls joins the taller part's cluster, until no column has such walls.
 BuildingModel make_lod13_blocks(const Lod13Parts& roof, double floor_z, double step_height,
                                 double roof_percentile = 70.0, double min_height = 1.0,
-                                bool no_pinched_clusters = false);
+                                bool no_overlapping_walls = false);
 
 /// Blocks per roof-height cluster from an LoD2 model (3DBAG's LoD1.3; LoD1.2 with an infinite
 /// step): the model's roof faces, projected to the ground, are the roof parts; each part's height is

@@ -517,7 +517,7 @@ Lod13Parts lod13_parts(const BuildingModel& lod22, const std::vector<Point3>& po
 }
 
 BuildingModel make_lod13_blocks(const Lod13Parts& roof, double floor_z, double step_height,
-                                double roof_percentile, double min_height, bool no_pinched_clusters) {
+                                double roof_percentile, double min_height, bool no_overlapping_walls) {
   const std::vector<Point2>& pts = roof.pts;
   const std::vector<Loop>& parts = roof.parts;
   const std::vector<double>& mean_z = roof.mean_z;
@@ -573,44 +573,48 @@ BuildingModel make_lod13_blocks(const Lod13Parts& roof, double floor_z, double s
     height.erase(pair.second);
     height[pair.first] = cluster_height(pair.first);
   }
-  if (no_pinched_clusters) {
-    // A cluster whose parts meet at a vertex only across other clusters' parts (heights A, B, A, B
-    // around it) puts four walls on the vertical edge there. Of the parts that share an edge through
-    // that vertex with the cluster's, the one whose height is nearest the cluster's (the first of
-    // equals) joins it; again until no cluster is pinched (at most a round per part).
+  if (no_overlapping_walls) {
+    // The walls through a vertex run on its column from the lower side's height (the floor outside)
+    // to the taller part's. Where more than two of them overlap (heights A, B, A, B around the vertex,
+    // or high, low, higher, low) the column has an edge of more than two faces. The part across the
+    // wall of least height there, the first of equals, joins the taller part's cluster; again until no
+    // column has such an edge (at most a round per part).
+    const auto top_of = [&](std::size_t p) { return std::max(height[cluster[p]], floor_z + min_height); };
+    struct Wall {
+      double bottom, top;
+      std::size_t part, across;  // across = parts.size(): outside
+    };
     for (std::size_t round = 0; round < parts.size(); ++round) {
-      std::size_t pinched = 0;
-      std::uint32_t at = 0;
-      bool found = false;
-      for (const auto& [c, h] : height) {
-        std::map<std::uint32_t, int> leaving;  // boundary edges of the cluster leaving each vertex
-        for (std::size_t p : members[c])
-          for (std::size_t k = 0; k < parts[p].size(); ++k) {
-            const std::uint32_t a = parts[p][k], b = parts[p][(k + 1) % parts[p].size()];
-            const auto across = part_of_edge.find({b, a});
-            if (across == part_of_edge.end() || cluster[across->second] != c) ++leaving[a];
-          }
-        for (const auto& [v, n] : leaving)
-          if (n > 1) {
-            pinched = c, at = v, found = true;
-            break;
-          }
-        if (found) break;
-      }
-      if (!found) break;
-      // The parts at the vertex that share an edge through it with the cluster's parts.
-      std::size_t best = parts.size();
-      double nearest = std::numeric_limits<double>::infinity();
-      for (std::size_t p : members[pinched])
+      std::map<std::uint32_t, std::vector<Wall>> walls_at;
+      for (std::size_t p = 0; p < parts.size(); ++p)
         for (std::size_t k = 0; k < parts[p].size(); ++k) {
           const std::uint32_t a = parts[p][k], b = parts[p][(k + 1) % parts[p].size()];
-          if (a != at && b != at) continue;
           const auto across = part_of_edge.find({b, a});
-          if (across == part_of_edge.end() || cluster[across->second] == pinched) continue;
-          const double d = std::fabs(height[cluster[across->second]] - height[pinched]);
-          if (d < nearest || (d == nearest && across->second < best)) nearest = d, best = across->second;
+          const double bottom = across == part_of_edge.end() ? floor_z : top_of(across->second);
+          if (!(bottom < top_of(p))) continue;
+          const Wall wall{bottom, top_of(p), p, across == part_of_edge.end() ? parts.size() : across->second};
+          walls_at[a].push_back(wall);
+          walls_at[b].push_back(wall);
         }
-      if (best == parts.size()) break;
+      const Wall* joining = nullptr;
+      for (const auto& [v, walls] : walls_at) {
+        if (walls.size() < 3) continue;
+        std::vector<std::pair<double, int>> events;  // (height, +1 a wall begins / -1 it ends), ends first
+        for (const Wall& w : walls) events.push_back({w.bottom, 1}), events.push_back({w.top, -1});
+        std::sort(events.begin(), events.end());
+        int open = 0, most = 0;
+        for (const auto& [z, change] : events) most = std::max(most, open += change);
+        if (most <= 2) continue;
+        for (const Wall& w : walls)
+          if (w.across < parts.size() &&
+              (!joining || w.top - w.bottom < joining->top - joining->bottom ||
+               (w.top - w.bottom == joining->top - joining->bottom &&
+                std::make_pair(w.part, w.across) < std::make_pair(joining->part, joining->across))))
+            joining = &w;
+        if (joining) break;
+      }
+      if (!joining) break;
+      const std::size_t best = joining->across, into = cluster[joining->part];
       const std::size_t from = cluster[best];
       members[from].erase(std::find(members[from].begin(), members[from].end(), best));
       sorted_z[from].clear();
@@ -624,10 +628,10 @@ BuildingModel make_lod13_blocks(const Lod13Parts& roof, double floor_z, double s
       std::vector<std::size_t> part{best};
       std::vector<double> z = part_z[best];
       std::sort(z.begin(), z.end());
-      cluster[best] = pinched;
-      merge_sorted(members[pinched], part);
-      merge_sorted(sorted_z[pinched], z);
-      height[pinched] = cluster_height(pinched);
+      cluster[best] = into;
+      merge_sorted(members[into], part);
+      merge_sorted(sorted_z[into], z);
+      height[into] = cluster_height(into);
     }
   }
   for (auto& [c, h] : height) h = std::max(h, floor_z + min_height);

@@ -74,16 +74,16 @@ std::optional<ValidBlocks> validated(BuildingModel blocks, const ReconstructionP
 }
 
 // The blocks of a level (LoD1.2: an infinite step) whose blocks of `parts` are no valid solid: the
-// roof parts joined within lod1.join_distance (a sliver between two parts, `joined`), with no
-// cluster meeting itself at a vertex; LoD1.3 then with its step height doubled until they are valid,
-// and as one block, as LoD1.2 is; at last the LoD1 rung's block (the footprint, or a cloud's convex
-// hull, extruded). `how` says which, when coarser than asked.
+// roof parts joined within lod1.join_distance (a sliver between two parts, `joined`), with no more
+// than two walls over each other on a vertex's column; LoD1.3 then with its step height doubled
+// until they are valid, and as one block, as LoD1.2 is; at last the LoD1 rung's block (the
+// footprint, or a cloud's convex hull, extruded). `how` says which, when coarser than asked.
 std::optional<ValidBlocks> remade_blocks(const BuildingInput& input, const ReconstructionParams& params,
                                          const Lod13Parts& parts, const Lod13Parts& joined, double step,
                                          std::string& how) {
-  const auto clusters = [&](const Lod13Parts& roof, double step_height, bool no_pinched_clusters) {
+  const auto clusters = [&](const Lod13Parts& roof, double step_height, bool no_overlapping_walls) {
     return make_lod13_blocks(roof, input.ground_z, step_height, params.lod1.roof_percentile,
-                             params.lod1.min_height, no_pinched_clusters);
+                             params.lod1.min_height, no_overlapping_walls);
   };
   BuildingModel last = clusters(joined, step, true);
   if (auto b = validated(last, params)) return b;
