@@ -1033,6 +1033,15 @@ bool has_code(const std::vector<ValidityError>& errors, int code) {
   return std::any_of(errors.begin(), errors.end(), [code](const ValidityError& e) { return e.code == code; });
 }
 
+// The heights of a block model's roof faces.
+std::set<double> roof_heights(const BuildingModel& blocks) {
+  std::set<double> roofs;
+  for (std::size_t f = 0; f < blocks.mesh.faces.size(); ++f)
+    if (blocks.surfaces[f] == SurfaceType::roof)
+      roofs.insert(blocks.mesh.vertices[blocks.mesh.faces[f][0]].z);
+  return roofs;
+}
+
 // Two roof parts whose shared wall bends 1 mm into the lower one (two walls nearly in line, as an LoD2
 // model can have them): more than the half millimetre that joins parts by default, so they share no
 // edge, and the blocks have a sliver between them, walled on both sides. Joined within 1 cm, they are
@@ -1087,12 +1096,8 @@ TEST(Lod13, a_cluster_meeting_itself_at_a_vertex_takes_in_a_part_between) {
 
   const BuildingModel blocks = make_lod13_blocks(parts, 0.0, 3.0, 70.0, 1.0, true);
   EXPECT_TRUE(validate_model(blocks.mesh).empty()) << validity_codes(validate_model(blocks.mesh));
-  std::set<double> roofs;
-  for (std::size_t f = 0; f < blocks.mesh.faces.size(); ++f)
-    if (blocks.surfaces[f] == SurfaceType::roof)
-      roofs.insert(blocks.mesh.vertices[blocks.mesh.faces[f][0]].z);
   // A with part 1: its parts' mean heights weighted by area, (700 x 10 + 100 x 4) / 800.
-  EXPECT_EQ(roofs, (std::set<double>{4.0, 9.25}));
+  EXPECT_EQ(roof_heights(blocks), (std::set<double>{4.0, 9.25}));
   EXPECT_NEAR(check_mesh(blocks.mesh).signed_volume, 800 * 9.25 + 100 * 4.0, 1e-9);
   // Where no cluster meets itself so, the flag changes nothing.
   const BuildingModel plain = make_lod13_blocks(three_roof_parts(), {}, 0.0, 3.0);
@@ -1116,11 +1121,8 @@ TEST(Lod13, walls_that_overlap_four_deep_on_a_column_are_undone_by_joining_the_p
   EXPECT_TRUE(has_code(validate_model(make_lod13_blocks(parts, 0.0, 3.0).mesh), 304));
   const BuildingModel blocks = make_lod13_blocks(parts, 0.0, 3.0, 70.0, 1.0, true);
   EXPECT_TRUE(validate_model(blocks.mesh).empty()) << validity_codes(validate_model(blocks.mesh));
-  std::set<double> roofs;
-  for (std::size_t f = 0; f < blocks.mesh.faces.size(); ++f)
-    if (blocks.surfaces[f] == SurfaceType::roof)
-      roofs.insert(blocks.mesh.vertices[blocks.mesh.faces[f][0]].z);
-  EXPECT_EQ(roofs, (std::set<double>{2.0, 4.0, 10.0}));  // parts 1 and 3: (100 x 2 + 100 x 6) / 200
+  // Parts 1 and 3: (100 x 2 + 100 x 6) / 200.
+  EXPECT_EQ(roof_heights(blocks), (std::set<double>{2.0, 4.0, 10.0}));
   EXPECT_NEAR(check_mesh(blocks.mesh).signed_volume, 100 * 10.0 + 200 * 4.0 + 100 * 2.0, 1e-9);
 }
 
