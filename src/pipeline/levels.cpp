@@ -73,36 +73,24 @@ std::optional<ValidBlocks> validated(BuildingModel blocks, const ReconstructionP
   return b;
 }
 
-// The blocks of a level (LoD1.2: an infinite step) whose blocks of `parts` are no valid solid: the
-// roof parts joined within lod1.join_distance (a sliver between two parts, `joined`), with no more
-// than two walls over each other on a vertex's column; LoD1.3 then with its step height doubled
-// until they are valid, and as one block, as LoD1.2 is; at last the LoD1 rung's block (the
-// footprint, or a cloud's convex hull, extruded). `how` says which, when coarser than asked.
+// The blocks of a level (LoD1.2: an infinite step) whose blocks of `parts` are no valid solid, with
+// no more than two walls over each other on a vertex's column: of the roof parts joined within
+// lod1.join_distance (a sliver between two parts, `joined`), else of `parts` themselves (joining can
+// fold a part that is itself a sliver); LoD1.3 then as one block, as LoD1.2 is; at last the LoD1
+// rung's block (the footprint, or a cloud's convex hull, extruded). `how` says which, when coarser
+// than asked.
 std::optional<ValidBlocks> remade_blocks(const BuildingInput& input, const ReconstructionParams& params,
                                          const Lod13Parts& parts, const Lod13Parts& joined, double step,
                                          std::string& how) {
-  const auto clusters = [&](const Lod13Parts& roof, double step_height, bool no_overlapping_walls) {
-    return make_lod13_blocks(roof, input.ground_z, step_height, params.lod1.roof_percentile,
-                             params.lod1.min_height, no_overlapping_walls);
-  };
-  BuildingModel last = clusters(joined, step, true);
-  if (auto b = validated(last, params)) return b;
+  for (const Lod13Parts* roof : {&joined, &parts})
+    if (auto b = validated(make_lod13_blocks(*roof, input.ground_z, step, params.lod1.roof_percentile,
+                                             params.lod1.min_height, true),
+                           params))
+      return b;
   if (std::isfinite(step)) {
-    constexpr int kDoublings = 10;  // 3 m * 2^10: no building's roofs span more
-    double doubled = step;
-    for (int k = 0; k < kDoublings; ++k) {
-      doubled *= 2;
-      BuildingModel attempt = clusters(joined, doubled, true);
-      if (same_model(attempt, last)) continue;  // the same clusters: as invalid
-      last = attempt;
-      if (auto b = validated(std::move(attempt), params)) {
-        std::ostringstream text;
-        text << " with a step height of " << doubled << " m";
-        how = text.str();
-        return b;
-      }
-    }
-    if (auto b = validated(clusters(parts, std::numeric_limits<double>::infinity(), false), params)) {
+    if (auto b = validated(make_lod13_blocks(parts, input.ground_z, std::numeric_limits<double>::infinity(),
+                                             params.lod1.roof_percentile, params.lod1.min_height),
+                           params)) {
       how = " as one block, as LoD1.2";
       return b;
     }
