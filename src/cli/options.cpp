@@ -101,14 +101,16 @@ const std::vector<OptionSpec>& option_table() {
   static const std::vector<OptionSpec> table = {
       // Footprints.
       {"--footprints", "-f", "PATH",
-       "footprint source: any OGR vector source (GeoPackage, Shapefile, GeoJSON, SQLite) or a City3D OBJ polygon "
+       "footprint source: any OGR vector source (GeoPackage, Shapefile, GeoJSON, SQLite) or a City3D OBJ "
+       "polygon "
        "file; without it every point-cloud file is one building",
        [](const O& o) { return o.batch.footprints; }, [](O& o, V v) { o.batch.footprints = v; }},
       {"--layer", nullptr, "NAME", "footprint layer (default: the first layer with polygons)",
-       [](const O& o) { return o.batch.footprint.layer; },
-       [](O& o, V v) { o.batch.footprint.layer = v; }},
-      {"--id-field", nullptr, "NAME", "footprint attribute holding the building id (default: the feature id, FID)",
-       [](const O& o) { return o.batch.footprint.id_field; }, [](O& o, V v) { o.batch.footprint.id_field = v; }},
+       [](const O& o) { return o.batch.footprint.layer; }, [](O& o, V v) { o.batch.footprint.layer = v; }},
+      {"--id-field", nullptr, "NAME",
+       "footprint attribute holding the building id (default: the feature id, FID)",
+       [](const O& o) { return o.batch.footprint.id_field; },
+       [](O& o, V v) { o.batch.footprint.id_field = v; }},
       {"--where", nullptr, "SQL", "OGR attribute filter on the footprints, e.g. \"bouwjaar > 1900\"",
        [](const O& o) { return o.batch.footprint.attribute_filter; },
        [](O& o, V v) { o.batch.footprint.attribute_filter = v; }},
@@ -117,15 +119,19 @@ const std::vector<OptionSpec>& option_table() {
        "reprojected)",
        [](const O& o) { return bbox_text(o.batch.footprint.bbox); },
        [](O& o, V v) { o.batch.footprint.bbox = parse_bbox("--bbox", v); }},
-      {"--ground-field", nullptr, "NAME", "footprint attribute with the floor height (world z); overrides the ground "
-       "points where set", [](const O& o) { return o.batch.footprint.ground_field; },
+      {"--ground-field", nullptr, "NAME",
+       "footprint attribute with the floor height (world z); overrides the ground "
+       "points where set",
+       [](const O& o) { return o.batch.footprint.ground_field; },
        [](O& o, V v) { o.batch.footprint.ground_field = v; }},
-      {"--max-footprint-size", nullptr, "M", "skip footprints wider or longer than this, metres (no building is; "
+      {"--max-footprint-size", nullptr, "M",
+       "skip footprints wider or longer than this, metres (no building is; "
        "one such footprint would take every point of the tiles)",
        [](const O& o) { return number_text(o.batch.footprint.max_extent); },
        [](O& o, V v) {
          const double m = parse_double("--max-footprint-size", v);
-         if (!(m > 0)) throw ConfigError("option --max-footprint-size: '" + v + "' is not a size > 0 (metres)");
+         if (!(m > 0))
+           throw ConfigError("option --max-footprint-size: '" + v + "' is not a size > 0 (metres)");
          o.batch.footprint.max_extent = m;
        }},
       {"--no-repair", nullptr, nullptr, "skip invalid footprints instead of repairing them with MakeValid",
@@ -138,9 +144,12 @@ const std::vector<OptionSpec>& option_table() {
       {"--ground-class", nullptr, "N", "LAS class of ground points",
        [](const O& o) { return std::to_string(o.batch.crop.ground_class); },
        [](O& o, V v) { o.batch.crop.ground_class = parse_classes("--ground-class", v).front(); }},
-      {"--ignore-classes", nullptr, nullptr, "every point inside a footprint is a building point (no ground points)",
-       [](const O& o) { return yes_no(o.batch.crop.use_classes == ClassUse::never); }, [](O& o, V) { o.batch.crop.use_classes = ClassUse::never; }},
-      {"--ground-buffer", nullptr, "M", "ground points within this distance of a footprint give its floor height",
+      {"--ignore-classes", nullptr, nullptr,
+       "every point inside a footprint is a building point (no ground points)",
+       [](const O& o) { return yes_no(o.batch.crop.use_classes == ClassUse::never); },
+       [](O& o, V) { o.batch.crop.use_classes = ClassUse::never; }},
+      {"--ground-buffer", nullptr, "M",
+       "ground points within this distance of a footprint give its floor height",
        [](const O& o) { return number_text(o.batch.crop.ground_buffer); },
        [](O& o, V v) { o.batch.crop.ground_buffer = parse_double("--ground-buffer", v); }},
       {"--ground-percentile", nullptr, "P", "percentile (0-100) of the ground points' z taken as the floor",
@@ -155,7 +164,8 @@ const std::vector<OptionSpec>& option_table() {
        [](const O& o) { return number_text(o.batch.min_coverage); },
        [](O& o, V v) {
          const double share = parse_double("--min-coverage", v);
-         if (!(share >= 0 && share <= 1)) throw ConfigError("option --min-coverage: '" + v + "' is not a share (0-1)");
+         if (!(share >= 0 && share <= 1))
+           throw ConfigError("option --min-coverage: '" + v + "' is not a share (0-1)");
          o.batch.min_coverage = share;
        }},
       {"--crs", nullptr, "CRS",
@@ -180,7 +190,8 @@ const std::vector<OptionSpec>& option_table() {
       // Reconstruction (the paper's parameters; see ../shared/spec/city3d_paper.tex).
       {"--lod", nullptr, "LIST",
        "levels of detail, comma-separated: 1.2 (one block), 1.3 (a block per roof-height cluster), 2.2 (the "
-       "reconstructed roof); CityJSON holds each, OBJ/PLY the highest; 1.2 alone makes blocks without LoD2",
+       "reconstructed roof), or all for the three; CityJSON holds each, OBJ/PLY the highest; 1.2 alone makes "
+       "blocks without LoD2",
        [](const O& o) { return lod_set_text(o.batch.reconstruction.lods); },
        [](O& o, V v) {
          // "2" is not read as 2.2 (LoD2 has four refinements; city3d makes one of them): say which.
@@ -196,7 +207,7 @@ const std::vector<OptionSpec>& option_table() {
        }},
       {"--scale", nullptr, "M",
        "CityJSON transform scale, and the grid every model is rounded to and checked for validity on: 0.0001 "
-       "(0.1 mm, as OBJ/PLY) or 0.001 (millimetres)",
+       "(0.1 mm, as OBJ/PLY), 0.001 (millimetres) or 0.01 (centimetres)",
        [](const O& o) { return number_text(o.batch.reconstruction.output_grid); },
        [](O& o, V v) {
          const double s = parse_double("--scale", v);
@@ -213,18 +224,22 @@ const std::vector<OptionSpec>& option_table() {
       {"--plane-angle", nullptr, "DEG", "region growing: normal deviation",
        [](const O& o) { return number_text(o.batch.reconstruction.planes.max_angle); },
        [](O& o, V v) { o.batch.reconstruction.planes.max_angle = parse_double("--plane-angle", v); }},
-      {"--step-height", nullptr, "M", "step lines: height step between two roof planes that makes an inner wall where their points meet; 0 = no step lines",
+      {"--step-height", nullptr, "M",
+       "step lines: height step between two roof planes that makes an inner wall where their points meet; 0 "
+       "= no step lines",
        [](const O& o) {
          const auto& st = o.batch.reconstruction.step_lines;
          return number_text(st.enabled ? st.min_step : 0.0);
        },
        [](O& o, V v) {
          const double h = parse_double("--step-height", v);
-         if (h < 0.0) throw ConfigError("--step-height: " + std::string(v) + " is negative (give 0 for no step lines)");
+         if (h < 0.0)
+           throw ConfigError("--step-height: " + std::string(v) + " is negative (give 0 for no step lines)");
          o.batch.reconstruction.step_lines.enabled = h > 0.0;
          if (h > 0.0) o.batch.reconstruction.step_lines.min_step = h;
        }},
-      {"--resolution", nullptr, "M", "heightmap resolution r; 0 = from the point density (0.20 m at AHN3 density)",
+      {"--resolution", nullptr, "M",
+       "heightmap resolution r; 0 = from the point density (0.20 m at AHN3 density)",
        [](const O& o) { return number_text(o.batch.reconstruction.heightmap.resolution); },
        [](O& o, V v) { o.batch.reconstruction.heightmap.resolution = parse_double("--resolution", v); }},
       {"--eps-d", nullptr, "M", "polylines: Hausdorff distance bound eps_d",
@@ -235,7 +250,9 @@ const std::vector<OptionSpec>& option_table() {
        [](O& o, V v) { o.batch.reconstruction.polylines.max_cost = parse_double("--eps-c", v); }},
       {"--snap-angle", nullptr, "DEG", "regularisation: near-parallel / near-orthogonal threshold",
        [](const O& o) { return number_text(o.batch.reconstruction.regularise.angle_threshold); },
-       [](O& o, V v) { o.batch.reconstruction.regularise.angle_threshold = parse_double("--snap-angle", v); }},
+       [](O& o, V v) {
+         o.batch.reconstruction.regularise.angle_threshold = parse_double("--snap-angle", v);
+       }},
       {"--walls", nullptr, "auto|footprint|inferred|detected",
        "vertical planes: footprint edges + inferred inner walls, all inferred, or detected wall planes",
        [](const O& o) {
@@ -245,18 +262,25 @@ const std::vector<OptionSpec>& option_table() {
        },
        [](O& o, V v) {
          WallMode& m = o.batch.reconstruction.walls.mode;
-         if (v == "auto") m = WallMode::automatic;
-         else if (v == "footprint") m = WallMode::footprint;
-         else if (v == "inferred") m = WallMode::inferred;
-         else if (v == "detected") m = WallMode::detected;
-         else throw ConfigError("option --walls: '" + v + "' is not auto, footprint, inferred or detected");
+         if (v == "auto")
+           m = WallMode::automatic;
+         else if (v == "footprint")
+           m = WallMode::footprint;
+         else if (v == "inferred")
+           m = WallMode::inferred;
+         else if (v == "detected")
+           m = WallMode::detected;
+         else
+           throw ConfigError("option --walls: '" + v + "' is not auto, footprint, inferred or detected");
        }},
       {"--lambda-data", nullptr, "W", "weight of the data-fitting term",
        [](const O& o) { return number_text(o.batch.reconstruction.selection.lambda_data); },
        [](O& o, V v) { o.batch.reconstruction.selection.lambda_data = parse_double("--lambda-data", v); }},
       {"--lambda-complexity", nullptr, "W", "weight of the model-complexity term",
        [](const O& o) { return number_text(o.batch.reconstruction.selection.lambda_complexity); },
-       [](O& o, V v) { o.batch.reconstruction.selection.lambda_complexity = parse_double("--lambda-complexity", v); }},
+       [](O& o, V v) {
+         o.batch.reconstruction.selection.lambda_complexity = parse_double("--lambda-complexity", v);
+       }},
       {"--lambda-roof", nullptr, "W", "weight of the roof-preference term",
        [](const O& o) { return number_text(o.batch.reconstruction.selection.lambda_roof); },
        [](O& o, V v) { o.batch.reconstruction.selection.lambda_roof = parse_double("--lambda-roof", v); }},
@@ -266,18 +290,21 @@ const std::vector<OptionSpec>& option_table() {
        [](O& o, V v) {
          o.batch.reconstruction.selection.lambda_unsupported = parse_double("--lambda-unsupported", v);
        }},
-      {"--solver", nullptr, "auto|glpk|cbc", "integer-program solver (auto: GLPK, then CBC where GLPK stops at its node limit)",
+      {"--solver", nullptr, "auto|glpk|cbc",
+       "integer-program solver (auto: GLPK, then CBC where GLPK stops at its node limit)",
        [](const O& o) { return o.batch.reconstruction.selection.solver; },
        [](O& o, V v) {
          if (v != "auto" && v != "glpk" && v != "cbc")
            throw ConfigError("option --solver: '" + v + "' is not auto, glpk or cbc");
          o.batch.reconstruction.selection.solver = v;
        }},
-      {"--node-limit", nullptr, "N", "deterministic work limit of the integer programs: branch-and-bound nodes per "
+      {"--node-limit", nullptr, "N",
+       "deterministic work limit of the integer programs: branch-and-bound nodes per "
        "program (the search keeps the best selection found when it stops there; the report says so)",
        [](const O& o) { return std::to_string(o.batch.reconstruction.selection.node_limit); },
        [](O& o, V v) { o.batch.reconstruction.selection.node_limit = parse_int("--node-limit", v, 1); }},
-      {"--exact-variables", nullptr, "N", "integer programs of more variables than this are solved by windows "
+      {"--exact-variables", nullptr, "N",
+       "integer programs of more variables than this are solved by windows "
        "from the start (deterministic, not proven optimal; the report says so)",
        [](const O& o) { return std::to_string(o.batch.reconstruction.selection.max_exact_variables); },
        [](O& o, V v) {
@@ -288,29 +315,39 @@ const std::vector<OptionSpec>& option_table() {
        [](O& o, V v) {
          o.batch.reconstruction.selection.window_variables = static_cast<std::size_t>(parse_int("--window-variables", v, 2));
        }},
-      {"--max-footprint-vertices", nullptr, "N", "footprints of more vertices are simplified (tolerance from 0.01 m, "
+      {"--max-footprint-vertices", nullptr, "N",
+       "footprints of more vertices are simplified (tolerance from 0.01 m, "
        "doubled until they fit; the report says so)",
        [](const O& o) { return std::to_string(o.batch.reconstruction.max_footprint_vertices); },
        [](O& o, V v) {
          o.batch.reconstruction.max_footprint_vertices = static_cast<std::size_t>(parse_int("--max-footprint-vertices", v, 3));
        }},
-      {"--retry-share", nullptr, "F", "a LoD2 model leaving more than this share of the building's points farther "
-       "than 1 m from it is rebuilt with variants (smaller roof planes, a wider outline, roofs for the points left "
+      {"--retry-share", nullptr, "F",
+       "a LoD2 model leaving more than this share of the building's points farther "
+       "than 1 m from it is rebuilt with variants (smaller roof planes, a wider outline, roofs for the "
+       "points left "
        "out, without the face prior, "
-       "half the complexity weight), and one that explains more points and fits them better is kept (the report "
+       "half the complexity weight), and one that explains more points and fits them better is kept (the "
+       "report "
        "says so); 1: never",
        [](const O& o) { return number_text(o.batch.reconstruction.retry_unexplained_share); },
        [](O& o, V v) { o.batch.reconstruction.retry_unexplained_share = parse_double("--retry-share", v); }},
-      {"--retry-unsupported", nullptr, "M2", "a LoD2 model with more than this much surface no point supports "
-       "(m2 more than 1 m above the highest point within 1.5 m in plan) is rebuilt with the same variants, and one "
+      {"--retry-unsupported", nullptr, "M2",
+       "a LoD2 model with more than this much surface no point supports "
+       "(m2 more than 1 m above the highest point within 1.5 m in plan) is rebuilt with the same variants, "
+       "and one "
        "more faithful both ways is kept (the report says so)",
        [](const O& o) { return number_text(o.batch.reconstruction.retry_unsupported_area); },
-       [](O& o, V v) { o.batch.reconstruction.retry_unsupported_area = parse_double("--retry-unsupported", v); }},
-      {"--time-limit", nullptr, "S", "opt-in wall-clock safety net per building for LoD2, seconds (then it falls back); "
+       [](O& o, V v) {
+         o.batch.reconstruction.retry_unsupported_area = parse_double("--retry-unsupported", v);
+       }},
+      {"--time-limit", nullptr, "S",
+       "opt-in wall-clock safety net per building for LoD2, seconds (then it falls back); "
        "0: none, the default. When it fires, the output depends on the machine and its load",
        [](const O& o) { return number_text(o.batch.reconstruction.time_limit); },
        [](O& o, V v) { o.batch.reconstruction.time_limit = parse_double("--time-limit", v); }},
-      {"--debug", nullptr, "DIR", "write each building's intermediate results (planes, heightmap, edges, "
+      {"--debug", nullptr, "DIR",
+       "write each building's intermediate results (planes, heightmap, edges, "
        "polylines, walls, candidate faces, models rejected as invalid) into DIR/<id>/",
        [](const O& o) { return o.batch.reconstruction.debug_dir; },
        [](O& o, V v) { o.batch.reconstruction.debug_dir = v; }},
@@ -331,11 +368,11 @@ const std::vector<OptionSpec>& option_table() {
        [](const O& o) { return yes_no(!o.batch.per_building_files); },
        [](O& o, V) { o.batch.per_building_files = false; }},
       {"--merged", nullptr, nullptr, "also write every building into one models.<format> file",
-       [](const O& o) { return yes_no(o.batch.merged_file); },
-       [](O& o, V) { o.batch.merged_file = true; }},
-      {"--no-cityjson", nullptr, nullptr, "do not write buildings.city.json", [](const O& o) { return yes_no(!o.batch.cityjson); },
-       [](O& o, V) { o.batch.cityjson = false; }},
-      {"--cityjsonseq", nullptr, nullptr, "also write buildings.city.jsonl (CityJSONSeq, one building per line)",
+       [](const O& o) { return yes_no(o.batch.merged_file); }, [](O& o, V) { o.batch.merged_file = true; }},
+      {"--no-cityjson", nullptr, nullptr, "do not write buildings.city.json",
+       [](const O& o) { return yes_no(!o.batch.cityjson); }, [](O& o, V) { o.batch.cityjson = false; }},
+      {"--cityjsonseq", nullptr, nullptr,
+       "also write buildings.city.jsonl (CityJSONSeq, one building per line)",
        [](const O& o) { return yes_no(o.batch.cityjson_seq); }, [](O& o, V) { o.batch.cityjson_seq = true; }},
       {"--gpkg", nullptr, nullptr,
        "also write buildings.gpkg: the footprints with every report attribute, and each level's roof parts "
@@ -347,8 +384,10 @@ const std::vector<OptionSpec>& option_table() {
        [](const O& o) { return yes_no(o.batch.tiles3d); }, [](O& o, V) { o.batch.tiles3d = true; }},
       {"--no-html", nullptr, nullptr, "do not write report.html (the run overview)",
        [](const O& o) { return yes_no(!o.batch.html); }, [](O& o, V) { o.batch.html = false; }},
-      {"--timings", nullptr, nullptr, "add each building's seconds to its CityJSON attributes (output then differs "
-       "from run to run)", [](const O& o) { return yes_no(o.batch.timings_in_cityjson); },
+      {"--timings", nullptr, nullptr,
+       "add each building's seconds to its CityJSON attributes (output then differs "
+       "from run to run)",
+       [](const O& o) { return yes_no(o.batch.timings_in_cityjson); },
        [](O& o, V) { o.batch.timings_in_cityjson = true; }},
       {"--local-coordinates", nullptr, nullptr,
        "write local coordinates and record each building's origin, instead of world coordinates",
@@ -362,8 +401,7 @@ const std::vector<OptionSpec>& option_table() {
        [](O& o, V v) { o.batch.threads = parse_int("--jobs", v, 1); }},
       {"--no-resume", nullptr, nullptr,
        "recompute every building, even those an interrupted earlier run into the same folder finished",
-       [](const O& o) { return yes_no(!o.batch.resume); },
-       [](O& o, V) { o.batch.resume = false; }},
+       [](const O& o) { return yes_no(!o.batch.resume); }, [](O& o, V) { o.batch.resume = false; }},
       {"--block-size", nullptr, "M",
        "footprints are processed in square blocks of this size: shards are made of them and cropping passes "
        "group them (0 = all at once; the output is the same)",
@@ -375,22 +413,25 @@ const std::vector<OptionSpec>& option_table() {
        [](const O& o) { return number_text(o.batch.group_area); },
        [](O& o, V v) { o.batch.group_area = parse_double("--group-area", v); }},
       {"--shard", nullptr, "K/N",
-       "reconstruct only shard K of N (consecutive blocks in tile order, balanced by footprint area) into the "
+       "reconstruct only shard K of N (consecutive blocks in tile order, balanced by footprint area) into "
+       "the "
        "output folder; "
        "`city3d merge` combines the N folders",
-       [](const O& o) { return o.batch.shards > 0 ? std::to_string(o.batch.shard) + "/" + std::to_string(o.batch.shards) : std::string(); },
+       [](const O& o) {
+         return o.batch.shards > 0 ? std::to_string(o.batch.shard) + "/" + std::to_string(o.batch.shards)
+                                   : std::string();
+       },
        [](O& o, V v) { parse_shard(v, o.batch.shard, o.batch.shards); }},
       {"--strict", nullptr, nullptr,
        "exit with code 4 when any building failed or is partial, 5 when more than half share one problem",
-       [](const O& o) { return yes_no(o.strict); },
-       [](O& o, V) { o.strict = true; }},
-      {"--residuals", nullptr, "PATH", "evaluate: also write every point's distance to the model as CSV (x,y,z,distance)",
+       [](const O& o) { return yes_no(o.strict); }, [](O& o, V) { o.strict = true; }},
+      {"--residuals", nullptr, "PATH",
+       "evaluate: also write every point's distance to the model as CSV (x,y,z,distance)",
        [](const O& o) { return o.residuals; }, [](O& o, V v) { o.residuals = v; }},
       {"--progress", nullptr, nullptr, "progress on stderr even when it is not a terminal",
-       [](const O& o) { return yes_no(o.progress == 1); },
-       [](O& o, V) { o.progress = 1; }},
-      {"--no-progress", nullptr, nullptr, "no progress line", [](const O& o) { return yes_no(o.progress == 0); },
-       [](O& o, V) { o.progress = 0; }},
+       [](const O& o) { return yes_no(o.progress == 1); }, [](O& o, V) { o.progress = 1; }},
+      {"--no-progress", nullptr, nullptr, "no progress line",
+       [](const O& o) { return yes_no(o.progress == 0); }, [](O& o, V) { o.progress = 0; }},
       {"--profile", nullptr, nullptr,
        "at the end of a run, the CPU seconds of each reconstruction stage summed over the buildings it "
        "reconstructed, on stderr (bench/stage_profile.py sums runs)",
@@ -405,13 +446,14 @@ const std::vector<OptionSpec>& option_table() {
        "one); options given on the command line override it",
        [](const O& o) { return o.config_path; }, [](O& o, V v) { o.config_path = v; }},
       {"--print-config", nullptr, nullptr,
-       "print every option as TOML with its effective value (the defaults, a --config file, the command line) "
+       "print every option as TOML with its effective value (the defaults, a --config file, the command "
+       "line) "
        "and exit",
        [](const O& o) { return yes_no(o.print_config); }, [](O& o, V) { o.print_config = true; }},
       {"--help", "-h", nullptr, "print this help and exit", [](const O& o) { return yes_no(o.help); },
        [](O& o, V) { o.help = true; }},
-      {"--version", nullptr, nullptr, "print the version and exit", [](const O& o) { return yes_no(o.version); },
-       [](O& o, V) { o.version = true; }},
+      {"--version", nullptr, nullptr, "print the version and exit",
+       [](const O& o) { return yes_no(o.version); }, [](O& o, V) { o.version = true; }},
   };
   return table;
 }
