@@ -551,3 +551,211 @@ TEST_F(Mistakes, a_shard_that_builds_nothing_succeeds_and_its_merge_says_so) {
   EXPECT_EQ(merged.exit_code, 5) << merged.output;  // 132 of 160 outside the tile
   EXPECT_EQ(report(dir_ / "merged").at("summary").at("buildings"), 160);
 }
+
+// --- 8. mistakes a user tried (ninety of them, 2026-11-27): what was wrong and marked ok, or lost ---
+
+namespace {
+const std::string kSampleTiles = kSample + "/delft_sample_1.las " + kSample + "/delft_sample_2.las";
+const std::string kSampleFootprints = " -f " + kSample + "/delft_sample_footprints.gpkg --id-field gml_id";
+}  // namespace
+
+TEST_F(Mistakes, a_jobs_count_beyond_the_threads_to_be_had_runs_on_as_many_as_there_is_work_for) {
+  // -j 50000 aborted ("terminate called without an active exception"): a thread that could not be
+  // started was never joined.
+  const Result many = run("reconstruct " + kSampleTiles + kSampleFootprints + " -j 100000 --no-progress -o " +
+                          (dir_ / "many").string());
+  ASSERT_EQ(many.exit_code, 0) << many.output;
+  ASSERT_EQ(run("reconstruct " + kSampleTiles + kSampleFootprints + " -j 1 --no-progress -o " +
+                (dir_ / "one").string())
+                .exit_code,
+            0);
+  EXPECT_EQ(read_file(dir_ / "many" / "buildings.city.json"),
+            read_file(dir_ / "one" / "buildings.city.json"));
+}
+
+TEST_F(Mistakes, v_repeated_in_one_word_is_v_given_twice) {
+  const std::string tail = kSampleFootprints + " --lod 1.2 --no-progress -o ";
+  const Result twice = run("reconstruct " + kSampleTiles + tail + (dir_ / "a").string() + " -v -v");
+  const Result word = run("reconstruct " + kSampleTiles + tail + (dir_ / "b").string() + " -vv");
+  ASSERT_EQ(twice.exit_code, 0) << twice.output;
+  ASSERT_EQ(word.exit_code, 0) << word.output;
+  const auto lines = [](const std::string& text) { return std::count(text.begin(), text.end(), '\n'); };
+  EXPECT_EQ(lines(word.output), lines(twice.output)) << word.output;
+  EXPECT_GT(lines(word.output),
+            lines(run("reconstruct " + kSampleTiles + tail + (dir_ / "c").string() + " -v").output));
+}
+
+TEST_F(Mistakes, a_folder_given_as_the_configuration_file_is_refused) {
+  const Result r = run("reconstruct " + kSampleTiles + kSampleFootprints + " --config " + dir_.string() +
+                       " --no-progress -o " + (dir_ / "out").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+TEST_F(Mistakes, empty_and_blank_ids_are_skipped_as_null_ones_are) {
+  const fs::path footprints = dir_ / "ids.gpkg";
+  const Result made =
+      run_shell("ogr2ogr -f GPKG " + footprints.string() + " " + kSample +
+                "/delft_sample_footprints.gpkg -dialect sqlite -sql \"SELECT *, CASE gml_id WHEN "
+                "'b31e1d795-00ba-11e6-b420-2bdcc4ab5d7f' THEN '' WHEN "
+                "'b11282794-00ba-11e6-b420-2bdcc4ab5d7f' THEN '  ' ELSE gml_id END AS pid FROM "
+                "buildingpart\" -nln buildingpart");
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  const Result r = run("reconstruct " + kSampleTiles + " -f " + footprints.string() +
+                       " --id-field pid --lod 1.2 --no-progress -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json whole = report(dir_ / "out");
+  EXPECT_EQ(whole.at("summary").at("buildings"), 15);
+  EXPECT_EQ(whole.at("summary").at("skipped"), 2);
+  for (const json& row : whole.at("buildings")) {
+    const std::string id = row.at("id").get<std::string>();
+    EXPECT_NE(id.find_first_not_of(' '), std::string::npos) << "a building of a blank id";
+    if (row.at("status") == "skipped")
+      EXPECT_EQ(row.at("reason").get<std::string>().rfind("no id", 0), 0u) << row;
+  }
+  const json city = json::parse(read_file(dir_ / "out" / "buildings.city.json"));
+  for (const auto& [id, object] : city.at("CityObjects").items())
+    EXPECT_NE(id.find_first_not_of(' '), std::string::npos) << "a CityObject of a blank id";
+}
+
+TEST_F(Mistakes, a_ground_field_of_dates_is_refused_and_one_of_other_numbers_is_not_taken_for_the_ground) {
+  const std::string tail = " --lod 1.2 --no-progress -o ";
+  // 'created' holds dates ("2014-07-09" was read as 2014 m); bag_pnd is a building number (5.03e14 m).
+  const Result dates = run("reconstruct " + kSampleTiles + kSampleFootprints + " --ground-field created" +
+                           tail + (dir_ / "dates").string());
+  EXPECT_EQ(dates.exit_code, 1) << dates.output;
+  EXPECT_FALSE(fs::exists(dir_ / "dates"));
+  ASSERT_EQ(
+      run("reconstruct " + kSampleTiles + kSampleFootprints + tail + (dir_ / "measured").string()).exit_code,
+      0);
+  const Result numbers = run("reconstruct " + kSampleTiles + kSampleFootprints + " --ground-field bag_pnd" +
+                             tail + (dir_ / "numbers").string());
+  ASSERT_EQ(numbers.exit_code, 0) << numbers.output;
+  const auto measured = rows_by_id(dir_ / "measured"), with_field = rows_by_id(dir_ / "numbers");
+  std::size_t noted = 0;
+  for (const auto& [id, row] : with_field) {
+    if (row.at("status") == "skipped") continue;
+    EXPECT_EQ(row.at("ground_z"), measured.at(id).at("ground_z")) << id;
+    EXPECT_EQ(row.at("ground_method"), measured.at(id).at("ground_method")) << id;
+    EXPECT_EQ(row.at("volume_lod12"), measured.at(id).at("volume_lod12")) << id;
+    noted += contains(row.at("note").get<std::string>(), "bag_pnd");
+  }
+  EXPECT_GE(noted, 10u);
+  // A text field of heights, one of them not a number: that one measured, the others taken.
+  const fs::path footprints = dir_ / "floor.gpkg";
+  ASSERT_EQ(run_shell("ogr2ogr -f GPKG " + footprints.string() + " " + kSample +
+                      "/delft_sample_footprints.gpkg -dialect sqlite -sql \"SELECT *, CASE gml_id WHEN "
+                      "'b31e1d795-00ba-11e6-b420-2bdcc4ab5d7f' THEN 'unknown' ELSE '0.25' END AS floor FROM "
+                      "buildingpart\" -nln buildingpart")
+                .exit_code,
+            0);
+  const Result mixed = run("reconstruct " + kSampleTiles + " -f " + footprints.string() +
+                           " --id-field gml_id --ground-field floor" + tail + (dir_ / "mixed").string());
+  ASSERT_EQ(mixed.exit_code, 0) << mixed.output;
+  for (const auto& [id, row] : rows_by_id(dir_ / "mixed")) {
+    if (row.at("status") == "skipped") continue;
+    if (id == "b31e1d795-00ba-11e6-b420-2bdcc4ab5d7f") {
+      EXPECT_EQ(row.at("ground_method"), measured.at(id).at("ground_method"));
+    } else {
+      EXPECT_EQ(row.at("ground_method"), "footprint attribute") << id;
+      EXPECT_DOUBLE_EQ(row.at("ground_z").get<double>(), 0.25) << id;
+    }
+  }
+}
+
+TEST_F(Mistakes, a_folder_of_tiles_is_not_the_output_folder_and_a_mesh_among_clouds_is_named) {
+  fs::create_directories(dir_ / "tiles");
+  for (const char* f : {"delft_sample_1.las", "delft_sample_2.las"})
+    fs::copy_file(kSample + "/" + f, dir_ / "tiles" / f);
+  // The second run into the folder read the first one's models.ply as a tile, took the journal for
+  // another run's and removed every model.
+  const Result same = run("reconstruct " + (dir_ / "tiles").string() + kSampleFootprints +
+                          " --format ply --merged --no-progress -o " + (dir_ / "tiles").string());
+  EXPECT_EQ(same.exit_code, 2) << same.output;
+  std::size_t entries = 0;
+  for (const auto& e : fs::directory_iterator(dir_ / "tiles"))
+    entries += e.is_regular_file() || e.is_directory();
+  EXPECT_EQ(entries, 2u) << "nothing written among the tiles";
+  // A model among the tiles is read as points, and said to be a mesh.
+  ASSERT_EQ(run("reconstruct " + kSampleTiles + kSampleFootprints +
+                " --lod 1.2 --format ply --merged --no-progress -o " + (dir_ / "out").string())
+                .exit_code,
+            0);
+  fs::copy_file(dir_ / "out" / "models.ply", dir_ / "tiles" / "models.ply");
+  const Result with_mesh = run("reconstruct " + (dir_ / "tiles").string() + kSampleFootprints +
+                               " --lod 1.2 --no-progress -o " + (dir_ / "again").string());
+  EXPECT_TRUE(contains(with_mesh.output, (dir_ / "tiles" / "models.ply").string() + " is a mesh of"))
+      << with_mesh.output;
+  EXPECT_TRUE(contains(run("info " + (dir_ / "tiles" / "models.ply").string()).output, "faces: "))
+      << "info names it too";
+}
+
+TEST_F(Mistakes, files_of_a_run_in_a_folder_without_its_journal_are_not_replaced) {
+  fs::create_directories(dir_ / "mine");
+  { std::ofstream(dir_ / "mine" / "report.csv") << "my own table\n"; }
+  const Result r = run("reconstruct " + kSampleTiles + kSampleFootprints + " --no-progress -o " +
+                       (dir_ / "mine").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(read_file(dir_ / "mine" / "report.csv"), "my own table\n");
+  EXPECT_FALSE(fs::exists(dir_ / "mine" / "models"));
+  // A run's own folder (its journal beside its files) is resumed as before.
+  ASSERT_EQ(run("reconstruct " + kSampleTiles + kSampleFootprints + " --lod 1.2 --no-progress -o " +
+                (dir_ / "run").string())
+                .exit_code,
+            0);
+  const Result again = run("reconstruct " + kSampleTiles + kSampleFootprints +
+                           " --lod 1.2 --no-progress -o " + (dir_ / "run").string());
+  EXPECT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_EQ(report(dir_ / "run").at("summary").at("resumed"), 15);
+}
+
+TEST_F(Mistakes, ground_z_with_footprints_and_a_cityjson_to_evaluate_are_refused) {
+  const Result z = run("reconstruct " + kSampleTiles + kSampleFootprints +
+                       " --ground-z 100 --no-progress -o " + (dir_ / "out").string());
+  EXPECT_EQ(z.exit_code, 2) << z.output;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+  ASSERT_EQ(run("reconstruct " + kSampleTiles + kSampleFootprints + " --lod 1.2 --no-progress -o " +
+                (dir_ / "run").string())
+                .exit_code,
+            0);
+  const Result json_model = run("evaluate " + (dir_ / "run" / "buildings.city.json").string() + " " +
+                                kSample + "/delft_sample_1.las");
+  EXPECT_EQ(json_model.exit_code, 1) << json_model.output;
+  EXPECT_TRUE(contains(json_model.output, "not an OBJ file")) << json_model.output;
+}
+
+TEST_F(Mistakes, a_tile_given_without_footprints_and_points_at_ground_level_are_noted) {
+  // A whole tile as one building's cloud: 17,327 of its 40,957 points are ground.
+  const Result tile = run("reconstruct " + kSample + "/delft_sample_1.las --lod 1.2 --no-progress -o " +
+                          (dir_ / "tile").string());
+  ASSERT_EQ(tile.exit_code, 0) << tile.output;
+  const auto rows = rows_by_id(dir_ / "tile");
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_TRUE(contains(rows.begin()->second.at("note").get<std::string>(), "classified ground"))
+      << rows.begin()->second;
+  // Every height set to 0: each building's points stand at its ground (the blocks are 1 m slabs).
+  const city3d::PointCloud cloud = city3d::read_point_cloud(kSample + "/delft_sample_1.las",
+                                                            city3d::kFieldXyz | city3d::kFieldClassification);
+  std::vector<city3d::test::LasPoint> flat;
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    flat.push_back({cloud.points[i].x, cloud.points[i].y, 0.0, cloud.classification[i]});
+  city3d::test::write_las((dir_ / "flat.las").string(), flat);
+  const Result r = run("reconstruct " + (dir_ / "flat.las").string() + kSampleFootprints +
+                       " --lod 1.2 --no-progress -o " + (dir_ / "flat").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::size_t built = 0, noted = 0;
+  for (const auto& [id, row] : rows_by_id(dir_ / "flat")) {
+    if (row.at("status") == "skipped") continue;
+    ++built;
+    noted += contains(row.at("note").get<std::string>(), "less than 1 m above its ground");
+  }
+  EXPECT_GT(built, 5u);
+  EXPECT_EQ(noted, built);
+  // The real heights give no such note.
+  ASSERT_EQ(run("reconstruct " + kSampleTiles + kSampleFootprints + " --lod 1.2 --no-progress -o " +
+                (dir_ / "real").string())
+                .exit_code,
+            0);
+  for (const auto& [id, row] : rows_by_id(dir_ / "real"))
+    EXPECT_FALSE(contains(row.at("note").get<std::string>(), "above its ground")) << id;
+}

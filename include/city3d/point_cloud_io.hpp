@@ -31,6 +31,7 @@ struct PointCloudInfo {
   std::string generating_software;
   PointFields fields = kFieldXyz;  ///< attributes the file can provide
   std::vector<std::string> vlrs;   ///< "user_id/record_id (n bytes)" of each VLR and EVLR, for `info`
+  std::uint64_t mesh_faces = 0;  ///< PLY: items of its 'face' element (a mesh, such as a model, not a cloud)
 };
 
 /// A streaming reader over one file. Open with open_point_cloud(); call read() until it returns 0.

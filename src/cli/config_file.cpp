@@ -3,12 +3,12 @@
 // Parsed with toml++, which gives every key and value its line for the messages.
 #include <toml++/toml.h>
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -228,6 +228,9 @@ std::vector<ConfigEntry> read_config_text(const std::string& text, const std::st
 }
 
 std::vector<ConfigEntry> read_config_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw ConfigError("config: " + path + " is a folder, not a TOML file (city3d --print-config writes one)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ConfigError("config: cannot open " + path + ": no such file or not readable");
   std::stringstream text;

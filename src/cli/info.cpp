@@ -6,6 +6,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -90,6 +91,7 @@ std::string describe_point_cloud(const PointCloudSummary& s) {
   if (i.point_format >= 0) out << ", point format " << i.point_format << ", record length " << i.record_length;
   out << "\n";
   out << "points: " << i.point_count << "\n";
+  if (i.mesh_faces > 0) out << "faces: " << i.mesh_faces << " (a mesh, such as a model: not a point cloud)\n";
   if (!i.bounds.empty()) {
     out << "bounds: x " << fixed(i.bounds.min.x, d) << " .. " << fixed(i.bounds.max.x, d) << ", y "
         << fixed(i.bounds.min.y, d) << " .. " << fixed(i.bounds.max.y, d) << ", z " << fixed(i.bounds.min.z, d)
@@ -149,6 +151,13 @@ std::string describe_footprints(const FootprintSet& f, const std::vector<FieldSu
 
 std::string evaluate_model(const std::string& model_path, const std::string& points_path,
                            const std::string& residuals_path) {
+  std::string extension = std::filesystem::path(model_path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (extension != ".obj")
+    throw IoError("evaluate: " + model_path +
+                  " is not an OBJ file: evaluate reads one model as OBJ (city3d writes "
+                  "them to models/ with --format obj, the default)");
   BuildingModel model = read_obj_model(model_path);
   PointCloud cloud = read_point_cloud(points_path, kFieldXyz);
   Box3 box;

@@ -566,6 +566,13 @@ RunOptions parse_command_line(int argc, const char* const* argv) {
         arg = arg.substr(0, eq);
         has_inline_value = true;
       }
+      // -vv, -vvv: -v repeated, as the help says.
+      if (arg.size() > 2 && arg[1] == 'v' && arg.find_first_not_of('v', 1) == std::string::npos) {
+        for (std::size_t k = 1; k < arg.size(); ++k)
+          for (const OptionSpec& s : option_table())
+            if (s.short_flag && std::string(s.short_flag) == "-v") given.push_back({&s, "-v", "true"});
+        continue;
+      }
       const OptionSpec* spec = nullptr;
       for (const OptionSpec& s : option_table())
         if (arg == s.flag || (s.short_flag && arg == s.short_flag)) spec = &s;

@@ -10,18 +10,18 @@
 #include <ogrsf_frmts.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cctype>
+#include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <memory>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "city3d/error.hpp"
 #include "city3d/footprint_io.hpp"
@@ -439,6 +439,11 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
       throw IoError(kModule + std::string("no field '") + options.ground_field + "' in " + where + " (fields: " +
                     join(fields) + ")");
     }
+    // Heights are numbers: a date or a list would be read as some number (2014 of "2014-07-09").
+    const OGRFieldType type = definition->GetFieldDefn(ground_index)->GetType();
+    if (type != OFTInteger && type != OFTInteger64 && type != OFTReal && type != OFTString)
+      throw IoError(kModule + std::string("field '") + options.ground_field + "' of " + where + " holds " +
+                    OGRFieldDefn::GetFieldTypeName(type) + " values, not heights (--ground-field)");
   }
 
   if (!options.attribute_filter.empty()) {
@@ -479,6 +484,8 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
   // warning per feature).
   std::vector<std::string> duplicate_warnings;
   std::string first_duplicate;
+  std::size_t ground_numbers = 0, ground_not_numbers = 0;  // --ground-field values read, and not heights
+  std::string first_not_number;
   auto skip = [&](const BuildingId& id, const std::string& reason) {
     warn(kModule + std::string("skipped ") + id + " in " + where + ": " + reason);
     set.skipped.push_back({id, reason});
@@ -516,6 +523,11 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
       continue;
     } else {
       id = feature->GetFieldAsString(id_index);
+      if (id.find_first_not_of(" \t\r\n") == std::string::npos) {
+        skip(fid_text,
+             "no id (field '" + options.id_field + "' is " + (id.empty() ? "empty" : "blank") + ")");
+        continue;
+      }
     }
 
     if (geometry == nullptr) {
@@ -586,8 +598,20 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
       footprint.attributes.emplace_back(field->GetNameRef(), std::move(value));
     }
     if (ground_index >= 0 && feature->IsFieldSetAndNotNull(ground_index)) {
-      const double z = feature->GetFieldAsDouble(ground_index);
-      if (std::isfinite(z)) footprint.ground_z = z;
+      // A text field's value must be a number as a whole ("2014-07-09" is not).
+      const char* text = feature->GetFieldAsString(ground_index);
+      char* end = nullptr;
+      const double z = definition->GetFieldDefn(ground_index)->GetType() == OFTString
+                           ? std::strtod(text, &end)
+                           : feature->GetFieldAsDouble(ground_index);
+      const bool whole =
+          end == nullptr || (end != text && std::string(end).find_first_not_of(" \t") == std::string::npos);
+      if (std::isfinite(z) && whole) {
+        footprint.ground_z = z;
+        ++ground_numbers;
+      } else if (ground_not_numbers++ == 0) {
+        first_not_number = "'" + std::string(text) + "' at " + footprint.id;
+      }
     }
     if (!outcome.repair_note.empty()) footprint.note = "footprint repaired with MakeValid: " + outcome.repair_note;
     const bool has_hole = std::any_of(footprint.polygons.begin(), footprint.polygons.end(),
@@ -618,6 +642,13 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
                                         ": " + unique));
   }
   for (const std::string& message : duplicate_warnings) warn(message);
+  if (ground_not_numbers > 0) {
+    const std::string what = "field '" + options.ground_field + "' of " + where + " holds " +
+                             std::to_string(ground_not_numbers) +
+                             " values that are no heights (the first: " + first_not_number + ")";
+    if (ground_numbers == 0) throw IoError(kModule + what + " and none that is one (--ground-field)");
+    warn(kModule + what + ": those footprints' ground is measured from the points");
+  }
 
   // No polygon at all: an error when the unfiltered layer has none either; an empty selection
   // (filters that match nothing) is a valid result.

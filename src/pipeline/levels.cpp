@@ -120,6 +120,17 @@ void describe_points(const BuildingInput& input, const ReconstructionParams& par
   r.h_roof_min = *std::min_element(z.begin(), z.end());
   r.h_roof_max = *std::max_element(z.begin(), z.end());
   r.roof_type = "could not be detected";
+  // Points that do not stand above the ground measured around the footprint (heights in another datum
+  // than the ground's, a flattened cloud, a footprint of something at ground level): the blocks are
+  // raised to lod1.min_height, and the report says why.
+  const double ground = input.ground_z + input.origin.z;
+  if (input.footprint_given && input.ground_measured && r.h_roof_70p < ground + params.lod1.min_height) {
+    std::ostringstream note;
+    note << "the building's points stand less than " << params.lod1.min_height << " m above its ground ("
+         << params.lod1.roof_percentile << "th percentile " << r.h_roof_70p << " m, ground " << ground
+         << " m, " << input.ground_method << ")";
+    add_note(r, note.str());
+  }
 }
 
 void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams& params,

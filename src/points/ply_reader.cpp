@@ -324,6 +324,8 @@ class PlyReader final : public PointCloudReader {
     info.version = h.format_name;
     info.point_count = h.elements[h.vertex_element].count;
     info.fields = VertexRoles::of(h.elements[h.vertex_element]).fields();
+    for (const PlyElement& e : h.elements)
+      if (e.name == "face") info.mesh_faces += e.count;
     return info;
   }
 
