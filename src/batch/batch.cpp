@@ -64,29 +64,6 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// An output folder without a journal that holds files of the names a run writes (a user's own
-// report.csv, or the outputs of a run whose journal was deleted): a run would replace them unasked.
-void refuse_files_of_no_run(const std::string& dir) {
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec) || fs::exists(fs::path(dir) / "resume.journal", ec)) return;
-  static const char* const kWritten[] = {
-      "report.csv", "report.json",         "report.html",         "run.json",
-      "models.obj", "models.ply",          "city3d.mtl",          "buildings.gpkg",
-      "3dtiles",    "buildings.city.json", "buildings.city.jsonl"};
-  std::vector<std::string> found;
-  for (const char* name : kWritten)
-    if (fs::exists(fs::path(dir) / name, ec)) found.emplace_back(name);
-  const fs::path models = fs::path(dir) / "models";
-  if (fs::is_directory(models, ec) && !fs::is_empty(models, ec)) found.emplace_back("models/");
-  if (found.empty()) return;
-  std::string names;
-  for (const std::string& n : found) names += (names.empty() ? "" : ", ") + n;
-  throw IoError(
-      "output: folder " + dir + " holds " + names +
-      " but no resume.journal: no city3d run is "
-      "resumed there, and a run would replace them; give an empty or new folder (-o), or remove them");
-}
-
 // Files as given, folders expanded to their LAS/LAZ/PLY files sorted by name (deterministic).
 std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
   std::vector<std::string> files;
@@ -149,25 +126,6 @@ std::vector<CloudId> cloud_ids(const std::vector<std::string>& files) {
       c.id += "~" + std::to_string(n);
     }
   return ids;
-}
-
-// A single-building cloud's points, and a note when its classes say it is more than one building's
-// (a tile given without its footprints: its ground is modelled as a building's roof).
-struct CloudPoints {
-  std::vector<Point3> points;
-  std::string note;
-};
-
-CloudPoints read_cloud(const std::string& path) {
-  PointCloud cloud = read_point_cloud(path, kFieldXyz | kFieldClassification);
-  const std::size_t ground =
-      static_cast<std::size_t>(std::count(cloud.classification.begin(), cloud.classification.end(), 2));
-  CloudPoints out{std::move(cloud.points), {}};
-  if (ground * 10 > out.points.size())
-    out.note = std::to_string(ground) + " of its " + std::to_string(out.points.size()) +
-               " points are classified ground: a tile rather than one building's cloud? (give its footprints "
-               "with -f; city3d info lists its classes)";
-  return out;
 }
 
 Box2 bounds(const Footprint& f) {
@@ -479,15 +437,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   if (sharded && !(options.shards >= 1 && options.shard >= 1 && options.shard <= options.shards))
     throw ConfigError("batch: shard " + std::to_string(options.shard) + "/" + std::to_string(options.shards) +
                       " does not exist (K/N with 1 <= K <= N)");
-  // A folder of point clouds that is also the output folder would take the run's own models
-  // (models.ply, models/ beside it) for points the next time.
-  for (const std::string& in : options.point_clouds) {
-    std::error_code ec;
-    if (fs::is_directory(in, ec) && fs::equivalent(in, options.output_dir, ec))
-      throw ConfigError("input: " + in +
-                        " is both a folder of point clouds and the output folder (-o): a later run "
-                        "would read the models written there as points; give another output folder");
-  }
+  detail::check_output_folder(options.point_clouds, options.output_dir);
   // Tiles given twice are read once; single-building clouds are buildings, each file its own.
   const std::vector<std::string> files = detail::distinct_inputs(
       expand_inputs(options.point_clouds),
@@ -495,11 +445,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   // Every header is checked before anything is written, and gives the CRS and extents.
   std::vector<PointCloudInfo> infos;
   for (const std::string& f : files) infos.push_back(read_point_cloud_info(f));
-  for (const PointCloudInfo& info : infos)
-    if (info.mesh_faces > 0)
-      log_warning("input: " + info.path + " is a mesh of " + std::to_string(info.mesh_faces) +
-                  " faces (a model?), not a point cloud: its " + std::to_string(info.point_count) +
-                  " vertices are read as points");
+  detail::warn_of_meshes(infos);
   // Each tile's bounds (a PLY's once its points are streamed), for the footprints' coverage.
   std::vector<Box3> tile_bounds;
   for (const PointCloudInfo& info : infos) tile_bounds.push_back(info.bounds);
@@ -628,7 +574,6 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
 
   // The output folders only now, when the inputs are known to be usable: a run that fails on its
   // inputs leaves nothing behind.
-  refuse_files_of_no_run(options.output_dir);
   detail::prepare_output_folder(options.output_dir, "output");
   if (!options.reconstruction.debug_dir.empty()) detail::prepare_output_folder(options.reconstruction.debug_dir, "debug");
   if (options.per_building_files)
@@ -724,7 +669,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
       reconstruct_all(
           indices, [&](std::size_t k) { return plan.cloud_ids[indices[k]].id; },
           [&](std::size_t k) {
-            CloudPoints cloud = read_cloud(files[indices[k]]);
+            detail::CloudPoints cloud = detail::read_building_cloud(files[indices[k]]);
             BuildingInput input =
                 building_from_cloud(plan.cloud_ids[indices[k]].id, cloud.points, options.ground_z);
             if (!cloud.note.empty()) {
@@ -786,32 +731,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
     // Keep only the group's own inputs (the first indices.size()).
     std::vector<BuildingInput> inputs = cropper.finish();
     inputs.resize(indices.size());
-    std::size_t field_grounds_ignored = 0;
-    std::string first_ignored;
-    for (BuildingInput& in : inputs)
-      if (in.footprint.ground_z) {
-        // The footprint source knows the floor: it overrides the ground points, unless it stands above
-        // half of the building's points (another field than a height, or heights in another datum).
-        const double field_z = *in.footprint.ground_z - in.origin.z;
-        std::vector<double> z;
-        z.reserve(in.points.size());
-        for (const Point3& p : in.points) z.push_back(p.z);
-        if (!z.empty() && field_z > percentile(z, 50.0)) {
-          std::ostringstream note;
-          note << "ground field '" << options.footprint.ground_field << "' (" << *in.footprint.ground_z
-               << ") above half of the building's points: the ground is " << in.ground_method;
-          in.footprint.note += (in.footprint.note.empty() ? "" : "; ") + note.str();
-          if (field_grounds_ignored++ == 0) first_ignored = in.id + ": " + note.str();
-          continue;
-        }
-        in.ground_z = field_z;
-        in.ground_method = "footprint attribute";
-        in.ground_measured = true;
-      }
-    if (field_grounds_ignored > 0)
-      log_warning("input: " + std::to_string(field_grounds_ignored) + " of " + std::to_string(inputs.size()) +
-                  " footprints' ground heights not used (" + first_ignored +
-                  (field_grounds_ignored > 1 ? "; the others' notes say the same" : "") + ")");
+    detail::take_ground_fields(inputs, options.footprint.ground_field);
     // The tiles' extents, for the coverage each worker measures before it reconstructs.
     std::vector<Box2> extents;
     std::vector<double> spacings;

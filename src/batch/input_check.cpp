@@ -2,6 +2,7 @@
 // size and the bytes at both ends, CRS comparison through OGR.
 #include "batch/input_check.hpp"
 
+#include <cpl_conv.h>
 #include <ogr_spatialref.h>
 #include <sys/stat.h>
 
@@ -9,14 +10,15 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <utility>
 
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
-#include <cpl_conv.h>
 #include "points/input_file.hpp"
 #include "points/las_reader.hpp"
 
@@ -322,6 +324,78 @@ void check_footprints_meet_points(const std::vector<Box2>& boxes, const Footprin
                 fixed(all.max.x) + ", y " + fixed(all.min.y) + " .. " + fixed(all.max.y) + "; the points (" +
                 short_crs(points_crs) + ") span x " + fixed(points.min.x) + " .. " + fixed(points.max.x) + ", y " +
                 fixed(points.min.y) + " .. " + fixed(points.max.y) + ": " + hint);
+}
+
+void check_output_folder(const std::vector<std::string>& point_clouds, const std::string& output_dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  for (const std::string& in : point_clouds)
+    if (fs::is_directory(in, ec) && fs::equivalent(in, output_dir, ec))
+      throw ConfigError("input: " + in +
+                        " is both a folder of point clouds and the output folder (-o): a later run "
+                        "would read the models written there as points; give another output folder");
+  if (!fs::is_directory(output_dir, ec) || fs::exists(fs::path(output_dir) / "resume.journal", ec)) return;
+  static const char* const kWritten[] = {
+      "report.csv", "report.json",         "report.html",         "run.json",
+      "models.obj", "models.ply",          "city3d.mtl",          "buildings.gpkg",
+      "3dtiles",    "buildings.city.json", "buildings.city.jsonl"};
+  std::string names;
+  for (const char* name : kWritten)
+    if (fs::exists(fs::path(output_dir) / name, ec)) names += (names.empty() ? "" : ", ") + std::string(name);
+  const fs::path models = fs::path(output_dir) / "models";
+  if (fs::is_directory(models, ec) && !fs::is_empty(models, ec))
+    names += (names.empty() ? "" : ", ") + std::string("models/");
+  if (!names.empty())
+    throw IoError(
+        "output: folder " + output_dir + " holds " + names + " but no resume.journal: no city3d run is " +
+        "resumed there, and a run would replace them; give an empty or new folder (-o), or remove them");
+}
+
+void warn_of_meshes(const std::vector<PointCloudInfo>& infos) {
+  for (const PointCloudInfo& info : infos)
+    if (info.mesh_faces > 0)
+      log_warning("input: " + info.path + " is a mesh of " + std::to_string(info.mesh_faces) +
+                  " faces (a model?), not a point cloud: its " + std::to_string(info.point_count) +
+                  " vertices are read as points");
+}
+
+CloudPoints read_building_cloud(const std::string& path) {
+  PointCloud cloud = read_point_cloud(path, kFieldXyz | kFieldClassification);
+  const auto ground =
+      static_cast<std::size_t>(std::count(cloud.classification.begin(), cloud.classification.end(), 2));
+  CloudPoints out{std::move(cloud.points), {}};
+  if (ground * 10 > out.points.size())
+    out.note = std::to_string(ground) + " of its " + std::to_string(out.points.size()) +
+               " points are classified ground: a tile rather than one building's cloud? (give its footprints "
+               "with -f; city3d info lists its classes)";
+  return out;
+}
+
+void take_ground_fields(std::vector<BuildingInput>& inputs, const std::string& field) {
+  std::size_t ignored = 0;
+  std::string first_ignored;
+  for (BuildingInput& in : inputs) {
+    if (!in.footprint.ground_z) continue;
+    const double field_z = *in.footprint.ground_z - in.origin.z;
+    std::vector<double> z;
+    z.reserve(in.points.size());
+    for (const Point3& p : in.points) z.push_back(p.z);
+    if (!z.empty() && field_z > percentile(z, 50.0)) {
+      std::ostringstream note;
+      note << "ground field '" << field << "' (" << *in.footprint.ground_z
+           << ") above half of the building's points: the ground is " << in.ground_method;
+      in.footprint.note += (in.footprint.note.empty() ? "" : "; ") + note.str();
+      if (ignored++ == 0) first_ignored = in.id + ": " + note.str();
+      continue;
+    }
+    in.ground_z = field_z;
+    in.ground_method = "footprint attribute";
+    in.ground_measured = true;
+  }
+  if (ignored > 0)
+    log_warning("input: " + std::to_string(ignored) + " of " + std::to_string(inputs.size()) +
+                " footprints' ground heights not used (" + first_ignored +
+                (ignored > 1 ? "; the others' notes say the same" : "") + ")");
 }
 
 }  // namespace city3d::detail

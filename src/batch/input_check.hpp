@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "city3d/crop.hpp"
 #include "city3d/footprint_io.hpp"
 #include "city3d/point_cloud_io.hpp"
 
@@ -72,5 +73,29 @@ RunCrs resolve_run_crs(const std::string& given, const std::string& points_crs, 
 /// some cloud's bounds are unknown (PLY).
 void check_footprints_meet_points(const std::vector<Box2>& boxes, const FootprintSet& footprints,
                                   const std::vector<PointCloudInfo>& infos, const std::string& points_crs);
+
+/// Throws ConfigError when a folder of point clouds (`point_clouds`) is the output folder: a later
+/// run would read the models written there as points. Throws IoError when `output_dir` holds files
+/// of the names a run writes (report.csv, run.json, models/, ...) but no resume.journal: no run is
+/// resumed there, and a run would replace them unasked (a user's own files, or a run's whose
+/// journal was deleted).
+void check_output_folder(const std::vector<std::string>& point_clouds, const std::string& output_dir);
+
+/// A warning for each input that is a mesh (a PLY with faces, such as a model) rather than a cloud.
+void warn_of_meshes(const std::vector<PointCloudInfo>& infos);
+
+/// A single-building cloud's points, and a note when more than a tenth of them are classified
+/// ground (class 2): a tile given without its footprints, whose ground would be modelled as a roof.
+struct CloudPoints {
+  std::vector<Point3> points;
+  std::string note;
+};
+CloudPoints read_building_cloud(const std::string& path);
+
+/// Each input's ground from its footprint's ground field (Footprint::ground_z, read with
+/// --ground-field `field`), unless that stands above half of the building's points (another field
+/// than a height, or heights in another datum): then the ground measured from the points stays, a
+/// note says why, and one warning counts them.
+void take_ground_fields(std::vector<BuildingInput>& inputs, const std::string& field);
 
 }  // namespace city3d::detail
