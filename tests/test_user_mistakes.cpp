@@ -759,3 +759,18 @@ TEST_F(Mistakes, a_tile_given_without_footprints_and_points_at_ground_level_are_
   for (const auto& [id, row] : rows_by_id(dir_ / "real"))
     EXPECT_FALSE(contains(row.at("note").get<std::string>(), "above its ground")) << id;
 }
+
+TEST_F(Mistakes, point_clouds_in_a_subfolder_of_a_folder_given_are_named_as_not_read) {
+  fs::create_directories(dir_ / "tiles" / "more");
+  fs::copy_file(kSample + "/delft_sample_1.las", dir_ / "tiles" / "delft_sample_1.las");
+  fs::copy_file(kSample + "/delft_sample_2.las", dir_ / "tiles" / "more" / "delft_sample_2.las");
+  const Result r = run("reconstruct " + (dir_ / "tiles").string() + kSampleFootprints +
+                       " --lod 1.2 --no-progress -o " + (dir_ / "out").string());
+  EXPECT_TRUE(contains(r.output, "subfolders of " + (dir_ / "tiles").string() + " are not read (more)"))
+      << r.output;
+  const Result all =
+      run("reconstruct " + (dir_ / "tiles").string() + " " + (dir_ / "tiles" / "more").string() +
+          kSampleFootprints + " --lod 1.2 --no-progress -o " + (dir_ / "all").string());
+  EXPECT_FALSE(contains(all.output, "not read")) << "given too: " << all.output;
+  EXPECT_EQ(report(dir_ / "all").at("summary").at("partial"), 0) << "both tiles read";
+}

@@ -55,8 +55,9 @@ std::string advice_for(const BatchSummary& s, const ClassCounts* classes, const 
     return rows + " buildings are partial: the tiles given cover too little of their footprints (the coverage "
            "column); give the neighbouring tiles too";
   const std::string status = s.main_problem.substr(0, s.main_problem.find(':'));
-  return rows + (status == "failed" ? " buildings failed" : " footprints are " + status) + " for one reason: " +
-         problem + "; see the reason column of " + s.report_path;
+  // "buildings": the rows are footprints or single-building clouds.
+  return rows + (status == "failed" ? " buildings failed" : " buildings are " + status) +
+         " for one reason: " + problem + "; see the reason column of " + s.report_path;
 }
 
 }  // namespace city3d::detail

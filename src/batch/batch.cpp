@@ -72,6 +72,18 @@ std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
     if (fs::is_directory(in, ec)) {
       const std::vector<std::string> found = point_cloud_files_in(in);
       if (found.empty()) throw IoError("input: folder " + in + " holds no .las, .laz or .ply file");
+      std::vector<std::string> below;  // subfolders with point clouds of their own: not read
+      for (const auto& entry : fs::directory_iterator(in, ec))
+        if (entry.is_directory(ec) && !point_cloud_files_in(entry.path().string()).empty() &&
+            std::none_of(inputs.begin(), inputs.end(),
+                         [&](const std::string& given) { return fs::equivalent(given, entry.path(), ec); }))
+          below.push_back(entry.path().filename().string());
+      std::sort(below.begin(), below.end());
+      std::string names;
+      for (const std::string& b : below) names += (names.empty() ? "" : ", ") + b;
+      if (!names.empty())
+        log_warning("input: the point clouds in subfolders of " + in + " are not read (" + names +
+                    "): give them too");
       files.insert(files.end(), found.begin(), found.end());
     } else if (fs::exists(in, ec)) {
       files.push_back(in);
