@@ -23,6 +23,7 @@ struct LasWriteOptions {
   bool geographic = false;
   std::optional<std::uint32_t> claimed_count;  ///< header point count instead of the real one
   std::optional<std::uint16_t> claimed_vlr_length;  ///< the GeoKey VLR's length field instead of the real one
+  std::optional<double> claimed_max_x;              ///< the header's max x instead of the real one
   double scale = 0.001;
   double offset_x = 0, offset_y = 0, offset_z = 0;
 };
@@ -86,6 +87,7 @@ inline std::vector<std::uint8_t> las_bytes(const std::vector<LasPoint>& points, 
   put<double>(out, o.offset_x);
   put<double>(out, o.offset_y);
   put<double>(out, o.offset_z);
+  if (o.claimed_max_x) max[0] = *o.claimed_max_x;
   for (int a = 0; a < 3; ++a) {
     put<double>(out, max[a]);
     put<double>(out, min[a]);

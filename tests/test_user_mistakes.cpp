@@ -774,3 +774,31 @@ TEST_F(Mistakes, point_clouds_in_a_subfolder_of_a_folder_given_are_named_as_not_
   EXPECT_FALSE(contains(all.output, "not read")) << "given too: " << all.output;
   EXPECT_EQ(report(dir_ / "all").at("summary").at("partial"), 0) << "both tiles read";
 }
+
+TEST_F(Mistakes, a_header_whose_bounds_leave_out_points_is_named_and_coverage_is_measured_from_the_points) {
+  // The sample's first tile rewritten twice: with its true bounds, and with a header max x 25 m short.
+  const city3d::PointCloud cloud = city3d::read_point_cloud(kSample + "/delft_sample_1.las",
+                                                            city3d::kFieldXyz | city3d::kFieldClassification);
+  std::vector<city3d::test::LasPoint> points;
+  double max_x = -1e300;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    points.push_back({cloud.points[i].x, cloud.points[i].y, cloud.points[i].z, cloud.classification[i]});
+    max_x = std::max(max_x, cloud.points[i].x);
+  }
+  city3d::test::write_las((dir_ / "true.las").string(), points);
+  city3d::test::LasWriteOptions shrunk;
+  shrunk.claimed_max_x = max_x - 25.0;
+  city3d::test::write_las((dir_ / "short.las").string(), points, shrunk);
+  const std::string tail =
+      " " + kSample + "/delft_sample_2.las" + kSampleFootprints + " --lod 1.2 --no-progress -o ";
+  ASSERT_EQ(run("reconstruct " + (dir_ / "true.las").string() + tail + (dir_ / "true").string()).exit_code,
+            0);
+  const Result r = run("reconstruct " + (dir_ / "short.las").string() + tail + (dir_ / "short").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "beyond its header's bounds")) << r.output;
+  const auto truth = rows_by_id(dir_ / "true");
+  for (const auto& [id, row] : rows_by_id(dir_ / "short")) {
+    EXPECT_EQ(row.at("status"), truth.at(id).at("status")) << id;
+    EXPECT_EQ(row.at("coverage"), truth.at(id).at("coverage")) << id;
+  }
+}

@@ -6,6 +6,7 @@
 #include <functional>
 #include <future>
 
+#include "batch/input_check.hpp"
 #include "city3d/log.hpp"
 
 namespace city3d::detail {
@@ -44,7 +45,7 @@ void crop_tiles(const std::vector<std::string>& files, const std::vector<Box2>& 
       std::future<std::size_t> ahead;
       if (threads > 1) ahead = std::async(std::launch::async, read, std::ref(next));
       n += got;
-      if (info.bounds.empty())
+      if (info.bounds.empty() || whole)
         for (const Point3& p : chunk.points) seen.add(p);
       if (!classes.counted[t]) {
         classes.any = classes.any || !chunk.classification.empty();
@@ -56,6 +57,21 @@ void crop_tiles(const std::vector<std::string>& files, const std::vector<Box2>& 
     }
     if (whole) classes.counted[t] = true;
     if (info.bounds.empty() && whole) bounds[t] = seen;
+    // A header whose bounds leave out some of its points (a file written by a tool that did not update
+    // them): the coverage of its footprints is measured from the points, and the user told.
+    const double step = std::max({info.scale[0], info.scale[1], info.scale[2]});
+    if (!info.bounds.empty() && whole && n > 0 &&
+        (seen.min.x < info.bounds.min.x - step || seen.min.y < info.bounds.min.y - step ||
+         seen.max.x > info.bounds.max.x + step || seen.max.y > info.bounds.max.y + step)) {
+      log_warning("crop: " + file + ": its points span x " + fixed(seen.min.x) + " .. " + fixed(seen.max.x) +
+                  ", y " + fixed(seen.min.y) + " .. " + fixed(seen.max.y) +
+                  ", beyond its header's bounds x " + fixed(info.bounds.min.x) + " .. " +
+                  fixed(info.bounds.max.x) + ", y " + fixed(info.bounds.min.y) + " .. " +
+                  fixed(info.bounds.max.y) + ": coverage is measured from the points; a tile whose header " +
+                  "misses a block is not read for it (rewrite the header's bounds)");
+      bounds[t].add(seen.min);
+      bounds[t].add(seen.max);
+    }
     log_info("crop: " + file + ": " + std::to_string(n) + " points streamed");
   }
 }

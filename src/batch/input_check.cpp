@@ -42,12 +42,15 @@ std::string ends_of(const std::string& path, std::uint64_t size) {
   return bytes;
 }
 
-/// Millimetres for metres, about 0.1 m for degrees.
+}  // namespace
+
 std::string fixed(double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", std::fabs(v) <= 360 ? 6 : 3, v);
   return buf;
 }
+
+namespace {
 
 std::string short_crs(const std::string& crs) {
   if (crs.empty()) return "no CRS recorded";
@@ -320,10 +323,11 @@ void check_footprints_meet_points(const std::vector<Box2>& boxes, const Footprin
     hint = "the point clouds record no CRS: if they are not in " + short_crs(footprints.srs) +
            ", reproject the footprints to theirs (ogr2ogr -t_srs)";
   throw IoError("input: no footprint meets any point cloud: the " + std::to_string(boxes.size()) +
-                " footprints of " + footprints.path + " (" + footprint_crs + ") span x " + fixed(all.min.x) + " .. " +
-                fixed(all.max.x) + ", y " + fixed(all.min.y) + " .. " + fixed(all.max.y) + "; the points (" +
-                short_crs(points_crs) + ") span x " + fixed(points.min.x) + " .. " + fixed(points.max.x) + ", y " +
-                fixed(points.min.y) + " .. " + fixed(points.max.y) + ": " + hint);
+                " footprints of " + footprints.path + " (" + footprint_crs + ") span x " + fixed(all.min.x) +
+                " .. " + fixed(all.max.x) + ", y " + fixed(all.min.y) + " .. " + fixed(all.max.y) +
+                "; the point clouds' headers (" + short_crs(points_crs) +
+                ") give their points as spanning x " + fixed(points.min.x) + " .. " + fixed(points.max.x) +
+                ", y " + fixed(points.min.y) + " .. " + fixed(points.max.y) + ": " + hint);
 }
 
 void check_output_folder(const std::vector<std::string>& point_clouds, const std::string& output_dir) {

@@ -22,6 +22,9 @@ enum class Repeats {
   clouds,
 };
 
+/// A coordinate as messages give it: millimetres for metres, about 0.1 m for degrees.
+std::string fixed(double v);
+
 /// `files` without repeats, first occurrence kept, in order. The same file is one under another
 /// name (a second mention, a folder holding a file also given alone, a symbolic or hard link); a
 /// copy has the same size and the same first and last 64 KiB; a twin is a LAS or LAZ file with the
