@@ -350,7 +350,7 @@ TEST_F(Shards, merge_refuses_a_missing_an_incomplete_and_a_foreign_shard_and_nam
   ASSERT_EQ(reconstruct(dir_ / "other", "--shard 3/3 --roof-percentile 50").exit_code, 0);
   r = run("merge " + s1 + " " + s2 + " " + (dir_ / "other").string() + out);
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_TRUE(contains(r.output, "shards of different runs")) << r.output;
+  EXPECT_TRUE(contains(r.output, "shards of different runs (--roof-percentile: 70 against 50)")) << r.output;
 
   // A model file changed after its shard wrote it.
   const std::string name = *files_in(dir_ / "s1" / "models").begin();

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -25,6 +27,45 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// What differs between the runs of two shard folders, as their run.json files state them: the city3d
+// version, the inputs and the parameters, each key that differs with both values; empty when the
+// files cannot tell (what differs is then the block size or the shard count, or the inputs' contents).
+std::string what_differs(const std::string& a, const std::string& b, const detail::JournalHeader& ha,
+                         const detail::JournalHeader& hb) {
+  const auto read = [](const std::string& dir) {
+    std::ifstream in(fs::path(dir) / "run.json", std::ios::binary);
+    return nlohmann::json::parse(in, nullptr, false);
+  };
+  const nlohmann::json x = read(a), y = read(b);
+  std::string out;
+  const auto add = [&out](const std::string& what, const std::string& in_a, const std::string& in_b) {
+    out += (out.empty() ? "" : "; ") + what + ": " + in_a + " against " + in_b;
+  };
+  if (ha.shards != hb.shards) add("shard count", std::to_string(ha.shards), std::to_string(hb.shards));
+  if (ha.block_size != hb.block_size)
+    add("--block-size", nlohmann::json(ha.block_size).dump(), nlohmann::json(hb.block_size).dump());
+  if (!x.is_object() || !y.is_object()) return out;
+  if (x.value("city3d", "") != y.value("city3d", ""))
+    add("city3d version", x.value("city3d", ""), y.value("city3d", ""));
+  for (const char* section : {"inputs", "parameters"}) {
+    const nlohmann::json empty = nlohmann::json::object();
+    const nlohmann::json& p = x.contains(section) ? x.at(section) : empty;
+    const nlohmann::json& q = y.contains(section) ? y.at(section) : empty;
+    if (!p.is_object() || !q.is_object()) continue;
+    std::vector<std::string> keys;
+    for (const auto& [k, v] : p.items()) keys.push_back(k);
+    for (const auto& [k, v] : q.items()) keys.push_back(k);
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    for (const std::string& k : keys) {
+      const std::string in_a = p.contains(k) ? p.at(k).dump() : "none",
+                        in_b = q.contains(k) ? q.at(k).dump() : "none";
+      if (in_a != in_b) add(std::string(section == std::string("inputs") ? "input " : "--") + k, in_a, in_b);
+    }
+  }
+  return out;
 }
 
 }  // namespace
@@ -74,9 +115,12 @@ BatchSummary merge_shards(const MergeOptions& options) {
     detail::JournalHeader as_first = h;
     as_first.shard = first.shard;
     as_first.expected = first.expected;
-    if (!as_first.same_run(first))
-      throw ConfigError("merge: " + shards.front().dir + " and " + s.dir +
-                        " are shards of different runs (inputs, parameters, block size or shard count differ)");
+    if (!as_first.same_run(first)) {
+      const std::string differs = what_differs(shards.front().dir, s.dir, first, h);
+      throw ConfigError("merge: " + shards.front().dir + " and " + s.dir + " are shards of different runs (" +
+                        (differs.empty() ? "inputs, parameters, block size or shard count differ" : differs) +
+                        ")");
+    }
     if (by_number[static_cast<std::size_t>(h.shard)])
       throw ConfigError("merge: shard " + std::to_string(h.shard) + "/" + std::to_string(h.shards) + " given twice: " +
                         by_number[static_cast<std::size_t>(h.shard)]->dir + " and " + s.dir);
