@@ -784,7 +784,7 @@ TEST_F(Reconstruct, footprints_in_another_crs_are_reprojected_or_refused_with_bo
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_TRUE(contains(r.output, "no footprint meets any point cloud")) << r.output;
   EXPECT_TRUE(contains(r.output, "EPSG:4326")) << r.output;
-  EXPECT_TRUE(contains(r.output, "the points (no CRS recorded) span x 84945.000 .. 85026.997")) << r.output;
+  EXPECT_TRUE(contains(r.output, "the point clouds' headers (no CRS recorded) give their points as spanning x 84945.000 .. 85026.997")) << r.output;
   EXPECT_FALSE(fs::exists(dir_ / "a")) << "a failed run leaves no output folder";
 
   // Tiles that record EPSG:28992: the WGS84 footprints are reprojected, and give the buildings
