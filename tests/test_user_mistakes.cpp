@@ -733,6 +733,18 @@ TEST_F(Mistakes, a_tile_given_without_footprints_and_points_at_ground_level_are_
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_TRUE(contains(rows.begin()->second.at("note").get<std::string>(), "classified ground"))
       << rows.begin()->second;
+  // A PLY's labels are not LAS classes (DALES labels vegetation 2): its points are not taken for ground.
+  {
+    std::ofstream ply(dir_ / "labelled.ply");
+    ply << "ply\nformat ascii 1.0\nelement vertex 400\nproperty float x\nproperty float y\nproperty float z\n"
+           "property uchar label\nend_header\n";
+    for (int i = 0; i < 20; ++i)
+      for (int j = 0; j < 20; ++j) ply << 0.5 * i << ' ' << 0.5 * j << ' ' << 5 + 0.1 * i << " 2\n";
+  }
+  const Result labelled = run("reconstruct " + (dir_ / "labelled.ply").string() +
+                              " --lod 1.2 --no-progress -o " + (dir_ / "labelled").string());
+  ASSERT_EQ(labelled.exit_code, 0) << labelled.output;
+  EXPECT_FALSE(contains(labelled.output, "classified ground")) << labelled.output;
   // Every height set to 0: each building's points stand at its ground (the blocks are 1 m slabs).
   const city3d::PointCloud cloud = city3d::read_point_cloud(kSample + "/delft_sample_1.las",
                                                             city3d::kFieldXyz | city3d::kFieldClassification);

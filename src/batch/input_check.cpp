@@ -364,7 +364,9 @@ void warn_of_meshes(const std::vector<PointCloudInfo>& infos) {
 }
 
 CloudPoints read_building_cloud(const std::string& path) {
-  PointCloud cloud = read_point_cloud(path, kFieldXyz | kFieldClassification);
+  // LAS classes only: a PLY's class or label property follows a scheme of its own (DALES: 2 is vegetation).
+  const bool las = read_point_cloud_info(path).format != "PLY";
+  PointCloud cloud = read_point_cloud(path, las ? kFieldXyz | kFieldClassification : kFieldXyz);
   const auto ground =
       static_cast<std::size_t>(std::count(cloud.classification.begin(), cloud.classification.end(), 2));
   CloudPoints out{std::move(cloud.points), {}};
