@@ -428,6 +428,20 @@ TEST(SurfaceSupport, local_top_counts_a_point_exactly_on_the_radius_and_none_bey
   EXPECT_TRUE(std::isnan(LocalTop({}, 1.5).at(0.0, 0.0)));
 }
 
+TEST(SurfaceSupport, a_face_of_square_kilometres_is_sampled_coarser_to_at_most_four_million_samples) {
+  // A roof of 12 x 8 km (a cloud in millimetres read as metres): 1.5 billion samples at 0.25 m were
+  // 24 GB; the run was killed.
+  const std::vector<Point3> roof{{0, 0, 10}, {12000, 0, 10}, {12000, 8000, 10}, {0, 8000, 10}};
+  std::vector<Point3> samples;
+  const double piece = sample_polygon(roof, 0.25, samples);
+  EXPECT_LE(samples.size(), 4000000u);
+  EXPECT_GT(samples.size(), 3900000u);
+  EXPECT_NEAR(piece * static_cast<double>(samples.size()), 12000.0 * 8000.0, 1e-3);
+  // A face of 250,000 m2 or less keeps the spacing asked for.
+  const std::vector<Point3> hall{{0, 0, 10}, {500, 0, 10}, {500, 400, 10}, {0, 400, 10}};
+  EXPECT_DOUBLE_EQ(sample_polygon(hall, 0.25, samples), 0.0625);
+}
+
 TEST(SurfaceSupport, samples_of_a_nonconvex_face_cover_its_area_inside_it_and_no_farther_apart_than_the_spacing) {
   // An L in the tilted plane z = 0.5 x: 6 x 6 minus its 3 x 3 upper right quarter.
   std::vector<Point3> l;

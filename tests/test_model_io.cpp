@@ -181,6 +181,22 @@ TEST(ModelFileName, replaces_unsafe_characters_and_never_returns_a_hidden_name) 
   EXPECT_EQ(model_file_name("..", MeshFormat::obj), "_..-a3d4a70d.obj");
 }
 
+// A 300-character id (or a cloud's 240-character file name) made a name the file system refused, and
+// the run ended: the name is cut to 200 bytes, with the hash of the whole id.
+TEST(ModelFileName, a_long_id_is_cut_to_two_hundred_bytes_and_keeps_its_hash) {
+  const std::string a(300, 'a'), b = std::string(299, 'a') + "b";
+  const std::string name = model_file_name(a, MeshFormat::obj);
+  EXPECT_EQ(name.size(), 200u + 9u + 4u);
+  EXPECT_EQ(name.substr(0, 200), std::string(200, 'a'));
+  EXPECT_NE(name, model_file_name(b, MeshFormat::obj));
+  EXPECT_EQ(model_file_name(std::string(200, 'a'), MeshFormat::obj), std::string(200, 'a') + ".obj");
+  const fs::path dir = fs::temp_directory_path() / "city3d_long_name";
+  fs::create_directories(dir);
+  write_model((dir / name).string(), box_model(a, {0, 0, 0}), {MeshFormat::obj, false});
+  EXPECT_TRUE(fs::exists(dir / name));
+  fs::remove_all(dir);
+}
+
 // Issue 24 item 3: ids that differ only in characters a file name cannot hold shared one model file.
 TEST(ModelFileName, distinct_ids_never_share_a_file_name) {
   EXPECT_NE(model_file_name("a b", MeshFormat::obj), model_file_name("a_b", MeshFormat::obj));

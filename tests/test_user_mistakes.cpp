@@ -814,3 +814,105 @@ TEST_F(Mistakes, a_header_whose_bounds_leave_out_points_is_named_and_coverage_is
     EXPECT_EQ(row.at("coverage"), truth.at(id).at("coverage")) << id;
   }
 }
+
+// --- 9. a second round of mistakes (2026-11-27) ---
+
+TEST_F(Mistakes, inputs_where_the_run_writes_are_refused_and_kept) {
+  // Footprints named buildings.gpkg in the output folder: --gpkg wrote over them.
+  fs::create_directories(dir_ / "work");
+  fs::copy_file(kSample + "/delft_sample_footprints.gpkg", dir_ / "work" / "buildings.gpkg");
+  const std::string before = read_file(dir_ / "work" / "buildings.gpkg");
+  const Result r = run("reconstruct " + kSampleTiles + " -f " + (dir_ / "work" / "buildings.gpkg").string() +
+                       " --id-field gml_id --gpkg --no-progress -o " + (dir_ / "work").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_EQ(read_file(dir_ / "work" / "buildings.gpkg"), before);
+  // evaluate --residuals naming one of its inputs wrote its CSV over it.
+  const std::string smoke = kShared + "/city3d_smoke/AHN3/00295";
+  if (!fs::exists(smoke + ".ply")) GTEST_SKIP() << "../shared/data is not beside the repository";
+  fs::copy_file(smoke + ".ply", dir_ / "points.ply");
+  const std::string points = read_file(dir_ / "points.ply");
+  const Result e = run("evaluate " + smoke + ".obj " + (dir_ / "points.ply").string() + " --residuals " +
+                       (dir_ / "points.ply").string());
+  EXPECT_EQ(e.exit_code, 2) << e.output;
+  EXPECT_EQ(read_file(dir_ / "points.ply"), points);
+}
+
+TEST_F(Mistakes, a_footprint_no_tolerance_simplifies_enough_is_skipped_and_the_others_are_built) {
+  // 300 squares in one multipolygon: 1,200 vertices, none of them removable; the run ended at it.
+  std::ostringstream squares;
+  squares << "{\"type\":\"FeatureCollection\",\"features\":[{\"type\":\"Feature\",\"properties\":{\"gml_id\":"
+             "\"many\"},\"geometry\":{\"type\":\"MultiPolygon\",\"coordinates\":[";
+  for (int k = 0; k < 300; ++k) {
+    const double x = 84960.0 + 2.0 * (k % 20), y = 447400.0 + 2.0 * (k / 20);
+    squares << (k ? "," : "") << "[[[" << x << "," << y << "],[" << x + 1 << "," << y << "],[" << x + 1 << ","
+            << y + 1 << "],[" << x << "," << y + 1 << "],[" << x << "," << y << "]]]";
+  }
+  squares << "]}}]}";
+  { std::ofstream(dir_ / "many.geojson") << squares.str(); }
+  const fs::path footprints = dir_ / "footprints.gpkg";
+  fs::copy_file(kSample + "/delft_sample_footprints.gpkg", footprints);
+  const Result appended =
+      run_shell("ogr2ogr -append -update -a_srs EPSG:28992 -nln buildingpart -nlt MULTIPOLYGON " +
+                footprints.string() + " " + (dir_ / "many.geojson").string());
+  ASSERT_EQ(appended.exit_code, 0) << appended.output;
+  const Result r = run("reconstruct " + kSampleTiles + " -f " + footprints.string() +
+                       " --id-field gml_id --lod 1.2 --no-progress -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto rows = rows_by_id(dir_ / "out");
+  ASSERT_EQ(rows.size(), 16u);
+  EXPECT_EQ(rows.at("many").at("status"), "skipped");
+  EXPECT_EQ(rows.at("many").at("stage"), "footprint");
+  std::size_t built = 0;
+  for (const auto& [id, row] : rows) built += row.at("status") == "ok";
+  EXPECT_EQ(built, 15u);
+}
+
+TEST_F(Mistakes, a_source_of_two_polygon_layers_needs_layer_and_a_model_is_no_footprint_file) {
+  const fs::path two = dir_ / "two.gpkg";
+  fs::copy_file(kSample + "/delft_sample_footprints.gpkg", two);
+  ASSERT_EQ(run_shell("ogr2ogr -update " + two.string() + " " + kSample +
+                      "/delft_sample_footprints.gpkg -nln parcels " +
+                      "-dialect sqlite -sql \"SELECT gml_id, ST_Buffer(GEOMETRY, 3) AS geom FROM "
+                      "buildingpart\" -nlt POLYGON")
+                .exit_code,
+            0);
+  const std::string tail = " --id-field gml_id --lod 1.2 --no-progress -o ";
+  const Result r = run("reconstruct " + kSampleTiles + " -f " + two.string() + tail + (dir_ / "a").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(contains(r.output, "parcels")) << r.output;
+  EXPECT_EQ(run("reconstruct " + kSampleTiles + " -f " + two.string() + " --layer buildingpart" + tail +
+                (dir_ / "b").string())
+                .exit_code,
+            0);
+  // City3D's own model of a building, given as its footprints: its walls were footprints.
+  const std::string smoke = kShared + "/city3d_smoke/AHN3/00295";
+  if (!fs::exists(smoke + ".ply")) GTEST_SKIP() << "../shared/data is not beside the repository";
+  const Result model =
+      run("reconstruct " + smoke + ".ply -f " + smoke + ".obj" + tail + (dir_ / "c").string());
+  EXPECT_EQ(model.exit_code, 1) << model.output;
+  EXPECT_FALSE(fs::exists(dir_ / "c"));
+}
+
+TEST_F(Mistakes,
+       a_height_datum_alone_a_weight_beyond_the_solvers_and_a_shapefile_without_its_dbf_are_refused) {
+  const std::string tail = " --id-field gml_id --lod 1.2 --no-progress -o " + (dir_ / "out").string();
+  EXPECT_EQ(run("reconstruct " + kSampleTiles + kSampleFootprints + " --crs EPSG:5709 --no-progress -o " +
+                (dir_ / "out").string())
+                .exit_code,
+            2);
+  EXPECT_EQ(run("reconstruct " + kSampleTiles + kSampleFootprints + " --lambda-data 1e308 --no-progress -o " +
+                (dir_ / "out").string())
+                .exit_code,
+            2);
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+  ASSERT_EQ(run_shell("ogr2ogr -f \"ESRI Shapefile\" " + (dir_ / "fp.shp").string() + " " + kSample +
+                      "/delft_sample_footprints.gpkg")
+                .exit_code,
+            0);
+  ASSERT_EQ(run("reconstruct " + kSampleTiles + " -f " + (dir_ / "fp.shp").string() + tail).exit_code, 0);
+  fs::remove(dir_ / "fp.dbf");
+  fs::remove_all(dir_ / "out");
+  const Result r = run("reconstruct " + kSampleTiles + " -f " + (dir_ / "fp.shp").string() + tail);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_TRUE(contains(r.output, (dir_ / "fp.dbf").string())) << r.output;
+}

@@ -31,8 +31,8 @@ std::string mesh_extension(MeshFormat format);
 
 /// A file name for a building id: the id itself when it is made of [A-Za-z0-9._-] and does not
 /// start with '.'; otherwise the id with every other character made '_' (and '_' put before a
-/// leading '.' or an empty id), then '-' and 8 hex digits of the id's 32-bit FNV-1a hash, so that
-/// distinct ids never share a file name ("a b" and "a_b").
+/// leading '.' or an empty id), cut to 200 bytes when longer, then '-' and 8 hex digits of the id's
+/// 32-bit FNV-1a hash, so that distinct ids never share a file name ("a b" and "a_b").
 std::string model_file_name(const BuildingId& id, MeshFormat format);
 
 /// The material library every OBJ model names (`mtllib`), in the folder of the OBJ files: one

@@ -449,7 +449,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   if (sharded && !(options.shards >= 1 && options.shard >= 1 && options.shard <= options.shards))
     throw ConfigError("batch: shard " + std::to_string(options.shard) + "/" + std::to_string(options.shards) +
                       " does not exist (K/N with 1 <= K <= N)");
-  detail::check_output_folder(options.point_clouds, options.output_dir);
+  detail::check_output_folder(options.point_clouds, options.footprints, options.output_dir);
   // Tiles given twice are read once; single-building clouds are buildings, each file its own.
   const std::vector<std::string> files = detail::distinct_inputs(
       expand_inputs(options.point_clouds),

@@ -189,6 +189,11 @@ CrsFacts crs_facts(const std::string& text) {
   if (text.empty() || srs.SetFromUserInput(text.c_str()) != OGRERR_NONE)
     throw ConfigError("crs: '" + short_crs(text) + "' is no CRS OGR/PROJ understand (give e.g. EPSG:7415, "
                       "EPSG:28992+5709 or WKT)");
+  // A height datum alone (EPSG:5709, NAP height) places nothing in plan.
+  if (srs.IsVertical() && !srs.IsCompound() && !srs.IsProjected() && !srs.IsGeographic())
+    throw ConfigError(
+        "crs: '" + short_crs(text) + "' (" + (srs.GetName() ? srs.GetName() : "") +
+        ") is a vertical CRS alone: give the horizontal one with it (e.g. EPSG:28992+5709, or EPSG:7415)");
   CrsFacts facts;
   facts.title = srs.GetName() ? srs.GetName() : "";
   facts.vertical = srs.IsCompound() || srs.IsVertical();
@@ -330,7 +335,8 @@ void check_footprints_meet_points(const std::vector<Box2>& boxes, const Footprin
                 ", y " + fixed(points.min.y) + " .. " + fixed(points.max.y) + ": " + hint);
 }
 
-void check_output_folder(const std::vector<std::string>& point_clouds, const std::string& output_dir) {
+void check_output_folder(const std::vector<std::string>& point_clouds, const std::string& footprints,
+                         const std::string& output_dir) {
   namespace fs = std::filesystem;
   std::error_code ec;
   for (const std::string& in : point_clouds)
@@ -338,11 +344,25 @@ void check_output_folder(const std::vector<std::string>& point_clouds, const std
       throw ConfigError("input: " + in +
                         " is both a folder of point clouds and the output folder (-o): a later run "
                         "would read the models written there as points; give another output folder");
-  if (!fs::is_directory(output_dir, ec) || fs::exists(fs::path(output_dir) / "resume.journal", ec)) return;
   static const char* const kWritten[] = {
       "report.csv", "report.json",         "report.html",         "run.json",
       "models.obj", "models.ply",          "city3d.mtl",          "buildings.gpkg",
       "3dtiles",    "buildings.city.json", "buildings.city.jsonl"};
+  // An input where the run writes (footprints named buildings.gpkg in the output folder, a cloud in
+  // its models/): the run would replace or remove it.
+  std::vector<std::string> inputs = point_clouds;
+  if (!footprints.empty()) inputs.push_back(footprints);
+  for (const std::string& in : inputs) {
+    const fs::path path(in), folder = fs::absolute(path).parent_path();
+    const bool named_as_output = std::any_of(std::begin(kWritten), std::end(kWritten),
+                                             [&](const char* name) { return path.filename() == name; });
+    if ((named_as_output && fs::equivalent(folder, output_dir, ec)) ||
+        fs::equivalent(folder, fs::path(output_dir) / "models", ec))
+      throw ConfigError("input: " + in + " is where the run writes its own " +
+                        (named_as_output ? path.filename().string() : std::string("models")) + " (-o " +
+                        output_dir + "): it would be replaced; give another output folder");
+  }
+  if (!fs::is_directory(output_dir, ec) || fs::exists(fs::path(output_dir) / "resume.journal", ec)) return;
   std::string names;
   for (const char* name : kWritten)
     if (fs::exists(fs::path(output_dir) / name, ec)) names += (names.empty() ? "" : ", ") + std::string(name);

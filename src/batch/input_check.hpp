@@ -77,12 +77,15 @@ RunCrs resolve_run_crs(const std::string& given, const std::string& points_crs, 
 void check_footprints_meet_points(const std::vector<Box2>& boxes, const FootprintSet& footprints,
                                   const std::vector<PointCloudInfo>& infos, const std::string& points_crs);
 
-/// Throws ConfigError when a folder of point clouds (`point_clouds`) is the output folder: a later
-/// run would read the models written there as points. Throws IoError when `output_dir` holds files
+/// Throws ConfigError when a folder of point clouds (`point_clouds`) is the output folder (a later
+/// run would read the models written there as points), or when an input file (a point cloud, the
+/// `footprints`) stands where the run writes: named as a run-level output in the output folder
+/// (buildings.gpkg, ...) or in its models/. Throws IoError when `output_dir` holds files
 /// of the names a run writes (report.csv, run.json, models/, ...) but no resume.journal: no run is
 /// resumed there, and a run would replace them unasked (a user's own files, or a run's whose
 /// journal was deleted).
-void check_output_folder(const std::vector<std::string>& point_clouds, const std::string& output_dir);
+void check_output_folder(const std::vector<std::string>& point_clouds, const std::string& footprints,
+                         const std::string& output_dir);
 
 /// A warning for each input that is a mesh (a PLY with faces, such as a model) rather than a cloud.
 void warn_of_meshes(const std::vector<PointCloudInfo>& infos);

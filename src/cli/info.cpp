@@ -158,6 +158,11 @@ std::string evaluate_model(const std::string& model_path, const std::string& poi
     throw IoError("evaluate: " + model_path +
                   " is not an OBJ file: evaluate reads one model as OBJ (city3d writes "
                   "them to models/ with --format obj, the default)");
+  std::error_code ec;
+  for (const std::string& input : {model_path, points_path})
+    if (!residuals_path.empty() && std::filesystem::equivalent(residuals_path, input, ec))
+      throw ConfigError("evaluate: --residuals " + residuals_path + " is the input " + input +
+                        ": it would be replaced; give another file");
   BuildingModel model = read_obj_model(model_path);
   PointCloud cloud = read_point_cloud(points_path, kFieldXyz);
   Box3 box;

@@ -294,6 +294,8 @@ double LocalTopRaster::unsupported_area(const std::vector<Point3>& face, const S
 
 namespace {
 
+constexpr double kMaxFaceSamples = 4e6;
+
 // The in-plane axes of sample_polygon's grid: samples are the spacing apart along u and along v.
 struct SampleAxes {
   Point3 u{0.0, 0.0, 0.0}, v{0.0, 0.0, 0.0};
@@ -309,6 +311,9 @@ double sample_polygon_axes(const std::vector<Point3>& face, double spacing, std:
   if (!(twice > 0.0) || !std::isfinite(twice)) return 0.0;
   const double area = 0.5 * twice;
   nx /= twice, ny /= twice, nz /= twice;
+  // A face too large for its samples to be held (a cloud in millimetres read as metres makes blocks of
+  // kilometres) is sampled coarser: at most kMaxFaceSamples, about 250,000 m2 at 0.25 m.
+  spacing = std::max(spacing, std::sqrt(area / kMaxFaceSamples));
   // The frame: u along the longest edge (a thin face then runs along the rows), v = n x u.
   std::size_t longest = 0;
   double longest2 = -1.0;

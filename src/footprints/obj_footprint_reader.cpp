@@ -1,6 +1,7 @@
 // Footprints from City3D's OBJ polygon files (as Easy3D writes them): `v x y z` vertices and
 // `f i j k ...` faces, each face one footprint polygon; z is dropped.
 #include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -89,6 +90,7 @@ FootprintSet read_obj_footprints(const std::string& path, const FootprintReadOpt
   }
 
   std::vector<Point2> vertices;
+  std::vector<double> heights;  // each vertex's z: only to tell a 3D model apart
   std::vector<ObjFace> faces;
   std::string group;
   std::string line;
@@ -111,6 +113,7 @@ FootprintSet read_obj_footprints(const std::string& path, const FootprintReadOpt
       const auto z = parse_double(tokens[3]);
       if (!x || !y || !z) throw malformed("vertex coordinate is not a number in '" + line + "'");
       vertices.push_back({*x, *y});
+      heights.push_back(*z);
     } else if (keyword == "f") {
       ObjFace face;
       face.group = group;
@@ -142,6 +145,26 @@ FootprintSet read_obj_footprints(const std::string& path, const FootprintReadOpt
     // Everything else (vn, vt, s, usemtl, mtllib, l, ...) says nothing about footprints.
   }
   if (in.bad()) throw IoError(kModule + std::string("read error in ") + path);
+
+  // A 3D model (a building's walls) is no footprint file: each face of one is a footprint, lying flat.
+  std::size_t standing = 0, first_standing_line = 0;
+  for (const ObjFace& face : faces) {
+    double nx = 0, ny = 0, nz = 0;  // Newell's normal
+    const std::size_t n = face.vertex_indices.size();
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t a = face.vertex_indices[k], b = face.vertex_indices[(k + 1) % n];
+      nx += (vertices[a].y - vertices[b].y) * (heights[a] + heights[b]);
+      ny += (heights[a] - heights[b]) * (vertices[a].x + vertices[b].x);
+      nz += (vertices[a].x - vertices[b].x) * (vertices[a].y + vertices[b].y);
+    }
+    const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
+    if (length > 0 && std::abs(nz) < 0.1 * length && standing++ == 0) first_standing_line = face.line;
+  }
+  if (standing > 0)
+    throw IoError(
+        kModule + path + " holds " + std::to_string(standing) + " standing faces (the first at line " +
+        std::to_string(first_standing_line) +
+        "): a 3D model, not footprints (each face of a footprint OBJ is one flat footprint polygon)");
 
   FootprintSet set;
   set.path = path;

@@ -85,7 +85,19 @@ GDALDatasetUniquePtr open_vector(const std::string& path) {
   CPLErrorReset();
   GDALDatasetUniquePtr dataset(GDALDataset::Open(
       path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY | GDAL_OF_VERBOSE_ERROR, nullptr, nullptr, nullptr));
-  if (dataset) return dataset;
+  if (dataset) {
+    // A Shapefile without its .dbf opens, with no attributes: its ids and fields are lost without a word.
+    if (std::string(dataset->GetDriverName()) == "ESRI Shapefile" && path.size() > 4) {
+      std::string stem = path.substr(0, path.size() - 4), extension = path.substr(path.size() - 4);
+      std::transform(extension.begin(), extension.end(), extension.begin(),
+                     [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+      if (extension == ".shp" && !path_exists(stem + ".dbf") && !path_exists(stem + ".DBF"))
+        throw IoError(kModule + path + " has no " + stem +
+                      ".dbf beside it: a Shapefile's attributes (its ids) are "
+                      "there; give the .dbf too");
+    }
+    return dataset;
+  }
   // Existence is checked after the attempt, not before: an OGR source need not be a local file
   // ("PG:dbname=...", "/vsizip/..."); VSIStatExL understands the /vsi prefixes too.
   if (!path_exists(path)) throw IoError(kModule + std::string("cannot open ") + path + ": no such file");
@@ -144,9 +156,18 @@ OGRLayer& select_layer(GDALDataset& dataset, const std::string& path, const std:
   // With one layer there is nothing to choose; whether it holds polygons is checked by the reader,
   // which then names the layer in its message.
   if (dataset.GetLayerCount() == 1) return *dataset.GetLayer(0);
-  for (OGRLayer* layer : dataset.GetLayers()) {
-    if (is_polygonal(layer->GetGeomType())) return *layer;
+  // Several polygon layers (a parcel layer beside the buildings, 3DBAG's pand beside its lod12_2d):
+  // taking the first would model the wrong polygons without a word.
+  std::vector<OGRLayer*> polygonal;
+  for (OGRLayer* layer : dataset.GetLayers())
+    if (is_polygonal(layer->GetGeomType())) polygonal.push_back(layer);
+  if (polygonal.size() > 1) {
+    std::vector<std::string> names;
+    for (OGRLayer* layer : polygonal) names.emplace_back(layer->GetName());
+    throw ConfigError(kModule + path + " has " + std::to_string(polygonal.size()) + " polygon layers (" +
+                      join(names) + "): give the footprints' with --layer");
   }
+  if (polygonal.size() == 1) return *polygonal.front();
   for (OGRLayer* layer : dataset.GetLayers()) {
     if (may_hold_polygons(layer->GetGeomType()) && layer_has_polygon_feature(*layer)) return *layer;
   }

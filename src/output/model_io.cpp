@@ -179,6 +179,10 @@ std::string model_file_name(const BuildingId& id, MeshFormat format) {
   }
   // Never empty, never a hidden file or "..".
   if (name.empty() || name[0] == '.') name.insert(name.begin(), '_'), changed = true;
+  // Never longer than a file name may be (255 bytes), with the hash, the extension and the temporary
+  // name's suffix (AtomicFile) added: a 300-character id, or a cloud's 240-character file name.
+  constexpr std::size_t kMaxNameBytes = 200;
+  if (name.size() > kMaxNameBytes) name.resize(kMaxNameBytes), changed = true;
   // Two ids that differ only where characters were replaced ("a b" and "a_b", "DALES/00011" and
   // "DALES_00011") must not share a file: a changed name carries the id's hash (32-bit FNV-1a).
   if (changed) {

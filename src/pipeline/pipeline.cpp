@@ -221,14 +221,23 @@ BuildingResult reconstruct_building(const BuildingInput& given, const Reconstruc
   const StageTimer building(Stage::other);
   const auto start = Clock::now();
   const double cpu_start = building_cpu_seconds();
-  std::string simplify_note;
-  const std::optional<BuildingInput> simplified = simplified_input(given, params, simplify_note);
+  std::string simplify_note, simplify_failure;
+  std::optional<BuildingInput> simplified;
+  try {
+    simplified = simplified_input(given, params, simplify_note);
+  } catch (const ReconstructionError& e) {  // a footprint no tolerance brings under the limit
+    simplify_failure = std::string(e.what()) + " (--max-footprint-vertices)";
+  }
   const BuildingInput& input = simplified ? *simplified : given;
 
   BuildingResult result;
   BuildingReport& r = result.report;
   r = first_report(input, params, simplify_note);
-  if (!nothing_to_reconstruct(input, r)) {
+  if (!simplify_failure.empty()) {
+    r.status = BuildingStatus::skipped;
+    r.stage = "footprint";
+    r.reason = simplify_failure;
+  } else if (!nothing_to_reconstruct(input, r)) {
     std::optional<ModelFit> lod2_fit;  // the LoD2 model's distances, as explain_more measured them
     result.model = walk_ladder(input, params, start, r, lod2_fit);
     if (result.model) {

@@ -621,9 +621,14 @@ MipSolution solve_program(const MipModel& model, const SelectionParams& params,
 
 void SelectionParams::validate() const {
   std::vector<std::string> errors;
+  // Up to a million: the terms are normalised to [0, 1], and a weight of 1e308 overflows the solvers'
+  // objective (CBC aborts on a cost over 1e25, GLPK's simplex fails its assertions).
   const auto weight = [&errors](double w, const char* name) {
-    if (!std::isfinite(w) || w < 0.0)
-      errors.push_back(std::string(name) + " = " + std::to_string(w) + " (need >= 0)");
+    if (!std::isfinite(w) || w < 0.0 || w > 1e6) {
+      std::ostringstream text;
+      text << name << " = " << w << " (need 0 to 1e6)";
+      errors.push_back(text.str());
+    }
   };
   weight(lambda_data, "lambda_data");
   weight(lambda_complexity, "lambda_complexity");
