@@ -72,7 +72,8 @@ struct SelectionProblem {
   std::vector<bool> start;
 };
 
-/// Energy weights and solver limits. Defaults are the paper's weights.
+/// Energy weights and solver limits. Defaults are the paper's weights. Each weight is 0 to 1e6 (the
+/// terms are normalised; larger weights overflow the solvers' objective).
 struct SelectionParams {
   double lambda_data = 0.34;        ///< lambda_d
   /// lambda_c. 0.3, not the paper's 0.62: with the refitted planes and the step lines (issue 10) the
