@@ -916,3 +916,51 @@ TEST_F(Mistakes,
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_TRUE(contains(r.output, (dir_ / "fp.dbf").string())) << r.output;
 }
+
+TEST_F(Mistakes, evaluate_places_a_local_coordinates_model_at_its_origin) {
+  const std::string tail = kSampleFootprints + " --lod 1.2 --no-progress -o ";
+  ASSERT_EQ(run("reconstruct " + kSampleTiles + tail + (dir_ / "world").string()).exit_code, 0);
+  ASSERT_EQ(run("reconstruct " + kSampleTiles + tail + (dir_ / "local").string() + " --local-coordinates")
+                .exit_code,
+            0);
+  const std::string name = "b11282794-00ba-11e6-b420-2bdcc4ab5d7f.obj",
+                    points = " " + kSample + "/delft_sample_1.las";
+  const auto without_path = [](std::string text) { return text.substr(text.find("\npoints:")); };
+  const Result world = run("evaluate " + (dir_ / "world" / "models" / name).string() + points);
+  const Result local = run("evaluate " + (dir_ / "local" / "models" / name).string() + points);
+  ASSERT_EQ(local.exit_code, 0) << local.output;
+  EXPECT_EQ(without_path(local.output), without_path(world.output));
+}
+
+TEST_F(Mistakes, evaluate_calls_two_cubes_on_one_edge_not_manifold_and_an_open_shell_without_volume) {
+  // Each cube of its own eight vertices: closed and manifold by the indices, not once coincident
+  // vertices are one (val3dity's 304), as evaluate's val3dity line said beside "manifold: yes".
+  std::ofstream obj(dir_ / "cubes.obj");
+  for (const double o : {0.0, 1.0})
+    for (int k = 0; k < 8; ++k)
+      obj << "v " << o + (k & 1) << ' ' << o + ((k >> 1) & 1) << ' ' << ((k >> 2) & 1) << "\n";
+  for (const int o : {0, 8})
+    for (const auto& f : std::vector<std::array<int, 4>>{
+             {1, 3, 4, 2}, {5, 6, 8, 7}, {1, 2, 6, 5}, {3, 7, 8, 4}, {1, 5, 7, 3}, {2, 4, 8, 6}})
+      obj << "f " << f[0] + o << ' ' << f[1] + o << ' ' << f[2] + o << ' ' << f[3] + o << "\n";
+  obj.close();
+  std::ofstream open_shell(dir_ / "open.obj");
+  for (int k = 0; k < 8; ++k)
+    open_shell << "v " << (k & 1) << ' ' << ((k >> 1) & 1) << ' ' << ((k >> 2) & 1) << "\n";
+  for (const auto& f :
+       std::vector<std::array<int, 4>>{{1, 3, 4, 2}, {1, 2, 6, 5}, {3, 7, 8, 4}, {1, 5, 7, 3}, {2, 4, 8, 6}})
+    open_shell << "f " << f[0] << ' ' << f[1] << ' ' << f[2] << ' ' << f[3] << "\n";
+  open_shell.close();
+  std::ofstream ply(dir_ / "points.ply");
+  ply << "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float "
+         "z\nend_header\n"
+         "0.5 0.5 1\n0.2 0.7 1\n1.5 1.5 1\n1.2 1.7 1\n";
+  ply.close();
+  const Result cubes =
+      run("evaluate " + (dir_ / "cubes.obj").string() + " " + (dir_ / "points.ply").string());
+  EXPECT_TRUE(contains(cubes.output, "val3dity: 304")) << cubes.output;
+  EXPECT_TRUE(contains(cubes.output, "manifold: no")) << cubes.output;
+  const Result shell = run("evaluate " + (dir_ / "open.obj").string() + " " + (dir_ / "points.ply").string());
+  EXPECT_TRUE(contains(shell.output, "closed: no")) << shell.output;
+  EXPECT_TRUE(contains(shell.output, "volume: none (not closed)")) << shell.output;
+}

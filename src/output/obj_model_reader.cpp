@@ -23,8 +23,24 @@ BuildingModel read_obj_model(const std::string& path) {
   auto fail = [&](const std::string& what) {
     throw IoError("obj: " + path + " line " + std::to_string(line_number) + ": " + what);
   };
+  // city3d's --local-coordinates models: "# origin x y z" before a building's vertices, which are
+  // relative to it (world = local + origin).
+  Point3 origin{0.0, 0.0, 0.0};
   while (std::getline(in, line)) {
     ++line_number;
+    if (line.rfind("# origin ", 0) == 0) {
+      double xyz[3];
+      const char* p = line.c_str() + 9;
+      bool read = true;
+      for (double& c : xyz) {
+        char* end = nullptr;
+        c = std::strtod(p, &end);
+        read = read && end != p && std::isfinite(c);
+        p = end;
+      }
+      if (read) origin = {xyz[0], xyz[1], xyz[2]};
+      continue;
+    }
     if (line.size() < 2 || line[1] != ' ' || (line[0] != 'v' && line[0] != 'f')) continue;
     const char* p = line.c_str() + 2;
     if (line[0] == 'v') {
@@ -35,7 +51,7 @@ BuildingModel read_obj_model(const std::string& path) {
         if (end == p || !std::isfinite(c)) fail("malformed vertex '" + line + "'");
         p = end;
       }
-      model.mesh.vertices.push_back({xyz[0], xyz[1], xyz[2]});
+      model.mesh.vertices.push_back({xyz[0] + origin.x, xyz[1] + origin.y, xyz[2] + origin.z});
     } else {
       std::vector<std::uint32_t> face;
       for (;;) {
