@@ -904,6 +904,13 @@ TEST_F(Mistakes,
                 (dir_ / "out").string())
                 .exit_code,
             2);
+  // A negative block size was taken as 0; strtod read "0x10" as 16.
+  for (const char* option : {" --block-size -5", " --group-area -1", " -j 0x10"})
+    EXPECT_EQ(run("reconstruct " + kSampleTiles + kSampleFootprints + option + " --no-progress -o " +
+                  (dir_ / "out").string())
+                  .exit_code,
+              2)
+        << option;
   EXPECT_FALSE(fs::exists(dir_ / "out"));
   ASSERT_EQ(run_shell("ogr2ogr -f \"ESRI Shapefile\" " + (dir_ / "fp.shp").string() + " " + kSample +
                       "/delft_sample_footprints.gpkg")

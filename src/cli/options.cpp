@@ -22,8 +22,16 @@ double parse_double(const std::string& flag, const std::string& text) {
   char* end = nullptr;
   errno = 0;
   const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v))
+  // strtod also reads hexadecimal ("0x10"): a number here is decimal.
+  if (text.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v) ||
+      text.find_first_of("xX") != std::string::npos)
     throw ConfigError("option " + flag + ": '" + text + "' is not a finite number");
+  return v;
+}
+
+double parse_non_negative(const std::string& flag, const std::string& text) {
+  const double v = parse_double(flag, text);
+  if (v < 0) throw ConfigError("option " + flag + ": '" + text + "' is negative");
   return v;
 }
 
@@ -406,12 +414,12 @@ const std::vector<OptionSpec>& option_table() {
        "footprints are processed in square blocks of this size: shards are made of them and cropping passes "
        "group them (0 = all at once; the output is the same)",
        [](const O& o) { return number_text(o.batch.block_size); },
-       [](O& o, V v) { o.batch.block_size = parse_double("--block-size", v); }},
+       [](O& o, V v) { o.batch.block_size = parse_non_negative("--block-size", v); }},
       {"--group-area", nullptr, "M2",
        "consecutive blocks are cropped together, one read of their tiles, up to this much footprint area "
        "(memory follows it; 0 = one block at a time; the output is the same)",
        [](const O& o) { return number_text(o.batch.group_area); },
-       [](O& o, V v) { o.batch.group_area = parse_double("--group-area", v); }},
+       [](O& o, V v) { o.batch.group_area = parse_non_negative("--group-area", v); }},
       {"--shard", nullptr, "K/N",
        "reconstruct only shard K of N (consecutive blocks in tile order, balanced by footprint area) into "
        "the "
