@@ -745,6 +745,22 @@ TEST_F(Mistakes, a_tile_given_without_footprints_and_points_at_ground_level_are_
                               " --lod 1.2 --no-progress -o " + (dir_ / "labelled").string());
   ASSERT_EQ(labelled.exit_code, 0) << labelled.output;
   EXPECT_FALSE(contains(labelled.output, "classified ground")) << labelled.output;
+  // The same building in degrees (4.36 E, 52.01 N): planes cannot be found, and the note says why.
+  {
+    std::ofstream ply(dir_ / "degrees.ply");
+    ply << "ply\nformat ascii 1.0\nelement vertex 400\nproperty double x\nproperty double y\nproperty double "
+           "z\n"
+           "end_header\n";
+    ply.precision(12);
+    for (int i = 0; i < 20; ++i)
+      for (int j = 0; j < 20; ++j)
+        ply << 4.36 + 7e-6 * i << ' ' << 52.01 + 4.5e-6 * j << ' ' << 5 + 0.1 * i << "\n";
+  }
+  const Result degrees = run("reconstruct " + (dir_ / "degrees.ply").string() +
+                             " --lod 1.2 --no-progress -o " + (dir_ / "degrees").string());
+  ASSERT_TRUE(fs::exists(dir_ / "degrees" / "report.json")) << degrees.output;
+  EXPECT_TRUE(contains(rows_by_id(dir_ / "degrees").begin()->second.at("note").get<std::string>(),
+                       "degrees of longitude"));
   // Every height set to 0: each building's points stand at its ground (the blocks are 1 m slabs).
   const city3d::PointCloud cloud = city3d::read_point_cloud(kSample + "/delft_sample_1.las",
                                                             city3d::kFieldXyz | city3d::kFieldClassification);

@@ -394,6 +394,14 @@ CloudPoints read_building_cloud(const std::string& path) {
     out.note = std::to_string(ground) + " of its " + std::to_string(out.points.size()) +
                " points are classified ground: a tile rather than one building's cloud? (give its footprints "
                "with -f; city3d info lists its classes)";
+  // Longitude and latitude read as metres: the building is a few thousandths wide.
+  Box3 box;
+  for (const Point3& p : out.points) box.add(p);
+  if (out.points.size() >= 3 && box.min.x >= -180 && box.max.x <= 180 && box.min.y >= -90 &&
+      box.max.y <= 90 && box.max.x - box.min.x < 0.01 && box.max.y - box.min.y < 0.01)
+    out.note += std::string(out.note.empty() ? "" : "; ") +
+                "its x and y span less than 0.01 within -180..180 and "
+                "-90..90: degrees of longitude and latitude? city3d needs metres (reproject the cloud)";
   return out;
 }
 

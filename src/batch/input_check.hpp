@@ -91,7 +91,8 @@ void check_output_folder(const std::vector<std::string>& point_clouds, const std
 void warn_of_meshes(const std::vector<PointCloudInfo>& infos);
 
 /// A single-building cloud's points, and a note when more than a tenth of them are classified
-/// ground (LAS class 2): a tile given without its footprints, whose ground would be modelled as a roof.
+/// ground (LAS class 2): a tile given without its footprints, whose ground would be modelled as a roof;
+/// or when its x and y look like degrees (a span under 0.01 within -180..180 and -90..90).
 struct CloudPoints {
   std::vector<Point3> points;
   std::string note;
