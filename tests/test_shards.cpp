@@ -263,6 +263,14 @@ TEST_F(Shards, merge_of_1_2_4_and_7_shards_is_byte_identical_to_one_process) {
     const Result m = run("merge" + folders + (n >= 4 ? " -j 3" : "") + " -o " + merged.string());
     ASSERT_EQ(m.exit_code, 0) << m.output;
     expect_same_outputs(dir_ / "single", merged);
+    if (n == 2) {
+      // The same merge again into its folder: the same files, and no word of an earlier run's models
+      // removed (it said "an earlier run of other inputs or options").
+      const Result again = run("merge" + folders + " -o " + merged.string());
+      ASSERT_EQ(again.exit_code, 0) << again.output;
+      EXPECT_FALSE(contains(again.output, "removed")) << again.output;
+      expect_same_outputs(dir_ / "single", merged);
+    }
   }
   // The merged folder is what one process leaves: a run of the same job into it resumes everything.
   const Result again = reconstruct(dir_ / "merged4", "-v");

@@ -594,7 +594,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
                              detail::run_level_files(plan.layout, sharded ? detail::FinaliseScope::shard
                                                                           : detail::FinaliseScope::whole_run));
   detail::Journal journal(options.output_dir, header, options.resume);
-  folder.remove_earlier_models(journal.earlier_models());
+  folder.remove_earlier_models(journal.earlier_models(), journal.earlier_of_the_same_run());
 
   if (owns_skipped)
     for (std::size_t j = 0; j < plan.skipped.size(); ++j)

@@ -238,7 +238,8 @@ OutputFolder::~OutputFolder() {
   if (lock_fd_ >= 0) ::close(lock_fd_);
 }
 
-void OutputFolder::remove_earlier_models(const std::vector<std::pair<std::string, std::string>>& models) {
+void OutputFolder::remove_earlier_models(const std::vector<std::pair<std::string, std::string>>& models,
+                                         bool same_run) {
   std::size_t removed = 0;
   for (const auto& [name, hash] : models) {
     if (name.empty() || name.find('/') != std::string::npos || name[0] == '.') continue;
@@ -247,8 +248,9 @@ void OutputFolder::remove_earlier_models(const std::vector<std::pair<std::string
     if (!hash.empty() && file_hash(file.string()) == hash && fs::remove(file, ec)) ++removed;
   }
   if (removed > 0)
-    log_warning("output: removed the " + std::to_string(removed) + " model files an earlier run of other inputs or "
-                "options wrote into " + (fs::path(dir_) / "models").string() + "; this run writes its own");
+    log_warning("output: removed the " + std::to_string(removed) + " model files an earlier run of " +
+                (same_run ? "the same inputs and options (not resumed)" : "other inputs or options") +
+                " wrote into " + (fs::path(dir_) / "models").string() + "; this run writes its own");
 }
 
 void OutputFolder::write_manifest(const RunManifest& m) {

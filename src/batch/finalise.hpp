@@ -56,8 +56,9 @@ class OutputFolder {
   const std::string& dir() const { return dir_; }
 
   /// Removes model files an earlier run recorded (name under models/, content hash) when they still
-  /// hold what that run wrote; never another file.
-  void remove_earlier_models(const std::vector<std::pair<std::string, std::string>>& models);
+  /// hold what that run wrote; never another file. `same_run`: that run had the same inputs and
+  /// options (not resumed), which the warning says.
+  void remove_earlier_models(const std::vector<std::pair<std::string, std::string>>& models, bool same_run);
 
   /// Writes run.json, atomically.
   void write_manifest(const RunManifest& manifest);

@@ -420,6 +420,7 @@ Journal::Journal(const std::string& output_dir, JournalHeader header, bool resum
                     "; starting afresh");
       for (const RecordRef& ref : old.records())
         if (!ref.model_file.empty()) earlier_models_.emplace_back(ref.model_file, ref.model_hash);
+      earlier_same_run_ = same;
     }
   }
   // Rewrite the journal with its good lines only, then append to it.

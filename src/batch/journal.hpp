@@ -142,9 +142,11 @@ class Journal {
   /// records of a resumed journal, then those appended. After close(), for the run's finalise: the
   /// list is handed over (moved out).
   std::vector<RecordRef> take_written();
-  /// Model files (name under models/, content hash) an earlier run of other inputs or parameters
-  /// recorded in this folder's journal.
+  /// Model files (name under models/, content hash) an earlier run recorded in this folder's journal,
+  /// when it is not resumed (other inputs or parameters, or --no-resume).
   const std::vector<std::pair<std::string, std::string>>& earlier_models() const { return earlier_models_; }
+  /// Whether those are of a journal of the same run, not resumed (--no-resume; a merge's folder).
+  bool earlier_of_the_same_run() const { return earlier_same_run_; }
 
  private:
   std::string path_;
@@ -165,6 +167,7 @@ class Journal {
   std::string appended_text_;
   std::uint64_t size_ = 0;  ///< the file's size: where the next line begins
   std::vector<std::pair<std::string, std::string>> earlier_models_;
+  bool earlier_same_run_ = false;
 };
 
 /// Writes a journal that holds `header` and `count` record lines, line_at(k) giving the k-th (as

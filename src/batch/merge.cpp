@@ -6,6 +6,7 @@
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -156,7 +157,14 @@ BatchSummary merge_shards(const MergeOptions& options) {
   {
     // What an earlier run left in the output folder's journal (other inputs or parameters).
     detail::Journal previous(options.output_dir, whole, false);
-    folder.remove_earlier_models(previous.earlier_models());
+    // Those this merge writes again, the same bytes under the same name, stay (a merge repeated).
+    std::set<std::pair<std::string, std::string>> writing;
+    for (const detail::RecordInJournal& source : sources)
+      if (!source.ref->model_file.empty()) writing.emplace(source.ref->model_file, source.ref->model_hash);
+    std::vector<std::pair<std::string, std::string>> earlier;
+    for (const auto& model : previous.earlier_models())
+      if (!writing.count(model)) earlier.push_back(model);
+    folder.remove_earlier_models(earlier, previous.earlier_of_the_same_run());
   }
   // Model files, copied and checked against the hash their shard recorded.
   if (layout.per_building_files) fs::create_directories(fs::path(options.output_dir) / "models");
