@@ -759,16 +759,46 @@ TEST(EndToEnd, the_roof_type_follows_its_flat_angle) {
   EXPECT_EQ(flat.report.roof_type, "horizontal");
 }
 
+// 2 million points on one roof (13,000 per m2) split it into 6,786 planes and the run ran out of
+// memory: a building denser than max_point_density is thinned first, one point per cell in plan.
+TEST(EndToEnd, a_building_denser_than_max_point_density_is_thinned_first_and_says_so) {
+  const Ring2 outline{{0, 0}, {10, 0}, {10, 6}, {0, 6}};
+  const auto gable = [](double, double y) { return 4.0 + 0.5 * std::min(y, 6.0 - y); };
+  const BuildingInput sparse = synthetic_input(outline, gable, 11);  // about 11 points per m2
+  const BuildingResult as_given = reconstruct_building(sparse, {});
+  ASSERT_EQ(as_given.report.level, ModelLevel::lod22) << as_given.report.reason;
+  EXPECT_EQ(as_given.report.note.find("thinned"), std::string::npos) << as_given.report.note;
+  // Each point 60 times, within a centimetre: about 650 per m2.
+  BuildingInput dense = sparse;
+  dense.points.clear();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> cm(-0.01, 0.01);
+  for (const Point3& p : sparse.points)
+    for (int k = 0; k < 60; ++k) dense.points.push_back({p.x + cm(rng), p.y + cm(rng), p.z + cm(rng)});
+  const BuildingResult thinned = reconstruct_building(dense, {});
+  ASSERT_EQ(thinned.report.level, ModelLevel::lod22) << thinned.report.reason;
+  EXPECT_NE(thinned.report.note.find("points thinned from " + std::to_string(dense.points.size())),
+            std::string::npos)
+      << thinned.report.note;
+  EXPECT_LT(thinned.report.points, dense.points.size() / 10);
+  EXPECT_EQ(thinned.report.planes, as_given.report.planes);
+  // Below the limit nothing is thinned, whatever the density.
+  ReconstructionParams high;
+  high.max_point_density = 1000.0;
+  EXPECT_EQ(reconstruct_building(dense, high).report.note.find("thinned"), std::string::npos);
+}
+
 // Every tuning number of the pipeline's own steps is a parameter: checked, and in the parameters'
 // text that a resume compares.
 TEST(Parameters, the_pipelines_own_numbers_are_checked_and_written) {
   const std::string text = parameters_text({});
-  for (const char* line : {"outline.gap_spacings = 1.5\n", "outline.wide_gap_spacings = 4\n",
-                           "rebuild.max_candidate_faces = 3000\n", "roof_type.flat_angle = 3\n",
-                           "planes.small_min_points = 10\n", "full_rung_time_share = 0.59999999999999998\n",
-                           "walls.min_escaping_rays = 3\n", "heightmap.resolution_per_spacing = 0.775",
-                           "hypothesis.support_cut_mixed = 0.050000000000000003\n",
-                           "hypothesis.surface_support.refine = 5\n"})
+  for (const char* line :
+       {"outline.gap_spacings = 1.5\n", "outline.wide_gap_spacings = 4\n",
+        "rebuild.max_candidate_faces = 3000\n", "roof_type.flat_angle = 3\n",
+        "planes.small_min_points = 10\n", "max_point_density = 400\n",
+        "full_rung_time_share = 0.59999999999999998\n", "walls.min_escaping_rays = 3\n",
+        "heightmap.resolution_per_spacing = 0.775", "hypothesis.support_cut_mixed = 0.050000000000000003\n",
+        "hypothesis.surface_support.refine = 5\n"})
     EXPECT_NE(text.find(line), std::string::npos) << line;
   const std::vector<std::pair<std::string, std::function<void(ReconstructionParams&)>>> wrong = {
       {"outline.min_region_area", [](ReconstructionParams& p) { p.outline.min_region_area = 0; }},

@@ -6,9 +6,11 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <optional>
 #include <sstream>
 #include <string>
+#include <unordered_set>
 
 #include "city3d/debug_output.hpp"
 #include "city3d/error.hpp"
@@ -48,6 +50,44 @@ std::optional<BuildingInput> simplified_input(const BuildingInput& given, const 
        << s.tolerance << " m; max_footprint_vertices " << params.max_footprint_vertices << ")";
   note = text.str();
   return simplified;
+}
+
+// The input with its points thinned to one per cell of 1 / sqrt(max_point_density) in plan (and per
+// ten cells in height) when they are denser than that over the footprint (a cloud: over its box in
+// plan), and `note` says so; nothing otherwise (every airborne survey).
+std::optional<BuildingInput> thinned_input(const BuildingInput& input, const ReconstructionParams& params,
+                                           std::string& note) {
+  if (input.points.empty()) return std::nullopt;
+  double area = 0.0;
+  if (input.footprint_given) {
+    area = polygons_area(input.footprint.polygons);
+  } else {
+    Box2 box;
+    for (const Point3& p : input.points) box.add({p.x, p.y});
+    area = (box.max.x - box.min.x) * (box.max.y - box.min.y);
+  }
+  if (!(area > 0.0) || static_cast<double>(input.points.size()) <= params.max_point_density * area)
+    return std::nullopt;
+  const double cell = 1.0 / std::sqrt(params.max_point_density);
+  std::unordered_set<std::uint64_t> taken;  // 21 bits per axis: 100 km at 5 cm
+  std::optional<BuildingInput> thinned = input;
+  thinned->points.clear();
+  for (const Point3& p : input.points) {
+    const auto bits = [cell](double v) {
+      return static_cast<std::uint64_t>(std::llround(std::floor(v / cell))) & 0x1FFFFF;
+    };
+    // One point per cell in plan and per ten cells in height: a roof's noise stays within a layer, a
+    // wall keeps a point every half metre up its cells.
+    if (taken.insert(bits(p.x) | bits(p.y) << 21 | bits(p.z / 10.0) << 42).second)
+      thinned->points.push_back(p);
+  }
+  std::ostringstream text;
+  text << "points thinned from " << input.points.size() << " to " << thinned->points.size() << " ("
+       << std::lround(static_cast<double>(input.points.size()) / area)
+       << " per m2, more than max_point_density " << params.max_point_density << ": one per " << cell
+       << " m cell in plan)";
+  note = text.str();
+  return thinned;
 }
 
 // The report's figures of the input, before any rung: its points, floor and notes, the heights of its
@@ -228,11 +268,15 @@ BuildingResult reconstruct_building(const BuildingInput& given, const Reconstruc
   } catch (const ReconstructionError& e) {  // a footprint no tolerance brings under the limit
     simplify_failure = std::string(e.what()) + " (--max-footprint-vertices)";
   }
-  const BuildingInput& input = simplified ? *simplified : given;
+  std::string thin_note;
+  const std::optional<BuildingInput> thinned =
+      thinned_input(simplified ? *simplified : given, params, thin_note);
+  const BuildingInput& input = thinned ? *thinned : simplified ? *simplified : given;
 
   BuildingResult result;
   BuildingReport& r = result.report;
   r = first_report(input, params, simplify_note);
+  if (!thin_note.empty()) add_note(r, thin_note);
   if (!simplify_failure.empty()) {
     r.status = BuildingStatus::skipped;
     r.stage = "footprint";
