@@ -14,6 +14,7 @@
 #include "city3d/error.hpp"
 #include "city3d/footprint_io.hpp"
 #include "city3d/log.hpp"
+#include "city3d/rings.hpp"
 
 namespace city3d {
 namespace {
@@ -33,7 +34,7 @@ constexpr double kDelftArea = 8654.03467670769;
 // The only footprint with a hole (ST_NumInteriorRing > 0): 4 + 4 vertices, 41.787485500241 m2.
 const std::string kHoleId = "b31bd5f7b-00ba-11e6-b420-2bdcc4ab5d7f";
 
-double ring_area(const Ring2& ring) {  // signed, positive when counter-clockwise
+double signed_ring_area(const Ring2& ring) {  // signed, positive when counter-clockwise
   double sum = 0.0;
   for (std::size_t i = 0; i < ring.size(); ++i) {
     const Point2& a = ring[i];
@@ -46,8 +47,8 @@ double ring_area(const Ring2& ring) {  // signed, positive when counter-clockwis
 double footprint_area(const Footprint& footprint) {  // holes are clockwise, so they subtract
   double area = 0.0;
   for (const Polygon2& polygon : footprint.polygons) {
-    area += ring_area(polygon.outer);
-    for (const Ring2& hole : polygon.holes) area += ring_area(hole);
+    area += signed_ring_area(polygon.outer);
+    for (const Ring2& hole : polygon.holes) area += signed_ring_area(hole);
   }
   return area;
 }
@@ -101,9 +102,9 @@ void expect_normal_form(const Footprint& footprint) {
   auto check_ring = [&](const Ring2& ring, bool outer) {
     ASSERT_GE(ring.size(), 3u) << footprint.id;
     if (outer) {
-      EXPECT_GT(ring_area(ring), 0.0) << footprint.id << ": outer ring not counter-clockwise";
+      EXPECT_GT(signed_ring_area(ring), 0.0) << footprint.id << ": outer ring not counter-clockwise";
     } else {
-      EXPECT_LT(ring_area(ring), 0.0) << footprint.id << ": hole not clockwise";
+      EXPECT_LT(signed_ring_area(ring), 0.0) << footprint.id << ": hole not clockwise";
     }
     for (std::size_t i = 0; i < ring.size(); ++i) {
       const Point2& a = ring[i];
@@ -437,7 +438,7 @@ TEST_F(BrokenFeatures, bow_tie_is_repaired_into_two_valid_triangles) {
   ASSERT_EQ(bowtie->polygons.size(), 2u);
   for (const Polygon2& triangle : bowtie->polygons) {
     EXPECT_EQ(triangle.outer.size(), 3u);
-    EXPECT_NEAR(ring_area(triangle.outer), 25.0, 1e-9);  // (20,0)-(30,10) crossing at (25,5)
+    EXPECT_NEAR(signed_ring_area(triangle.outer), 25.0, 1e-9);  // (20,0)-(30,10) crossing at (25,5)
   }
 }
 
@@ -461,8 +462,8 @@ TEST_F(BrokenFeatures, hole_given_in_the_wrong_orientation_is_reoriented) {
   ASSERT_EQ(footprint->polygons.size(), 1u);
   const Polygon2& polygon = footprint->polygons[0];
   ASSERT_EQ(polygon.holes.size(), 1u);
-  EXPECT_NEAR(ring_area(polygon.outer), 100.0, 1e-9);
-  EXPECT_NEAR(ring_area(polygon.holes[0]), -36.0, 1e-9);
+  EXPECT_NEAR(signed_ring_area(polygon.outer), 100.0, 1e-9);
+  EXPECT_NEAR(signed_ring_area(polygon.holes[0]), -36.0, 1e-9);
   // The source outer ring (40 0, 40 10, 50 10, 50 0) is clockwise: flipped, first vertex kept.
   EXPECT_DOUBLE_EQ(polygon.outer[0].x, 40.0);
   EXPECT_DOUBLE_EQ(polygon.outer[1].x, 50.0);
@@ -474,8 +475,8 @@ TEST_F(BrokenFeatures, multipolygon_keeps_both_parts_counter_clockwise) {
   const Footprint* multi = find(set, "multi");
   ASSERT_NE(multi, nullptr);
   ASSERT_EQ(multi->polygons.size(), 2u);
-  EXPECT_NEAR(ring_area(multi->polygons[0].outer), 16.0, 1e-9);
-  EXPECT_NEAR(ring_area(multi->polygons[1].outer), 16.0, 1e-9);
+  EXPECT_NEAR(signed_ring_area(multi->polygons[0].outer), 16.0, 1e-9);
+  EXPECT_NEAR(signed_ring_area(multi->polygons[1].outer), 16.0, 1e-9);
   EXPECT_DOUBLE_EQ(multi->polygons[1].outer[0].x, 70.0);
 }
 
@@ -575,10 +576,10 @@ TEST(ObjFootprints, named_objects_give_ids_and_negative_indices_count_back) {
   EXPECT_EQ(set.footprints[2].id, "2");  // `g` alone returns to unnamed faces
   const Ring2& triangle = set.footprints[1].polygons.at(0).outer;
   ASSERT_EQ(triangle.size(), 3u);
-  EXPECT_NEAR(ring_area(triangle), 4.5, 1e-12);  // (10 0)(10 3)(13 3), clockwise in the file
+  EXPECT_NEAR(signed_ring_area(triangle), 4.5, 1e-12);  // (10 0)(10 3)(13 3), clockwise in the file
   EXPECT_DOUBLE_EQ(triangle[0].x, 10.0);
   EXPECT_DOUBLE_EQ(triangle[1].x, 13.0);
-  EXPECT_NEAR(ring_area(set.footprints[2].polygons.at(0).outer), 16.0, 1e-12);
+  EXPECT_NEAR(signed_ring_area(set.footprints[2].polygons.at(0).outer), 16.0, 1e-12);
 }
 
 TEST(ObjFootprints, bbox_filter_applies_to_obj_faces) {
@@ -674,6 +675,113 @@ TEST(SimplifyFootprint, many_vertices_within_the_tolerance_and_few_untouched) {
   EXPECT_EQ(same.tolerance, 0.0);
   ASSERT_EQ(same.polygons.size(), 1u);
   EXPECT_EQ(same.polygons[0].outer.size(), 4u);
+}
+
+// The least distance from any vertex of one ring to any edge of another, both ways.
+double ring_gap(const Ring2& a, const Ring2& b) {
+  double gap = INFINITY;
+  for (const auto& [p, q] : {std::pair{&a, &b}, std::pair{&b, &a}})
+    for (const Point2& v : *p)
+      for (std::size_t k = 0; k < q->size(); ++k)
+        gap = std::min(gap, segment_distance(v, (*q)[k], (*q)[(k + 1) % q->size()]));
+  return gap;
+}
+
+// How many vertices of the polygons moved, and how far the farthest did.
+std::pair<int, double> moves(const std::vector<Polygon2>& before, const std::vector<Polygon2>& after) {
+  int moved = 0;
+  double farthest = 0.0;
+  const auto ring = [&](const Ring2& a, const Ring2& b) {
+    EXPECT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) {
+      const double d = std::hypot(a[i].x - b[i].x, a[i].y - b[i].y);
+      moved += d > 0.0;
+      farthest = std::max(farthest, d);
+    }
+  };
+  EXPECT_EQ(before.size(), after.size());
+  for (std::size_t p = 0; p < std::min(before.size(), after.size()); ++p) {
+    ring(before[p].outer, after[p].outer);
+    EXPECT_EQ(before[p].holes.size(), after[p].holes.size());
+    for (std::size_t h = 0; h < std::min(before[p].holes.size(), after[p].holes.size()); ++h)
+      ring(before[p].holes[h], after[p].holes[h]);
+  }
+  return {moved, farthest};
+}
+
+// A hole whose vertex lies on its outer ring's edge (valid in OGC's rules; every block extruded from it
+// has an edge of four faces): that vertex, and only it, moves into the hole until the two rings are
+// 1 cm apart, the hole keeping its orientation and area but for a sliver.
+TEST(OpenPinches, a_hole_touching_its_outer_ring_moves_into_the_hole_by_the_clearance) {
+  const std::vector<Polygon2> given{{{{0, 0}, {12, 0}, {12, 10}, {0, 10}}, {{{6, 0}, {4, 4}, {8, 4}}}}};
+  std::vector<Polygon2> polygons = given;
+  Point2 unopened{NAN, NAN};
+  const std::vector<Point2> opened = open_pinches(polygons, 0.01, &unopened);
+  ASSERT_EQ(opened.size(), 1u);
+  EXPECT_EQ(opened[0].x, 6.0);
+  EXPECT_EQ(opened[0].y, 0.0);
+  EXPECT_TRUE(std::isnan(unopened.x));
+  const auto [moved, farthest] = moves(given, polygons);
+  EXPECT_EQ(moved, 1);
+  EXPECT_LE(farthest, 0.1);
+  EXPECT_GE(ring_gap(polygons[0].outer, polygons[0].holes[0]), 0.01 * 0.999);
+  EXPECT_GT(polygons[0].holes[0][0].y, 0.0);  // into the hole, not out of the building
+  EXPECT_LT(signed_area(polygons[0].holes[0]), 0.0);
+  EXPECT_NEAR(signed_area(polygons[0].holes[0]), signed_area(given[0].holes[0]), 0.05);
+}
+
+// Two parts meeting at a corner, two holes sharing a vertex, and a ring that comes back to touch
+// itself: each is opened at one vertex, the rings then at least the clearance apart.
+TEST(OpenPinches, parts_meeting_at_a_corner_holes_sharing_a_vertex_and_a_self_touching_ring_are_opened) {
+  {
+    const std::vector<Polygon2> given{{{{0, 0}, {6, 0}, {6, 5}, {0, 5}}, {}},
+                                      {{{6, 5}, {12, 5}, {12, 10}, {6, 10}}, {}}};
+    std::vector<Polygon2> polygons = given;
+    EXPECT_EQ(open_pinches(polygons, 0.01).size(), 1u);
+    EXPECT_EQ(moves(given, polygons).first, 1);
+    EXPECT_GE(ring_gap(polygons[0].outer, polygons[1].outer), 0.01 * 0.999);
+  }
+  {
+    const std::vector<Polygon2> given{{{{0, 0}, {12, 0}, {12, 10}, {0, 10}},
+                                       {{{4, 3}, {4, 5}, {6, 5}, {6, 3}}, {{6, 5}, {6, 7}, {8, 7}, {8, 5}}}}};
+    std::vector<Polygon2> polygons = given;
+    EXPECT_EQ(open_pinches(polygons, 0.01).size(), 1u);
+    EXPECT_EQ(moves(given, polygons).first, 1);
+    EXPECT_GE(ring_gap(polygons[0].holes[0], polygons[0].holes[1]), 0.01 * 0.999);
+  }
+  {
+    // An outer ring that leaves its left side at (0, 5) for a loop round a diamond and comes back to
+    // (0, 5): a hole joined to the boundary at a point (ESRI's "inverted hole").
+    const std::vector<Polygon2> given{
+        {{{0, 0}, {10, 0}, {10, 10}, {0, 10}, {0, 5}, {3, 7}, {6, 5}, {3, 3}, {0, 5}}, {}}};
+    std::vector<Polygon2> polygons = given;
+    EXPECT_EQ(open_pinches(polygons, 0.01).size(), 1u);
+    EXPECT_EQ(moves(given, polygons).first, 1);
+    const Ring2& r = polygons[0].outer;
+    EXPECT_GE(std::hypot(r[4].x - r[8].x, r[4].y - r[8].y), 0.01 * 0.999);
+    EXPECT_GT(signed_area(r), 0.0);
+  }
+}
+
+// What is no pinch is left alone: vertices a few millimetres apart along one ring, a courtyard 5 cm
+// from the outer wall, a single square. A hole that crosses its outer ring cannot be opened by a move:
+// the polygons come back as they were, and the place is named.
+TEST(OpenPinches, no_pinch_leaves_the_footprint_alone_and_crossing_rings_are_named) {
+  const std::vector<Polygon2> given{
+      {{{0, 0}, {6, 0}, {6.003, 0.002}, {12, 0}, {12, 10}, {0, 10}}, {{{6, 0.05}, {4, 4}, {8, 4}}}},
+      {{{20, 0}, {24, 0}, {24, 4}, {20, 4}}, {}}};
+  std::vector<Polygon2> polygons = given;
+  EXPECT_TRUE(open_pinches(polygons, 0.01).empty());
+  EXPECT_EQ(moves(given, polygons).first, 0);
+
+  const std::vector<Polygon2> crossing{
+      {{{0, 0}, {12, 0}, {12, 10}, {0, 10}}, {{{6, 0}, {4, 4}, {8, 4}, {9, -1}}}}};
+  polygons = crossing;
+  Point2 unopened{NAN, NAN};
+  EXPECT_TRUE(open_pinches(polygons, 0.01, &unopened).empty());
+  EXPECT_EQ(moves(crossing, polygons).first, 0);
+  EXPECT_EQ(unopened.x, 6.0);
+  EXPECT_EQ(unopened.y, 0.0);
 }
 
 }  // namespace city3d

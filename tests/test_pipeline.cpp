@@ -24,6 +24,7 @@
 #include "city3d/mesh_check.hpp"
 #include "city3d/pipeline.hpp"
 #include "city3d/point_cloud_io.hpp"
+#include "city3d/rings.hpp"
 #include "city3d/stage_profile.hpp"
 #include "pipeline/left_out.hpp"
 
@@ -786,6 +787,47 @@ TEST(EndToEnd, a_building_denser_than_max_point_density_is_thinned_first_and_say
   ReconstructionParams high;
   high.max_point_density = 1000.0;
   EXPECT_EQ(reconstruct_building(dense, high).report.note.find("thinned"), std::string::npos);
+}
+
+// Footprints whose rings touch, valid in OGC's rules: a courtyard whose corner meets the outer wall, two
+// parts meeting at a corner. Every block extruded from them had an edge of four faces there, and the
+// building failed with no model at all. The rings are opened by footprint_clearance first, and the
+// model keeps the courtyard: its volume is the flat roof's height over the footprint less the hole.
+TEST(EndToEnd, a_footprint_whose_rings_touch_is_opened_and_modelled) {
+  const Ring2 outline{{0, 0}, {12, 0}, {12, 10}, {0, 10}};
+  const auto flat = [](double, double) { return 5.0; };
+  BuildingInput courtyard = synthetic_input(outline, flat, 21);
+  const Ring2 hole{{6, 0}, {4, 4}, {8, 4}};  // 8 m2, its first vertex on the outer ring
+  courtyard.footprint.polygons[0].holes.push_back(hole);
+  BuildingInput parts = synthetic_input(outline, flat, 22);
+  parts.footprint.polygons = {{{{0, 0}, {6, 0}, {6, 5}, {0, 5}}, {}},
+                              {{{6, 5}, {12, 5}, {12, 10}, {6, 10}}, {}}};
+  for (BuildingInput* input : {&courtyard, &parts}) {
+    std::vector<Point3> kept;
+    for (const Point3& p : input->points) {
+      bool in = false;
+      for (const Polygon2& polygon : input->footprint.polygons)
+        in = in || (inside_ring(polygon.outer, {p.x, p.y}) &&
+                    std::none_of(polygon.holes.begin(), polygon.holes.end(), [&](const Ring2& h) {
+                      return inside_ring(h, {p.x, p.y});
+                    }));
+      if (in) kept.push_back(p);
+    }
+    input->points = std::move(kept);
+  }
+  const double volumes[] = {5.0 * (120.0 - 8.0), 5.0 * 60.0};
+  int k = 0;
+  for (const BuildingInput* input : {&courtyard, &parts}) {
+    const BuildingResult r = reconstruct_building(*input, {});
+    ASSERT_TRUE(r.model) << r.report.reason;
+    EXPECT_EQ(r.report.status, BuildingStatus::ok) << r.report.reason;
+    EXPECT_EQ(r.report.level, ModelLevel::lod22) << r.report.reason;
+    EXPECT_NE(r.report.note.find("footprint: its rings touched at 1 place"), std::string::npos)
+        << r.report.note;
+    EXPECT_NEAR(r.report.volume_lod22, volumes[k], 0.03 * volumes[k]);
+    EXPECT_NEAR(r.report.volume_lod12, volumes[k], 0.03 * volumes[k]);
+    ++k;
+  }
 }
 
 // Every tuning number of the pipeline's own steps is a parameter: checked, and in the parameters'

@@ -119,6 +119,11 @@ struct ReconstructionParams {
   /// says so. A deterministic work limit: the walls, the arrangement and the program grow with the
   /// footprint's edges (a 10,000-vertex circle took 25 s). Real footprints have far fewer.
   std::size_t max_footprint_vertices = 1000;
+  /// Rings of a footprint that touch or come closer than half of this (a hole touching its outer ring
+  /// at a point, two parts meeting at a corner) are moved apart to this distance, metres, at the
+  /// vertex that touches (open_pinches in rings.hpp); the note says where. Every solid extruded from
+  /// a footprint that touches itself has an edge of four faces, so no model of it was valid.
+  double footprint_clearance = 0.01;
   /// A building of more points per m2 than this (of its footprint, or of a cloud's box in plan) is
   /// thinned first to one point per cell of 1 / sqrt(max_point_density) (5 cm) in plan and ten cells
   /// in height, the first in input order; the note says so. A work limit, and the scale the method's

@@ -41,6 +41,17 @@ std::size_t points_inside(const Ring2& ring, const std::vector<std::uint32_t>& i
 /// The distance from `p` to the segment from `a` to `b`, metres.
 double segment_distance(const Point2& p, const Point2& a, const Point2& b);
 
+/// Opens a footprint's pinches: places where two of its rings, or two stretches of one ring, touch or
+/// come closer than half of `clearance` (a hole touching its outer ring at a point, two parts meeting
+/// at a corner, two holes sharing a vertex: valid polygons in OGC's rules, but every solid extruded
+/// from them has an edge of four faces). The vertex that touches moves between its own two edges, away
+/// from the ring it touches, until they are `clearance` apart (at most 10 x `clearance`, and a third of
+/// its shorter edge). The rings keep their order and orientation, and no edge crosses another. Returns
+/// where the vertices were; when a pinch cannot be opened so (a ring that crosses another), the polygons
+/// are left as they were and `unopened` (when given) gets the place.
+std::vector<Point2> open_pinches(std::vector<Polygon2>& polygons, double clearance,
+                                 Point2* unopened = nullptr);
+
 /// The convex hull of `points`, counter-clockwise, without collinear points (monotone chain).
 Ring2 convex_hull(std::vector<Point2> points);
 

@@ -53,6 +53,7 @@ void ReconstructionParams::validate() const {
   need(lod13_step_height > 0, "lod13_step_height must be > 0 (metres)");
   need(output_grid >= 0 && finite(output_grid), "output_grid must be >= 0 (metres)");
   need(max_footprint_vertices >= 3, "max_footprint_vertices must be >= 3");
+  need(footprint_clearance > 0 && footprint_clearance <= 1, "footprint_clearance must be in (0, 1] (metres)");
   need(max_point_density > 0 && finite(max_point_density), "max_point_density must be > 0 (points per m2)");
   need(retry_unexplained_share >= 0 && finite(retry_unexplained_share),
        "retry_unexplained_share must be a share >= 0 (1: never retry)");
@@ -169,6 +170,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("validity.planarity_normals", p.validity.planarity_normals);
   put("max_level", level_name(p.max_level));
   put("max_footprint_vertices", p.max_footprint_vertices);
+  put("footprint_clearance", p.footprint_clearance);
   put("max_point_density", p.max_point_density);
   put("retry_unexplained_share", p.retry_unexplained_share);
   put("retry_unsupported_area", p.retry_unsupported_area);

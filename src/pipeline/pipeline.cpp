@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <iomanip>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -31,8 +32,9 @@ double seconds_since(Clock::time_point start) {
 }
 
 // The input as the stages take it: a footprint of very many vertices is simplified first (a work
-// limit: walls, arrangement and program grow with its edges), and `note` says so; the copy of the
-// input is made only then.
+// limit: walls, arrangement and program grow with its edges), and a footprint whose rings touch is
+// opened there (open_pinches: every block extruded from it would have an edge of four faces); `note`
+// says what was done. The copy of the input is made only then.
 std::optional<BuildingInput> simplified_input(const BuildingInput& given, const ReconstructionParams& params,
                                               std::string& note) {
   if (!given.footprint_given) return std::nullopt;
@@ -41,15 +43,36 @@ std::optional<BuildingInput> simplified_input(const BuildingInput& given, const 
     vertices += p.outer.size();
     for (const Ring2& h : p.holes) vertices += h.size();
   }
-  if (vertices <= params.max_footprint_vertices) return std::nullopt;
-  SimplifiedFootprint s = simplify_footprint(given.footprint.polygons, params.max_footprint_vertices);
-  std::optional<BuildingInput> simplified = given;
-  simplified->footprint.polygons = std::move(s.polygons);
+  std::optional<BuildingInput> ready;
+  if (vertices > params.max_footprint_vertices) {
+    SimplifiedFootprint s = simplify_footprint(given.footprint.polygons, params.max_footprint_vertices);
+    ready = given;
+    ready->footprint.polygons = std::move(s.polygons);
+    std::ostringstream text;
+    text << "footprint: " << s.vertices_before << " vertices simplified to " << s.vertices_after
+         << " (tolerance " << s.tolerance << " m; max_footprint_vertices " << params.max_footprint_vertices
+         << ")";
+    note = text.str();
+  }
+  std::vector<Polygon2> polygons = (ready ? *ready : given).footprint.polygons;
+  Point2 unopened{std::nan(""), std::nan("")};
+  const std::vector<Point2> opened = open_pinches(polygons, params.footprint_clearance, &unopened);
   std::ostringstream text;
-  text << "footprint: " << s.vertices_before << " vertices simplified to " << s.vertices_after << " (tolerance "
-       << s.tolerance << " m; max_footprint_vertices " << params.max_footprint_vertices << ")";
-  note = text.str();
-  return simplified;
+  text << std::fixed << std::setprecision(3) << "footprint: ";
+  if (!opened.empty()) {
+    if (!ready) ready = given;
+    ready->footprint.polygons = std::move(polygons);
+    text << "its rings touched at " << opened.size() << (opened.size() == 1 ? " place" : " places") << " (at "
+         << opened.front().x + given.origin.x << ", " << opened.front().y + given.origin.y << "), opened to "
+         << std::defaultfloat << params.footprint_clearance << " m (footprint_clearance)";
+  } else if (!std::isnan(unopened.x)) {
+    text << "its rings touch at " << unopened.x + given.origin.x << ", " << unopened.y + given.origin.y
+         << " and cannot be opened there (they cross)";
+  } else {
+    return ready;
+  }
+  note += (note.empty() ? "" : "; ") + text.str();
+  return ready;
 }
 
 // The input with its points thinned to one per cell of 1 / sqrt(max_point_density) in plan (and per
