@@ -724,6 +724,29 @@ TEST_F(Mistakes, ground_z_with_footprints_and_a_cityjson_to_evaluate_are_refused
   EXPECT_TRUE(contains(json_model.output, "not an OBJ file")) << json_model.output;
 }
 
+// -f given twice took the second layer only: the first one's buildings were left out without a word.
+// Two footprint sources, or two selections of one, are refused; an option repeated with the same value,
+// or any other option repeated (the last value wins, for scripts that append overrides), is not.
+TEST_F(Mistakes, two_footprint_layers_or_two_selections_are_refused_and_other_repeats_take_the_last) {
+  const fs::path other = dir_ / "other.gpkg";
+  fs::copy_file(kSample + "/delft_sample_footprints.gpkg", other);
+  for (const std::string& twice :
+       {" -f " + other.string(), std::string(" --where \"fid < 3\" --where \"fid > 5\""),
+        std::string(" --bbox 0,0,1,1 --bbox 0,0,2,2")}) {
+    const Result r = run("reconstruct " + kSampleTiles + kSampleFootprints + twice + " --no-progress -o " +
+                         (dir_ / "out").string());
+    EXPECT_EQ(r.exit_code, 2) << twice << r.output;
+    EXPECT_FALSE(fs::exists(dir_ / "out")) << twice;
+  }
+  const Result same =
+      run("reconstruct " + kSampleTiles + kSampleFootprints + kSampleFootprints +
+          " --lod 1.2 --lambda-data 0.5 --lambda-data 0.34 --no-progress -q -o " + (dir_ / "same").string());
+  ASSERT_EQ(same.exit_code, 0) << same.output;
+  const std::string parameters = read_file(dir_ / "same" / "run.json");
+  EXPECT_TRUE(contains(parameters, "\"lambda-data\": 0.34")) << parameters;
+  EXPECT_FALSE(rows_by_id(dir_ / "same").empty());
+}
+
 TEST_F(Mistakes, a_tile_given_without_footprints_and_points_at_ground_level_are_noted) {
   // A whole tile as one building's cloud: 17,327 of its 40,957 points are ground.
   const Result tile = run("reconstruct " + kSample + "/delft_sample_1.las --lod 1.2 --no-progress -o " +

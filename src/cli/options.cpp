@@ -619,6 +619,24 @@ RunOptions parse_command_line(int argc, const char* const* argv) {
     }
   }
 
+  // An option given twice takes its last value, as in most tools, except where the two values would
+  // be two sets of buildings: the run models one footprint layer, and a second -f, --layer, --where or
+  // --bbox used to leave the first one's buildings out without a word.
+  for (const char* flag : {"--footprints", "--layer", "--where", "--bbox"}) {
+    std::vector<std::string> values;
+    for (const GivenOption& g : given)
+      if (std::string(g.spec->flag) == flag &&
+          std::find(values.begin(), values.end(), g.value) == values.end())
+        values.push_back(g.value);
+    if (values.size() < 2) continue;
+    std::string listed;
+    for (const std::string& v : values) listed += (listed.empty() ? "'" : ", '") + v + "'";
+    problems.push_back(
+        std::string(flag) + " given " + std::to_string(values.size()) + " times (" + listed +
+        "): a run models one footprint layer and one selection of it (merge the layers first, e.g. "
+        "with ogr2ogr -append, or run once per layer, each into a folder of its own)");
+  }
+
   // The configuration file first, then the command line over it: an option given on the command
   // line replaces the file's value (and "--switch=false" the file's "switch = true").
   std::string config_path;
