@@ -1,6 +1,7 @@
 // Tests of the footprint readers: the 160 Delft footprints in four OGR formats, City3D's OBJ
 // footprints, and small hand-made broken inputs under tests/data/footprints.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -428,6 +429,51 @@ TEST_F(BrokenFeatures, good_features_are_kept_and_bad_ones_skipped_with_reasons)
   EXPECT_TRUE(contains(reason_of("sliver"), "repair left no polygon")) << reason_of("sliver");
   // The first "square" (0..10) is the one kept, not the duplicate at x = 100.
   EXPECT_DOUBLE_EQ(find(set, "square")->polygons.at(0).outer.at(0).x, 0.0);
+}
+
+// The same polygon under two ids made two models in one place. The second is skipped, naming the
+// first, whichever vertex its rings start at, whichever way they run and in whatever order its holes
+// and parts come; a polygon a millimetre away is another building.
+TEST_F(BrokenFeatures, the_same_polygon_under_another_id_is_skipped_naming_the_first) {
+  const fs::path path =
+      fs::temp_directory_path() / ("city3d_same_shape_" + std::to_string(::getpid()) + ".geojson");
+  const auto feature = [](const std::string& id, const std::string& type, const std::string& coordinates) {
+    return R"({"type":"Feature","properties":{"name":")" + id + R"("},"geometry":{"type":")" + type +
+           R"(","coordinates":)" + coordinates + "}}";
+  };
+  const std::string features[] = {
+      feature("first", "Polygon",
+              "[[[0,0],[10,0],[10,10],[0,10],[0,0]],[[2,2],[2,4],[4,4],[4,2],[2,2]],"
+              "[[6,6],[6,8],[8,8],[8,6],[6,6]]]"),
+      // Starting at another vertex, clockwise, its holes the other way round.
+      feature("copy", "Polygon",
+              "[[[10,10],[10,0],[0,0],[0,10],[10,10]],[[6,6],[6,8],[8,8],[8,6],[6,6]],"
+              "[[2,2],[2,4],[4,4],[4,2],[2,2]]]"),
+      feature("shifted", "Polygon", "[[[0.001,0],[10.001,0],[10.001,10],[0.001,10],[0.001,0]]]"),
+      feature("parts", "MultiPolygon",
+              "[[[[20,0],[24,0],[24,4],[20,4],[20,0]]],[[[30,0],[34,0],[34,4],[30,4],[30,0]]]]"),
+      feature("parts_again", "MultiPolygon",
+              "[[[[34,4],[30,4],[30,0],[34,0],[34,4]]],[[[20,0],[24,0],[24,4],[20,4],[20,0]]]]")};
+  {
+    std::ofstream out(path);
+    out << R"({"type":"FeatureCollection","features":[)";
+    for (std::size_t i = 0; i < std::size(features); ++i) out << (i ? "," : "") << features[i];
+    out << "]}";
+  }
+  FootprintReadOptions options;
+  options.id_field = "name";
+  const FootprintSet set = read_footprints(path.string(), options);
+  fs::remove(path);
+  std::vector<std::string> kept;
+  for (const Footprint& footprint : set.footprints) kept.push_back(footprint.id);
+  EXPECT_EQ(kept, (std::vector<std::string>{"first", "shifted", "parts"}));
+  ASSERT_EQ(set.skipped.size(), 2u);
+  const SkippedFootprint* copy = find_skipped(set, "copy");
+  ASSERT_NE(copy, nullptr);
+  EXPECT_TRUE(contains(copy->reason, "the same polygon as first (fid 0")) << copy->reason;
+  const SkippedFootprint* again = find_skipped(set, "parts_again");
+  ASSERT_NE(again, nullptr);
+  EXPECT_TRUE(contains(again->reason, "the same polygon as parts")) << again->reason;
 }
 
 TEST_F(BrokenFeatures, bow_tie_is_repaired_into_two_valid_triangles) {

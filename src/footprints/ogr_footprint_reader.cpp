@@ -177,6 +177,32 @@ OGRLayer& select_layer(GDALDataset& dataset, const std::string& path, const std:
 
 std::string describe_srs(const OGRSpatialReference& srs);
 
+/// The polygons' vertices as bytes that do not depend on where each ring starts, nor on the order of
+/// the holes or of the parts: two features of the same shape give the same text.
+std::string shape_bytes(const std::vector<Polygon2>& polygons) {
+  const auto ring_bytes = [](const Ring2& ring) {
+    const auto least = std::min_element(ring.begin(), ring.end(), [](const Point2& a, const Point2& b) {
+      return a.x < b.x || (a.x == b.x && a.y < b.y);
+    });
+    Ring2 turned(least, ring.end());
+    turned.insert(turned.end(), ring.begin(), least);
+    return std::string(reinterpret_cast<const char*>(turned.data()), turned.size() * sizeof(Point2)) + '|';
+  };
+  std::vector<std::string> parts;
+  for (const Polygon2& polygon : polygons) {
+    std::vector<std::string> holes;
+    for (const Ring2& hole : polygon.holes) holes.push_back(ring_bytes(hole));
+    std::sort(holes.begin(), holes.end());
+    std::string part = ring_bytes(polygon.outer);
+    for (const std::string& h : holes) part += h;
+    parts.push_back(part + '#');
+  }
+  std::sort(parts.begin(), parts.end());
+  std::string all;
+  for (const std::string& part : parts) all += part;
+  return all;
+}
+
 /// "EPSG:n" when the layer's SRS carries or can be matched to an EPSG code, else its WKT, else "".
 std::string describe_srs(OGRLayer& layer) {
   const OGRSpatialReference* srs = layer.GetSpatialRef();
@@ -505,6 +531,11 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
   // warning per feature).
   std::vector<std::string> duplicate_warnings;
   std::string first_duplicate;
+  // The same polygon under two ids (a feature copied, a layer appended to part of itself) made two
+  // models in one place: the first feature keeps it. Each shape is kept as the hash of its
+  // shape_bytes with the first holder's fid and id (two shapes of one hash, at odds of 2^-64, would
+  // be taken for one).
+  std::unordered_map<std::size_t, std::pair<std::int64_t, BuildingId>> first_of_shape;
   std::size_t ground_numbers = 0, ground_not_numbers = 0;  // --ground-field values read, and not heights
   std::string first_not_number;
   auto skip = [&](const BuildingId& id, const std::string& reason) {
@@ -587,6 +618,15 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
     if (const std::string too_big = extent_problem(outcome.polygons, options.max_extent); !too_big.empty()) {
       skip(id, too_big);
       continue;
+    }
+    if (!mode.keep_duplicates) {
+      const auto [shape, new_shape] = first_of_shape.emplace(
+          std::hash<std::string>{}(shape_bytes(outcome.polygons)), std::make_pair(fid, id));
+      if (!new_shape) {
+        skip(id, "the same polygon as " + shape->second.second + " (fid " +
+                     std::to_string(shape->second.first) + ", this is " + fid_text + ")");
+        continue;
+      }
     }
     if (!outcome.repair_note.empty()) {
       ++set.repaired;
