@@ -277,6 +277,20 @@ TEST(HeightmapParams, validate_lists_every_problem_at_once) {
   }
 }
 
+// A resolution given outside the automatic one's bounds is refused: 1e-9 m was taken, and every
+// building fell back to LoD1. The bounds themselves and 0 (automatic) are accepted.
+TEST(HeightmapParams, a_resolution_outside_the_automatic_bounds_is_refused) {
+  HeightmapParams p;
+  for (const double r : {1e-9, 0.049, 2.01, 50.0}) {
+    p.resolution = r;
+    EXPECT_THROW(p.validate(), city3d::ConfigError) << r;
+  }
+  for (const double r : {0.0, 0.05, 0.2, 2.0}) {
+    p.resolution = r;
+    EXPECT_NO_THROW(p.validate()) << r;
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Planes on synthetic buildings
 

@@ -247,7 +247,7 @@ const std::vector<OptionSpec>& option_table() {
          if (h > 0.0) o.batch.reconstruction.step_lines.min_step = h;
        }},
       {"--resolution", nullptr, "M",
-       "heightmap resolution r; 0 = from the point density (0.20 m at AHN3 density)",
+       "heightmap resolution r, 0.05 to 2 m; 0 = from the point density (0.20 m at AHN3 density)",
        [](const O& o) { return number_text(o.batch.reconstruction.heightmap.resolution); },
        [](O& o, V v) { o.batch.reconstruction.heightmap.resolution = parse_double("--resolution", v); }},
       {"--eps-d", nullptr, "M", "polylines: Hausdorff distance bound eps_d",

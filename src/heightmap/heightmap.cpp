@@ -106,6 +106,12 @@ void HeightmapParams::validate() const {
   if (!(min_resolution > 0.0) || !(max_resolution >= min_resolution) || !std::isfinite(max_resolution))
     problems.push_back("min_resolution = " + detail::format_number(min_resolution) + " m, max_resolution = " +
                        detail::format_number(max_resolution) + " m, need 0 < min <= max");
+  // A pixel finer than the finest automatic one (1e-9 m was taken, and every building fell back to
+  // LoD1) or coarser than the coarsest is no resolution the method works at.
+  else if (resolution != 0.0 && (resolution < min_resolution || resolution > max_resolution))
+    problems.push_back("resolution = " + detail::format_number(resolution) + " m, need 0 (automatic) or " +
+                       detail::format_number(min_resolution) + " to " +
+                       detail::format_number(max_resolution) + " m (min_resolution to max_resolution)");
   if (!(max_edge_length > 0.0) || !std::isfinite(max_edge_length))
     problems.push_back("max_edge_length = " + detail::format_number(max_edge_length) + " m, need > 0");
   if (closing_size < 0 || (closing_size > 0 && closing_size % 2 == 0))
