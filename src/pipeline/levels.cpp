@@ -13,7 +13,6 @@
 #include "city3d/evaluation.hpp"
 #include "city3d/mesh_check.hpp"
 #include "city3d/repair.hpp"
-#include "city3d/rings.hpp"
 #include "city3d/stage_profile.hpp"
 #include "city3d/surface_support.hpp"
 
@@ -104,8 +103,9 @@ std::optional<ValidBlocks> remade_blocks(const BuildingInput& input, const Recon
 
 }  // namespace
 
-void describe_points(const BuildingInput& input, const ReconstructionParams& params, BuildingReport& r) {
-  const double area = polygons_area(input.footprint.polygons);
+void describe_points(const BuildingInput& input, const ReconstructionParams& params, double footprint_area,
+                     BuildingReport& r) {
+  const double area = footprint_area;
   r.footprint_area = area;
   r.point_density = area > 0 ? input.points.size() / area : 0.0;
   if (input.points.empty()) {

@@ -9,8 +9,10 @@
 
 namespace city3d::detail {
 
-/// Heights, footprint area and point density of the report (3DBAG's b3_h_* attributes).
-void describe_points(const BuildingInput& input, const ReconstructionParams& params, BuildingReport& r);
+/// Heights, footprint area (`footprint_area`, of input.footprint.polygons) and point density of the
+/// report (3DBAG's b3_h_* attributes).
+void describe_points(const BuildingInput& input, const ReconstructionParams& params, double footprint_area,
+                     BuildingReport& r);
 
 /// LoD1.2 and LoD1.3 derived from the LoD2.2 model (or only the LoD1.2 block when the ladder ended
 /// there), each valid as written; volumes and RMSE per level; the model OBJ/PLY get is the highest

@@ -76,14 +76,14 @@ std::optional<BuildingInput> simplified_input(const BuildingInput& given, const 
 }
 
 // The input with its points thinned to one per cell of 1 / sqrt(max_point_density) in plan (and per
-// ten cells in height) when they are denser than that over the footprint (a cloud: over its box in
-// plan), and `note` says so; nothing otherwise (every airborne survey).
+// ten cells in height) when they are denser than that over the footprint (of `footprint_area`; a cloud:
+// over its box in plan), and `note` says so; nothing otherwise (every airborne survey).
 std::optional<BuildingInput> thinned_input(const BuildingInput& input, const ReconstructionParams& params,
-                                           std::string& note) {
+                                           double footprint_area, std::string& note) {
   if (input.points.empty()) return std::nullopt;
   double area = 0.0;
   if (input.footprint_given) {
-    area = polygons_area(input.footprint.polygons);
+    area = footprint_area;
   } else {
     Box2 box;
     for (const Point3& p : input.points) box.add({p.x, p.y});
@@ -116,7 +116,7 @@ std::optional<BuildingInput> thinned_input(const BuildingInput& input, const Rec
 // The report's figures of the input, before any rung: its points, floor and notes, the heights of its
 // points (3DBAG's b3_h_*) and the LoD1 roof height.
 BuildingReport first_report(const BuildingInput& input, const ReconstructionParams& params,
-                            const std::string& simplify_note) {
+                            const std::string& simplify_note, double footprint_area) {
   BuildingReport r;
   r.id = input.id;
   r.points = input.points.size();
@@ -126,7 +126,7 @@ BuildingReport first_report(const BuildingInput& input, const ReconstructionPara
   r.note = input.footprint.note;
   if (!simplify_note.empty()) add_note(r, simplify_note);
   const StageTimer stage(Stage::describe);
-  detail::describe_points(input, params, r);
+  detail::describe_points(input, params, footprint_area, r);
   if (!input.points.empty()) {
     try {
       r.roof_z = lod1_heights(input, params.lod1).roof_z + input.origin.z;
@@ -291,14 +291,15 @@ BuildingResult reconstruct_building(const BuildingInput& given, const Reconstruc
   } catch (const ReconstructionError& e) {  // a footprint no tolerance brings under the limit
     simplify_failure = std::string(e.what()) + " (--max-footprint-vertices)";
   }
+  const BuildingInput& ready = simplified ? *simplified : given;
+  const double footprint_area = polygons_area(ready.footprint.polygons);  // thinning keeps the footprint
   std::string thin_note;
-  const std::optional<BuildingInput> thinned =
-      thinned_input(simplified ? *simplified : given, params, thin_note);
-  const BuildingInput& input = thinned ? *thinned : simplified ? *simplified : given;
+  const std::optional<BuildingInput> thinned = thinned_input(ready, params, footprint_area, thin_note);
+  const BuildingInput& input = thinned ? *thinned : ready;
 
   BuildingResult result;
   BuildingReport& r = result.report;
-  r = first_report(input, params, simplify_note);
+  r = first_report(input, params, simplify_note, footprint_area);
   if (!thin_note.empty()) add_note(r, thin_note);
   if (!simplify_failure.empty()) {
     r.status = BuildingStatus::skipped;
