@@ -755,6 +755,32 @@ std::pair<int, double> moves(const std::vector<Polygon2>& before, const std::vec
   return {moved, farthest};
 }
 
+// tidy_footprint: a vertex 0.5 mm after another and a spike 1 mm wide (tip and one foot) go, in outer
+// rings and holes; a circle of 3 mm edges (its vertices 6 mm apart two by two, but each within 0.01 mm
+// of the line between its neighbours) and a ring of 3 vertices stay as they are.
+TEST(TidyFootprint, doubled_vertices_and_hairline_spikes_go_and_curves_stay) {
+  std::vector<Polygon2> polygons{
+      {{{0, 0}, {12, 0}, {12.0004, 0.0003}, {12, 8}, {6.001, 8}, {6.0005, 10}, {6, 8}, {0, 8}},
+       {{{2, 2}, {2, 4}, {2.0003, 4}, {4, 4}, {4, 2}}}}};
+  const TidiedFootprint t = tidy_footprint(polygons, 0.002, 0.01);
+  EXPECT_EQ(t.merged, 3u);  // the spike's two feet, 1 mm apart once its tip is gone, too
+  EXPECT_EQ(t.spikes, 1u);
+  ASSERT_EQ(polygons[0].outer.size(), 5u);  // {0,0} {12,0} {12,8}, one of the feet, {0,8}
+  for (const Point2& v : polygons[0].outer) EXPECT_LE(v.y, 8.0);
+  EXPECT_EQ(polygons[0].holes[0].size(), 4u);
+
+  Polygon2 circle;
+  for (int i = 0; i < 2000; ++i) {
+    const double a = 2 * M_PI * i / 2000;
+    circle.outer.push_back({std::cos(a), std::sin(a)});  // edges of 3.1 mm
+  }
+  std::vector<Polygon2> round{circle, {{{5, 5}, {5.0005, 5.0005}, {5, 5.001}}, {}}};
+  const TidiedFootprint none = tidy_footprint(round, 0.002, 0.01);
+  EXPECT_EQ(none.spikes, 0u);
+  EXPECT_EQ(round[0].outer.size(), 2000u);
+  EXPECT_EQ(round[1].outer.size(), 3u);
+}
+
 // A hole whose vertex lies on its outer ring's edge (valid in OGC's rules; every block extruded from it
 // has an edge of four faces): that vertex, and only it, moves into the hole until the two rings are
 // 1 cm apart, the hole keeping its orientation and area but for a sliver.

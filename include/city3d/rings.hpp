@@ -41,6 +41,20 @@ std::size_t points_inside(const Ring2& ring, const std::vector<std::uint32_t>& i
 /// The distance from `p` to the segment from `a` to `b`, metres.
 double segment_distance(const Point2& p, const Point2& a, const Point2& b);
 
+/// What tidy_footprint() removed.
+struct TidiedFootprint {
+  std::size_t merged = 0;  ///< vertices within the merge distance of the vertex before them
+  std::size_t spikes = 0;  ///< tips of spikes narrower than the spike width
+};
+
+/// Drops from each ring of `polygons` every vertex within `merge_distance` of the vertex before it
+/// (two vertices a validator takes for one: 102 CONSECUTIVE_POINTS_SAME), and the tip of every spike
+/// narrower than `spike_width`: a vertex whose two neighbours are closer to each other than that while it
+/// stands farther from the line between them than they are apart (a sliver no wall can be built on: 104
+/// RING_SELF_INTERSECTION once snapped). A gently curved ring of short edges keeps its vertices, and a
+/// ring keeps at least 3.
+TidiedFootprint tidy_footprint(std::vector<Polygon2>& polygons, double merge_distance, double spike_width);
+
 /// Opens a footprint's pinches: places where two of its rings, or two stretches of one ring, touch or
 /// come closer than half of `clearance` (a hole touching its outer ring at a point, two parts meeting
 /// at a corner, two holes sharing a vertex: valid polygons in OGC's rules, but every solid extruded

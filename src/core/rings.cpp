@@ -165,6 +165,32 @@ std::optional<std::array<std::size_t, 4>> find_pinch(const std::vector<Ring2*>& 
 
 }  // namespace
 
+TidiedFootprint tidy_footprint(std::vector<Polygon2>& polygons, double merge_distance, double spike_width) {
+  TidiedFootprint tidied;
+  const auto tidy = [&](Ring2& ring) {
+    for (bool changed = true; changed && ring.size() > 3;) {
+      changed = false;
+      for (std::size_t i = 0; i < ring.size() && ring.size() > 3; ++i) {
+        const std::size_t n = ring.size();
+        const Point2 &a = ring[(i + n - 1) % n], &v = ring[i], &b = ring[(i + 1) % n];
+        const bool merged = distance(a, v) < merge_distance;
+        const bool spike =
+            !merged && distance(a, b) < spike_width && segment_distance(v, a, b) > distance(a, b);
+        if (!merged && !spike) continue;
+        (merged ? tidied.merged : tidied.spikes) += 1;
+        ring.erase(ring.begin() + static_cast<std::ptrdiff_t>(i));
+        changed = true;
+        --i;
+      }
+    }
+  };
+  for (Polygon2& p : polygons) {
+    tidy(p.outer);
+    for (Ring2& h : p.holes) tidy(h);
+  }
+  return tidied;
+}
+
 std::vector<Point2> open_pinches(std::vector<Polygon2>& polygons, double clearance, Point2* unopened) {
   std::vector<Ring2*> rings;
   for (Polygon2& p : polygons) {

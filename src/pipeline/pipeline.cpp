@@ -32,11 +32,12 @@ double seconds_since(Clock::time_point start) {
 }
 
 // The input as the stages take it: a footprint of very many vertices is simplified first (a work
-// limit: walls, arrangement and program grow with its edges), and a footprint whose rings touch is
-// opened there (open_pinches: every block extruded from it would have an edge of four faces); `note`
-// says what was done. The copy of the input is made only then.
-std::optional<BuildingInput> simplified_input(const BuildingInput& given, const ReconstructionParams& params,
-                                              std::string& note) {
+// limit: walls, arrangement and program grow with its edges); vertices a validator would take for one
+// and hairline spikes are dropped (tidy_footprint), and a footprint whose rings touch is opened there
+// (open_pinches): every block extruded from such a footprint is invalid. `note` says what was done.
+// The copy of the input is made only then.
+std::optional<BuildingInput> footprint_ready_input(const BuildingInput& given,
+                                                   const ReconstructionParams& params, std::string& note) {
   if (!given.footprint_given) return std::nullopt;
   std::size_t vertices = 0;
   for (const Polygon2& p : given.footprint.polygons) {
@@ -55,23 +56,45 @@ std::optional<BuildingInput> simplified_input(const BuildingInput& given, const 
     note = text.str();
   }
   std::vector<Polygon2> polygons = (ready ? *ready : given).footprint.polygons;
+  // Vertices within twice the validator's snap tolerance are merged: rounding to the output grid can
+  // bring two vertices nearer than they were.
+  const double merge_distance = 2 * params.validity.snap_tolerance;
+  const TidiedFootprint tidied = tidy_footprint(polygons, merge_distance, params.footprint_clearance);
   Point2 unopened{std::nan(""), std::nan("")};
   const std::vector<Point2> opened = open_pinches(polygons, params.footprint_clearance, &unopened);
-  std::ostringstream text;
-  text << std::fixed << std::setprecision(3) << "footprint: ";
+  std::vector<std::string> done;
+  if (tidied.merged > 0) {
+    std::ostringstream merged;
+    merged << tidied.merged << (tidied.merged == 1 ? " vertex" : " vertices") << " within " << merge_distance
+           << " m of the one before dropped";
+    done.push_back(merged.str());
+  }
+  if (tidied.spikes > 0) {
+    std::ostringstream spikes;
+    spikes << tidied.spikes << (tidied.spikes == 1 ? " spike" : " spikes") << " narrower than "
+           << params.footprint_clearance << " m cut off";
+    done.push_back(spikes.str());
+  }
+  std::ostringstream place;
+  place << std::fixed << std::setprecision(3);
   if (!opened.empty()) {
+    place << "its rings touched at " << opened.size() << (opened.size() == 1 ? " place" : " places")
+          << " (at " << opened.front().x + given.origin.x << ", " << opened.front().y + given.origin.y
+          << "), opened to " << std::defaultfloat << params.footprint_clearance << " m (footprint_clearance)";
+    done.push_back(place.str());
+  } else if (!std::isnan(unopened.x)) {
+    place << "its rings touch at " << unopened.x + given.origin.x << ", " << unopened.y + given.origin.y
+          << " and cannot be opened there";
+    done.push_back(place.str());
+  }
+  if (tidied.merged > 0 || tidied.spikes > 0 || !opened.empty()) {
     if (!ready) ready = given;
     ready->footprint.polygons = std::move(polygons);
-    text << "its rings touched at " << opened.size() << (opened.size() == 1 ? " place" : " places") << " (at "
-         << opened.front().x + given.origin.x << ", " << opened.front().y + given.origin.y << "), opened to "
-         << std::defaultfloat << params.footprint_clearance << " m (footprint_clearance)";
-  } else if (!std::isnan(unopened.x)) {
-    text << "its rings touch at " << unopened.x + given.origin.x << ", " << unopened.y + given.origin.y
-         << " and cannot be opened there (they cross)";
-  } else {
-    return ready;
   }
-  note += (note.empty() ? "" : "; ") + text.str();
+  if (done.empty()) return ready;
+  std::string text = "footprint: ";
+  for (std::size_t k = 0; k < done.size(); ++k) text += (k ? ", " : "") + done[k];
+  note += (note.empty() ? "" : "; ") + text;
   return ready;
 }
 
@@ -116,7 +139,7 @@ std::optional<BuildingInput> thinned_input(const BuildingInput& input, const Rec
 // The report's figures of the input, before any rung: its points, floor and notes, the heights of its
 // points (3DBAG's b3_h_*) and the LoD1 roof height.
 BuildingReport first_report(const BuildingInput& input, const ReconstructionParams& params,
-                            const std::string& simplify_note, double footprint_area) {
+                            const std::string& footprint_note, double footprint_area) {
   BuildingReport r;
   r.id = input.id;
   r.points = input.points.size();
@@ -124,7 +147,7 @@ BuildingReport first_report(const BuildingInput& input, const ReconstructionPara
   r.ground_z = input.ground_z + input.origin.z;
   r.ground_method = input.ground_method;
   r.note = input.footprint.note;
-  if (!simplify_note.empty()) add_note(r, simplify_note);
+  if (!footprint_note.empty()) add_note(r, footprint_note);
   const StageTimer stage(Stage::describe);
   detail::describe_points(input, params, footprint_area, r);
   if (!input.points.empty()) {
@@ -284,14 +307,14 @@ BuildingResult reconstruct_building(const BuildingInput& given, const Reconstruc
   const StageTimer building(Stage::other);
   const auto start = Clock::now();
   const double cpu_start = building_cpu_seconds();
-  std::string simplify_note, simplify_failure;
-  std::optional<BuildingInput> simplified;
+  std::string footprint_note, simplify_failure;
+  std::optional<BuildingInput> with_footprint_ready;
   try {
-    simplified = simplified_input(given, params, simplify_note);
+    with_footprint_ready = footprint_ready_input(given, params, footprint_note);
   } catch (const ReconstructionError& e) {  // a footprint no tolerance brings under the limit
     simplify_failure = std::string(e.what()) + " (--max-footprint-vertices)";
   }
-  const BuildingInput& ready = simplified ? *simplified : given;
+  const BuildingInput& ready = with_footprint_ready ? *with_footprint_ready : given;
   const double footprint_area = polygons_area(ready.footprint.polygons);  // thinning keeps the footprint
   std::string thin_note;
   const std::optional<BuildingInput> thinned = thinned_input(ready, params, footprint_area, thin_note);
@@ -299,7 +322,7 @@ BuildingResult reconstruct_building(const BuildingInput& given, const Reconstruc
 
   BuildingResult result;
   BuildingReport& r = result.report;
-  r = first_report(input, params, simplify_note, footprint_area);
+  r = first_report(input, params, footprint_note, footprint_area);
   if (!thin_note.empty()) add_note(r, thin_note);
   if (!simplify_failure.empty()) {
     r.status = BuildingStatus::skipped;
