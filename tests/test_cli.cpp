@@ -202,7 +202,32 @@ TEST(Executable, info_reports_footprint_source_layer_count_holes_and_srs) {
   EXPECT_TRUE(contains(r.output, "id field: FID\n")) << r.output;
   EXPECT_TRUE(contains(r.output, "srs: EPSG:28992\n")) << r.output;
   EXPECT_TRUE(contains(r.output, "with holes: 1\n")) << r.output;
+  EXPECT_TRUE(contains(r.output, "rings touching: 0 ")) << r.output;
+  EXPECT_TRUE(contains(r.output, "vertices doubled or hairline spikes: 0 ")) << r.output;
   EXPECT_TRUE(contains(r.output, "skipped: 0\n")) << r.output;
+}
+
+// info counts the footprints a run will change before their stages: a courtyard touching its outer
+// ring at a point, and a vertex 0.5 mm after another (each of another footprint).
+TEST(Executable, info_counts_touching_rings_and_doubled_vertices) {
+  const fs::path path = fs::temp_directory_path() / "city3d_cli_touching.geojson";
+  {
+    std::ofstream out(path);
+    out << R"({"type":"FeatureCollection","features":[)"
+        << R"({"type":"Feature","properties":{"id":"courtyard"},"geometry":{"type":"Polygon","coordinates":)"
+        << R"([[[0,0],[12,0],[12,10],[0,10],[0,0]],[[6,0],[4,4],[8,4],[6,0]]]}},)"
+        << R"({"type":"Feature","properties":{"id":"doubled"},"geometry":{"type":"Polygon","coordinates":)"
+        << R"([[[20,0],[30,0],[30.0004,0.0003],[30,10],[20,10],[20,0]]]}},)"
+        << R"({"type":"Feature","properties":{"id":"plain"},"geometry":{"type":"Polygon","coordinates":)"
+        << R"([[[40,0],[50,0],[50,10],[40,10],[40,0]]]}}]})";
+  }
+  const Result r = run("info " + path.string());
+  fs::remove(path);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "footprints: 3\n")) << r.output;
+  EXPECT_TRUE(contains(r.output, "rings touching: 1 (opened by 0.01 m when reconstructed)\n")) << r.output;
+  EXPECT_TRUE(contains(r.output, "vertices doubled or hairline spikes: 1 (dropped when reconstructed)\n"))
+      << r.output;
 }
 
 TEST(Executable, info_on_missing_file_names_it_and_exits_with_input_error) {

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "city3d/building_report.hpp"
 #include "city3d/crop.hpp"
 #include "city3d/evaluation.hpp"
 #include "city3d/footprint_io.hpp"
@@ -21,8 +22,8 @@
 #include "city3d/planes.hpp"
 #include "city3d/polylines.hpp"
 #include "city3d/regularise.hpp"
+#include "city3d/rings.hpp"
 #include "city3d/selection.hpp"
-#include "city3d/building_report.hpp"
 #include "city3d/types.hpp"
 #include "city3d/walls.hpp"
 
@@ -172,6 +173,23 @@ struct BuildingResult {
   std::optional<BuildingModel> model;  ///< the highest level produced (OBJ/PLY write this one)
   std::vector<LodModel> lods;          ///< every level produced, "1.2" < "1.3" < "2.2" (CityJSON)
 };
+
+/// What prepare_footprint() did to a footprint's rings.
+struct FootprintPreparation {
+  TidiedFootprint tidied;          ///< vertices a validator takes for one, hairline spikes
+  std::vector<Point2> opened;      ///< where touching rings were opened (the vertices' places before)
+  std::optional<Point2> unopened;  ///< where rings touch and cannot be opened (a ring that crosses)
+  /// The report's note ("" when nothing was found), the places given in the frame of the polygons
+  /// plus `origin` (world coordinates).
+  std::string note(const ReconstructionParams& params, const Point3& origin) const;
+};
+
+/// What reconstruct_building() does to every footprint before its stages, after a simplification:
+/// drops each vertex within twice validity.snap_tolerance of the one before it (rounding to the output
+/// grid can bring two vertices nearer) and the tip of each spike narrower than footprint_clearance
+/// (tidy_footprint), then opens the rings that touch (open_pinches). Every block extruded from the
+/// footprint as it was would be invalid. `city3d info` counts the footprints it changes.
+FootprintPreparation prepare_footprint(std::vector<Polygon2>& polygons, const ReconstructionParams& params);
 
 /// Reconstructs one building, walking the ladder LoD2 -> LoD2 with footprint walls -> LoD1 until a
 /// rung gives a valid closed model. Never throws for a bad building: the result says what happened.

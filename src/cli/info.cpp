@@ -16,6 +16,7 @@
 #include "city3d/evaluation.hpp"
 #include "city3d/log.hpp"
 #include "city3d/model_io.hpp"
+#include "city3d/pipeline.hpp"
 #include "city3d/surface_support.hpp"
 
 namespace city3d {
@@ -144,6 +145,18 @@ std::string describe_footprints(const FootprintSet& f, const std::vector<FieldSu
   out << "with holes: " << f.with_holes << "\n";
   out << "multipolygons: " << multi << "\n";
   out << "repaired (invalid): " << f.repaired << "\n";
+  // What a run does to these footprints before their stages (prepare_footprint), counted per footprint.
+  const ReconstructionParams params;
+  std::size_t touching = 0, slips = 0;
+  for (const Footprint& fp : f.footprints) {
+    std::vector<Polygon2> polygons = fp.polygons;
+    const FootprintPreparation prepared = prepare_footprint(polygons, params);
+    touching += !prepared.opened.empty() || prepared.unopened.has_value();
+    slips += prepared.tidied.merged + prepared.tidied.spikes > 0;
+  }
+  out << "rings touching: " << touching << " (opened by " << params.footprint_clearance
+      << " m when reconstructed)\n";
+  out << "vertices doubled or hairline spikes: " << slips << " (dropped when reconstructed)\n";
   out << "skipped: " << f.skipped.size() << "\n";
   for (const SkippedFootprint& s : f.skipped) out << "  " << s.id << ": " << s.reason << "\n";
   return out.str();

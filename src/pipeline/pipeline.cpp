@@ -32,10 +32,8 @@ double seconds_since(Clock::time_point start) {
 }
 
 // The input as the stages take it: a footprint of very many vertices is simplified first (a work
-// limit: walls, arrangement and program grow with its edges); vertices a validator would take for one
-// and hairline spikes are dropped (tidy_footprint), and a footprint whose rings touch is opened there
-// (open_pinches): every block extruded from such a footprint is invalid. `note` says what was done.
-// The copy of the input is made only then.
+// limit: walls, arrangement and program grow with its edges), then prepared (prepare_footprint);
+// `note` says what was done. The copy of the input is made only then.
 std::optional<BuildingInput> footprint_ready_input(const BuildingInput& given,
                                                    const ReconstructionParams& params, std::string& note) {
   if (!given.footprint_given) return std::nullopt;
@@ -56,45 +54,13 @@ std::optional<BuildingInput> footprint_ready_input(const BuildingInput& given,
     note = text.str();
   }
   std::vector<Polygon2> polygons = (ready ? *ready : given).footprint.polygons;
-  // Vertices within twice the validator's snap tolerance are merged: rounding to the output grid can
-  // bring two vertices nearer than they were.
-  const double merge_distance = 2 * params.validity.snap_tolerance;
-  const TidiedFootprint tidied = tidy_footprint(polygons, merge_distance, params.footprint_clearance);
-  Point2 unopened{std::nan(""), std::nan("")};
-  const std::vector<Point2> opened = open_pinches(polygons, params.footprint_clearance, &unopened);
-  std::vector<std::string> done;
-  if (tidied.merged > 0) {
-    std::ostringstream merged;
-    merged << tidied.merged << (tidied.merged == 1 ? " vertex" : " vertices") << " within " << merge_distance
-           << " m of the one before dropped";
-    done.push_back(merged.str());
-  }
-  if (tidied.spikes > 0) {
-    std::ostringstream spikes;
-    spikes << tidied.spikes << (tidied.spikes == 1 ? " spike" : " spikes") << " narrower than "
-           << params.footprint_clearance << " m cut off";
-    done.push_back(spikes.str());
-  }
-  std::ostringstream place;
-  place << std::fixed << std::setprecision(3);
-  if (!opened.empty()) {
-    place << "its rings touched at " << opened.size() << (opened.size() == 1 ? " place" : " places")
-          << " (at " << opened.front().x + given.origin.x << ", " << opened.front().y + given.origin.y
-          << "), opened to " << std::defaultfloat << params.footprint_clearance << " m (footprint_clearance)";
-    done.push_back(place.str());
-  } else if (!std::isnan(unopened.x)) {
-    place << "its rings touch at " << unopened.x + given.origin.x << ", " << unopened.y + given.origin.y
-          << " and cannot be opened there";
-    done.push_back(place.str());
-  }
-  if (tidied.merged > 0 || tidied.spikes > 0 || !opened.empty()) {
+  const FootprintPreparation prepared = prepare_footprint(polygons, params);
+  if (prepared.tidied.merged > 0 || prepared.tidied.spikes > 0 || !prepared.opened.empty()) {
     if (!ready) ready = given;
     ready->footprint.polygons = std::move(polygons);
   }
-  if (done.empty()) return ready;
-  std::string text = "footprint: ";
-  for (std::size_t k = 0; k < done.size(); ++k) text += (k ? ", " : "") + done[k];
-  note += (note.empty() ? "" : "; ") + text;
+  const std::string text = prepared.note(params, given.origin);
+  if (!text.empty()) note += (note.empty() ? "" : "; ") + text;
   return ready;
 }
 
@@ -301,6 +267,47 @@ BuildingInput building_from_cloud(const BuildingId& id, const std::vector<Point3
     input.ground_method = "lowest building point";
   }
   return input;
+}
+
+FootprintPreparation prepare_footprint(std::vector<Polygon2>& polygons, const ReconstructionParams& params) {
+  FootprintPreparation prepared;
+  prepared.tidied = tidy_footprint(polygons, 2 * params.validity.snap_tolerance, params.footprint_clearance);
+  Point2 unopened{std::nan(""), std::nan("")};
+  prepared.opened = open_pinches(polygons, params.footprint_clearance, &unopened);
+  if (!std::isnan(unopened.x)) prepared.unopened = unopened;
+  return prepared;
+}
+
+std::string FootprintPreparation::note(const ReconstructionParams& params, const Point3& origin) const {
+  std::vector<std::string> done;
+  if (tidied.merged > 0) {
+    std::ostringstream merged;
+    merged << tidied.merged << (tidied.merged == 1 ? " vertex" : " vertices") << " within "
+           << 2 * params.validity.snap_tolerance << " m of the one before dropped";
+    done.push_back(merged.str());
+  }
+  if (tidied.spikes > 0) {
+    std::ostringstream spikes;
+    spikes << tidied.spikes << (tidied.spikes == 1 ? " spike" : " spikes") << " narrower than "
+           << params.footprint_clearance << " m cut off";
+    done.push_back(spikes.str());
+  }
+  std::ostringstream place;
+  place << std::fixed << std::setprecision(3);
+  if (!opened.empty()) {
+    place << "its rings touched at " << opened.size() << (opened.size() == 1 ? " place" : " places")
+          << " (at " << opened.front().x + origin.x << ", " << opened.front().y + origin.y << "), opened to "
+          << std::defaultfloat << params.footprint_clearance << " m (footprint_clearance)";
+    done.push_back(place.str());
+  } else if (unopened) {
+    place << "its rings touch at " << unopened->x + origin.x << ", " << unopened->y + origin.y
+          << " and cannot be opened there";
+    done.push_back(place.str());
+  }
+  if (done.empty()) return {};
+  std::string text = "footprint: ";
+  for (std::size_t k = 0; k < done.size(); ++k) text += (k ? ", " : "") + done[k];
+  return text;
 }
 
 BuildingResult reconstruct_building(const BuildingInput& given, const ReconstructionParams& params) {
