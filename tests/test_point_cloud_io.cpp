@@ -3,13 +3,12 @@
 // by tests/data/make_test_files.py).
 #include <gtest/gtest.h>
 
-#include <cstring>
-
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
-#include <iterator>
 #include <initializer_list>
+#include <iterator>
 #include <map>
 #include <sstream>
 #include <string>
@@ -18,6 +17,7 @@
 
 #include "city3d/error.hpp"
 #include "city3d/point_cloud_io.hpp"
+#include "las_writer.hpp"
 
 namespace city3d {
 namespace {
@@ -309,6 +309,65 @@ TEST(LasReader, streams_in_chunks_of_1000_with_the_same_points_as_a_whole_read) 
   EXPECT_EQ(streamed.rgb, whole.rgb);
   EXPECT_EQ(streamed.intensity, whole.intensity);
   EXPECT_EQ(reader->read(streamed, 1000), 0u);
+}
+
+// The LAS specification: points flagged withheld "should be considered a deleted point". They are
+// left out of every read, whatever the chunking, and counted.
+TEST(LasReader, leaves_out_points_flagged_withheld_and_counts_them) {
+  const std::string path = ::testing::TempDir() + "/withheld.las";
+  std::vector<test::LasPoint> points;
+  for (int i = 0; i < 10; ++i) {
+    // The first three and the seventh withheld (bit 7 of format 1's class byte), the others not.
+    const bool withheld = i < 3 || i == 6;
+    points.push_back(
+        {1000.0 + i, 2000.0, 5.0 + i, static_cast<std::uint8_t>((i % 2 ? 6 : 2) | (withheld ? 0x80 : 0))});
+  }
+  test::write_las(path, points);
+  for (std::size_t chunk : {1u, 2u, 1000u}) {
+    auto reader = open_point_cloud(path);
+    PointCloud c;
+    std::size_t calls = 0;
+    for (std::size_t n; (n = reader->read(c, chunk)) > 0; ++calls) ASSERT_LE(n, chunk);
+    ASSERT_EQ(c.size(), 6u) << chunk;
+    const double kept_x[] = {1003, 1004, 1005, 1007, 1008, 1009};
+    for (std::size_t k = 0; k < 6; ++k) {
+      EXPECT_EQ(c.points[k].x, kept_x[k]) << chunk;
+      EXPECT_EQ(c.points[k].z, kept_x[k] - 995.0) << chunk;
+      EXPECT_EQ(c.classification[k], static_cast<int>(kept_x[k]) % 2 ? 6 : 2) << chunk;
+    }
+    EXPECT_EQ(c.gps_time.size(), 6u);
+    EXPECT_EQ(c.intensity.size(), 6u);
+    EXPECT_EQ(reader->withheld_points(), 4u) << chunk;
+    if (chunk == 1) EXPECT_EQ(calls, 6u);  // the withheld first three do not end the read early
+  }
+  std::remove(path.c_str());
+}
+
+TEST(LasReader, leaves_out_withheld_points_of_the_extended_formats_by_their_flag_bit) {
+  // Formats 6-10 keep the flag in bit 2 of byte 15 (the classification flags); bit 7 there is the
+  // edge of flight line, which must not drop a point.
+  const std::string source = kCases + "las14_pf8_eb3_real_1chunk.las";
+  const PointCloud whole = read_point_cloud(source);
+  std::ifstream in(source, std::ios::binary);
+  std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t first = 2017,
+                    length = 41;  // as in reads_first_point_of_format_8_with_extra_bytes_exactly
+  bytes[first + 15] = static_cast<char>(bytes[first + 15] | 0x04);
+  bytes[first + 2 * length + 15] = static_cast<char>(bytes[first + 2 * length + 15] | 0x04);
+  bytes[first + length + 15] = static_cast<char>(bytes[first + length + 15] | 0x80);
+  const std::string path = ::testing::TempDir() + "/withheld_pf8.las";
+  std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  auto reader = open_point_cloud(path);
+  PointCloud c;
+  while (reader->read(c, 4096) > 0) {
+  }
+  ASSERT_EQ(c.size(), whole.size() - 2);
+  EXPECT_EQ(reader->withheld_points(), 2u);
+  EXPECT_EQ(c.points[0].x, whole.points[1].x);
+  EXPECT_EQ(c.points[1].x, whole.points[3].x);
+  EXPECT_EQ(c.rgb[0], whole.rgb[1]);
+  EXPECT_EQ(c.gps_time[1], whole.gps_time[3]);
+  std::remove(path.c_str());
 }
 
 TEST(LasReader, warns_but_reads_when_the_evlr_pointer_is_past_the_end) {

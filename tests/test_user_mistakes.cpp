@@ -1010,3 +1010,53 @@ TEST_F(Mistakes, evaluate_calls_two_cubes_on_one_edge_not_manifold_and_an_open_s
   EXPECT_TRUE(contains(shell.output, "closed: no")) << shell.output;
   EXPECT_TRUE(contains(shell.output, "volume: none (not closed)")) << shell.output;
 }
+
+TEST_F(Mistakes, withheld_points_are_left_out_and_heights_beyond_the_header_are_named) {
+  // Tile 1 with every building point doubled 3 m higher and flagged withheld (as a filter that marks
+  // points instead of deleting them writes it); tile 2 with its header's highest z lowered by 5 m (a
+  // z scale or offset changed without the bounds).
+  const city3d::PointCloud one = city3d::read_point_cloud(kSample + "/delft_sample_1.las",
+                                                          city3d::kFieldXyz | city3d::kFieldClassification);
+  std::vector<city3d::test::LasPoint> points;
+  std::size_t doubled = 0;
+  for (std::size_t i = 0; i < one.size(); ++i) {
+    points.push_back({one.points[i].x, one.points[i].y, one.points[i].z, one.classification[i]});
+    if (one.classification[i] != 6) continue;
+    points.push_back({one.points[i].x, one.points[i].y, one.points[i].z + 3.0, 6 | 0x80});
+    ++doubled;
+  }
+  city3d::test::write_las((dir_ / "one.las").string(), points);
+  fs::copy_file(kSample + "/delft_sample_2.las", dir_ / "two.las");
+  {
+    std::fstream two(dir_ / "two.las", std::ios::in | std::ios::out | std::ios::binary);
+    double max_z = 0;
+    two.seekg(211);  // LAS 1.2 header: max z
+    two.read(reinterpret_cast<char*>(&max_z), sizeof max_z);
+    max_z -= 5.0;
+    two.seekp(211);
+    two.write(reinterpret_cast<const char*>(&max_z), sizeof max_z);
+  }
+  const std::string tail = kSampleFootprints + " --no-progress -o ";
+  const Result r = run("reconstruct " + (dir_ / "one.las").string() + " " + (dir_ / "two.las").string() +
+                       tail + (dir_ / "marked").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(
+      contains(r.output, "one.las: " + std::to_string(doubled) + " points flagged withheld are left out"))
+      << r.output;
+  EXPECT_TRUE(contains(r.output, "two.las: its points' heights span z")) << r.output;
+  EXPECT_TRUE(contains(r.output, "check its z scale and offset")) << r.output;
+  EXPECT_FALSE(contains(r.output, "one.las: its points' heights")) << r.output;
+  // The models are those of the sample itself: no withheld point reached a building.
+  ASSERT_EQ(run("reconstruct " + kSampleTiles + tail + (dir_ / "sample").string()).exit_code, 0);
+  const auto marked = rows_by_id(dir_ / "marked"), sample = rows_by_id(dir_ / "sample");
+  ASSERT_EQ(marked.size(), sample.size());
+  for (const auto& [id, row] : sample) {
+    EXPECT_EQ(marked.at(id).at("points"), row.at("points")) << id;
+    EXPECT_EQ(marked.at(id).at("h_roof_max"), row.at("h_roof_max")) << id;
+    EXPECT_EQ(marked.at(id).at("faces"), row.at("faces")) << id;
+  }
+  // `city3d info` counts them apart from the classes.
+  const Result info = run("info " + (dir_ / "one.las").string());
+  EXPECT_TRUE(contains(info.output, "withheld: " + std::to_string(doubled))) << info.output;
+  EXPECT_TRUE(contains(info.output, "points: " + std::to_string(one.size() + doubled))) << info.output;
+}

@@ -13,7 +13,8 @@ namespace city3d {
 /// A point-cloud file's header plus what only reading every point tells: the class histogram.
 struct PointCloudSummary {
   PointCloudInfo info;
-  std::uint64_t points_read = 0;
+  std::uint64_t points_read = 0;  ///< withheld records not counted
+  std::uint64_t withheld = 0;     ///< LAS/LAZ records flagged withheld, left out as deleted
   bool has_classes = false;
   std::array<std::uint64_t, 256> class_counts{};
 };

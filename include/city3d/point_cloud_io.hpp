@@ -44,6 +44,9 @@ class PointCloudReader {
   /// many it appended; 0 means the end of the file. Throws IoError on truncated or invalid data
   /// (message names the file and the point index).
   virtual std::size_t read(PointCloud& out, std::size_t max_points) = 0;
+  /// LAS/LAZ records flagged withheld that read() has left out so far: the LAS specification has
+  /// readers treat them as deleted. 0 for formats without the flag (PLY).
+  virtual std::uint64_t withheld_points() const { return 0; }
 };
 
 /// Opens a LAS or PLY file (chosen by its signature, not its extension) and validates its header.

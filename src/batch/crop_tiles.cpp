@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <future>
 
@@ -56,6 +57,10 @@ void crop_tiles(const std::vector<std::string>& files, const std::vector<Box2>& 
       std::swap(chunk, next);
     }
     if (whole) classes.counted[t] = true;
+    if (whole && reader->withheld_points() > 0)
+      log_warning(
+          "crop: " + file + ": " + std::to_string(reader->withheld_points()) +
+          " points flagged withheld are left out (the LAS specification has them treated as deleted)");
     if (info.bounds.empty() && whole) bounds[t] = seen;
     // A header whose bounds leave out some of its points (a file written by a tool that did not update
     // them): the coverage of its footprints is measured from the points, and the user told.
@@ -71,6 +76,18 @@ void crop_tiles(const std::vector<std::string>& files, const std::vector<Box2>& 
                   "misses a block is not read for it (rewrite the header's bounds)");
       bounds[t].add(seen.min);
       bounds[t].add(seen.max);
+    }
+    // Heights beyond the header's: a z scale or offset changed without the bounds (heights in
+    // centimetres read as millimetres are ten times too high, and every model with them).
+    if (!info.bounds.empty() && whole && n > 0 &&
+        (seen.min.z < info.bounds.min.z - step || seen.max.z > info.bounds.max.z + step)) {
+      char text[256];
+      std::snprintf(
+          text, sizeof text,
+          ": its points' heights span z %.3f .. %.3f, beyond its header's bounds z %.3f .. %.3f: check "
+          "its z scale and offset (%g, %g) before trusting the models' heights",
+          seen.min.z, seen.max.z, info.bounds.min.z, info.bounds.max.z, info.scale[2], info.offset[2] + 0.0);
+      log_warning("crop: " + file + text);
     }
     log_info("crop: " + file + ": " + std::to_string(n) + " points streamed");
   }

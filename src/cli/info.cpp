@@ -78,6 +78,7 @@ PointCloudSummary summarise_point_cloud(const std::string& path) {
     }
     for (const Point3& p : chunk.points) bounds.add(p);
   }
+  summary.withheld = reader->withheld_points();
   // PLY headers carry no bounds: report the bounds of the points read.
   if (summary.info.bounds.empty()) summary.info.bounds = bounds;
   return summary;
@@ -106,6 +107,9 @@ std::string describe_point_cloud(const PointCloudSummary& s) {
   if (!i.generating_software.empty()) out << "software: " << i.generating_software << "\n";
   out << "fields: " << fields_text(i.fields) << "\n";
   for (const std::string& v : i.vlrs) out << "vlr: " << v << "\n";
+  if (s.withheld > 0)
+    out << "withheld: " << s.withheld
+        << " (flagged withheld: left out as deleted, as the LAS specification asks)\n";
   if (s.has_classes) {
     out << "classes:\n";
     for (int c = 0; c < 256; ++c)

@@ -68,12 +68,16 @@ std::string number(double v) {
 /// Where the optional fields of a point data format sit inside a record.
 struct PointLayout {
   bool extended = false;  // formats 6-10: 4-bit return fields, full-byte class at 16
+  // The withheld flag, in byte 15 of every format: bit 7 beside the 5-bit class of formats 0-5, bit 2
+  // of the classification flags of formats 6-10.
+  std::uint8_t withheld_bit = 0x80;
   int gps_offset = -1;
   int rgb_offset = -1;
 
   static PointLayout of(int format) {
     PointLayout l;
     l.extended = format >= 6;
+    if (l.extended) l.withheld_bit = 0x04;
     switch (format) {
       case 1: case 4: l.gps_offset = 20; break;
       case 2: l.rgb_offset = 20; break;
@@ -469,6 +473,7 @@ class LasReader final : public PointCloudReader {
   }
 
   const PointCloudInfo& info() const override { return info_; }
+  std::uint64_t withheld_points() const override { return withheld_; }
 
   std::size_t read(PointCloud& out, std::size_t max_points) override {
     const std::size_t old_size = out.size();
@@ -489,10 +494,12 @@ class LasReader final : public PointCloudReader {
       }
       const std::size_t n = std::min(max_points - appended, buffer_count_ - buffer_pos_);
       const std::size_t before = out.points.size();
-      convert(buffer_.data() + buffer_pos_ * record_length_, n, out);
+      const std::uint8_t* records = buffer_.data() + buffer_pos_ * record_length_;
+      convert(records, n, out);
       if (learn_) learn_bounds(out.points.data() + before, n);
+      const std::size_t kept = drop_withheld(records, n, before, out);
       buffer_pos_ += n;
-      appended += n;
+      appended += kept;
       next_index_ += n;
     }
     return appended;
@@ -514,6 +521,33 @@ class LasReader final : public PointCloudReader {
       n -= take;
       left_in_chunk_ -= take;
     }
+  }
+
+  /// Takes the withheld points out of the `n` just converted from `records` (appended to `out` after
+  /// its first `before`): the LAS specification has readers treat them as deleted. Returns how many
+  /// points are left. Their bounds were learnt already: a LAZ chunk's bounds are those of its records.
+  std::size_t drop_withheld(const std::uint8_t* records, std::size_t n, std::size_t before, PointCloud& out) {
+    const std::uint8_t bit = layout_.withheld_bit;
+    std::size_t first = 0;
+    while (first < n && !(records[first * record_length_ + 15] & bit)) ++first;
+    if (first == n) return n;
+    const auto compact = [&](auto& v) {
+      if (v.size() != before + n) return;  // an attribute not read
+      std::size_t to = before + first;
+      for (std::size_t i = first; i < n; ++i)
+        if (!(records[i * record_length_ + 15] & bit)) v[to++] = v[before + i];
+      v.resize(to);
+    };
+    compact(out.points);
+    compact(out.intensity);
+    compact(out.return_number);
+    compact(out.number_of_returns);
+    compact(out.classification);
+    compact(out.gps_time);
+    compact(out.rgb);
+    const std::size_t kept = out.points.size() - before;
+    withheld_ += n - kept;
+    return kept;
   }
 
   void reserve_all(PointCloud& out, std::size_t needed) {
@@ -603,7 +637,8 @@ class LasReader final : public PointCloudReader {
   std::size_t block_records_ = 0;
   std::size_t buffer_count_ = 0;
   std::size_t buffer_pos_ = 0;
-  std::uint64_t next_index_ = 0;
+  std::uint64_t next_index_ = 0;             ///< records read so far (withheld ones included)
+  std::uint64_t withheld_ = 0;               ///< withheld records left out so far
   ChunkExtents* learn_;                      ///< where the chunks' bounds go at the end, or null
   std::vector<std::uint64_t> chunk_points_;  ///< points per chunk, for learning their bounds
   std::vector<Box2> bounds_;                 ///< the bounds of the chunks read so far
