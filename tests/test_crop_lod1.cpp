@@ -170,6 +170,40 @@ TEST(Coverage, the_cell_share_counts_cells_with_points_of_any_class) {
   EXPECT_LT(coarse.cells, 1.0);
 }
 
+TEST(Coverage, the_building_share_counts_the_cells_with_points_that_hold_building_points) {
+  // Points of any class over all of a 10 x 10 m footprint, at 0.3 m; those over its left 4 m building
+  // points (class 6), the rest ground (class 2): 1 m cells, 40 of the 100 with points hold the building's.
+  std::vector<Point3> points;
+  std::vector<std::uint8_t> classes;
+  for (double x = kX + 0.1; x < kX + 10; x += 0.3)
+    for (double y = kY + 0.1; y < kY + 10; y += 0.3) {
+      points.push_back({x, y, x < kX + 4 ? 8.0 : 0.1});
+      classes.push_back(x < kX + 4 ? 6 : 2);
+    }
+  const BuildingInput in =
+      crop({footprint("f", {{rectangle(kX, kY, kX + 10, kY + 10), {}}})}, cloud(points, classes)).front();
+  ASSERT_FALSE(in.points.empty());
+  const std::vector<Box2> tiles =
+      local({box3(kX - 100, kY - 100, kX + 100, kY + 100)}, {4000000000}, in.origin);
+  FootprintCoverage c = footprint_coverage(in, tiles, 0.25);
+  EXPECT_DOUBLE_EQ(c.cells, 1.0);
+  EXPECT_DOUBLE_EQ(c.building, 0.4);
+  // Of the cells with points only: the right half without any point leaves the share of the rest.
+  std::vector<Point3> left_only;
+  std::vector<std::uint8_t> left_classes;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (points[i].x < kX + 5) left_only.push_back(points[i]), left_classes.push_back(classes[i]);
+  const BuildingInput half =
+      crop({footprint("f", {{rectangle(kX, kY, kX + 10, kY + 10), {}}})}, cloud(left_only, left_classes))
+          .front();
+  c = footprint_coverage(half, tiles, 0.25);
+  EXPECT_DOUBLE_EQ(c.cells, 0.5);
+  EXPECT_DOUBLE_EQ(c.building, 0.8);
+  // No point at all: unknown, not 0.
+  EXPECT_TRUE(std::isnan(
+      footprint_coverage(covered({{rectangle(kX, kY, kX + 10, kY + 10), {}}}, {}), tiles, 0.25).building));
+}
+
 // ---------------------------------------------------------------- cropping: which points go where
 
 TEST(Crop, assigns_points_inside_a_square_in_a_local_frame) {

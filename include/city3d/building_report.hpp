@@ -103,11 +103,13 @@ struct BuildingReport {
   std::string lods_reconstructed;   ///< levels that are reconstructions of this building's points
   double footprint_area = 0.0;      ///< square metres, plan view
   double point_density = 0.0;       ///< building points per square metre of footprint
-  /// Share (0-1) of the footprint's area inside the tiles' extents, and of its cells holding one of
-  /// its building points (FootprintCoverage, crop.hpp); NaN for single-building clouds and for
-  /// footprints skipped as they were read. Set by the batch run, which knows the tiles.
+  /// Share (0-1) of the footprint's area inside the tiles' extents, of its cells holding a point of
+  /// any class, and of those cells holding one of its building points (FootprintCoverage, crop.hpp);
+  /// NaN for single-building clouds and for footprints skipped as they were read. Set by the batch
+  /// run, which knows the tiles.
   double coverage = std::numeric_limits<double>::quiet_NaN();
   double point_coverage = std::numeric_limits<double>::quiet_NaN();
+  double building_coverage = std::numeric_limits<double>::quiet_NaN();
   double h_roof_50p = std::numeric_limits<double>::quiet_NaN();  ///< median z of the building points
   double h_roof_70p = std::numeric_limits<double>::quiet_NaN();  ///< 70th percentile (LoD1.2 roof)
   double h_roof_min = std::numeric_limits<double>::quiet_NaN();

@@ -146,6 +146,10 @@ struct FootprintCoverage {
   /// coordinates; those whose centres lie inside it) where the tiles have at least one point of
   /// any class; for a footprint that holds no cell centre, 1 when a point fell in its box, else 0.
   double cells = std::numeric_limits<double>::quiet_NaN();
+  /// Share (0-1) of those cells with a point where one of the building's own points is: the rest of
+  /// them hold only other classes (ground where the footprint outgrows the building, a tile whose
+  /// buildings are not classified, trees over a roof). NaN when no cell has a point.
+  double building = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// A tile's mean point spacing, metres: the square root of its xy box's area per point (0 without

@@ -51,6 +51,11 @@ std::string advice_for(const BatchSummary& s, const ClassCounts* classes, const 
     return rows + " footprints are skipped for want of building points inside them: are the tiles and the "
            "footprints of the same place (and the points classified as --building-classes says)?";
   }
+  if (s.main_problem == "partial: building points in only part of the footprint")
+    return rows +
+           " buildings are partial: their own points lie in too little of their footprints, the rest holding "
+           "other classes only (the building_coverage column): are the tiles' buildings classified as "
+           "--building-classes says, and do the footprints outline the buildings in the points?";
   if (s.main_problem.rfind("partial: ", 0) == 0)
     return rows + " buildings are partial: the tiles given cover too little of their footprints (the coverage "
            "column); give the neighbouring tiles too";

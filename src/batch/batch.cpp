@@ -161,14 +161,29 @@ double area(const Footprint& f) {
 // What the coverage of a footprint (FootprintCoverage) says about its building, in its report row.
 // Below `min_coverage` of its area inside the tiles' extents, a building reconstructed from what
 // points there are is `partial` (a tile left out: its model is wrong); a skipped or failed one keeps
-// its status, with a note. Cells without any point inside the extents are the data's own gaps (glass
-// roofs, water: 2 of Delft's 160 footprints have none over half their area): a note says so.
-void apply_coverage(const FootprintCoverage& c, double min_coverage, BuildingReport& r) {
+// its status, with a note. So is one whose own points lie in less than `min_building_coverage` of
+// the cells where the tiles have points: the rest of its footprint holds other classes only. Cells
+// without any point inside the extents are the data's own gaps (glass roofs, water: 2 of Delft's 160
+// footprints have none over half their area), and cells of other classes over less than
+// `min_coverage` of it ordinary (trees over a roof, a low part classified otherwise): notes say so.
+void apply_coverage(const FootprintCoverage& c, double min_coverage, double min_building_coverage,
+                    BuildingReport& r) {
   r.coverage = c.area;
   r.point_coverage = c.cells;
-  char buf[200];
-  if (c.area < min_coverage) {
-    if (c.area > 0)
+  r.building_coverage = c.building;
+  char buf[300];
+  const bool area_short = c.area < min_coverage;
+  // A footprint without building points says so in its reason already.
+  const bool building_short = r.points > 0 && c.building < min_building_coverage;
+  if (area_short || building_short) {
+    if (!area_short)
+      std::snprintf(
+          buf, sizeof buf,
+          "building points in only %.1f%% of the footprint's cells with points (building_coverage %.3f): "
+          "the rest hold other classes only (a tile whose buildings are not classified, or a footprint "
+          "larger than the building in the points)",
+          100.0 * c.building, c.building);
+    else if (c.area > 0)
       std::snprintf(buf, sizeof buf, "partly covered: %.1f%% of the footprint lies outside every tile given (coverage %.3f)",
                     100.0 * (1.0 - c.area), c.area);
     else
@@ -180,9 +195,17 @@ void apply_coverage(const FootprintCoverage& c, double min_coverage, BuildingRep
     } else {
       append_note(r, buf);
     }
-  } else if (c.cells < min_coverage) {
+    return;
+  }
+  if (c.cells < min_coverage) {
     std::snprintf(buf, sizeof buf, "no point at all over %.1f%% of the footprint (point_coverage %.3f)",
                   100.0 * (1.0 - c.cells), c.cells);
+    append_note(r, buf);
+  }
+  if (r.points > 0 && c.building < min_coverage) {
+    std::snprintf(buf, sizeof buf,
+                  "no building point in %.1f%% of the footprint's cells with points (building_coverage %.3f)",
+                  100.0 * (1.0 - c.building), c.building);
     append_note(r, buf);
   }
 }
@@ -773,7 +796,9 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
           return std::move(inputs[k]);
         },
         [&](std::size_t k) { return outlines.empty() ? nullptr : &outlines[k]; },
-        [&](std::size_t k, BuildingResult& result) { apply_coverage(coverage[k], options.min_coverage, result.report); },
+        [&](std::size_t k, BuildingResult& result) {
+          apply_coverage(coverage[k], options.min_coverage, options.min_building_coverage, result.report);
+        },
         points);
   }
   journal.close();

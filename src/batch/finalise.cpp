@@ -111,9 +111,12 @@ RunDescription run_description(const RunLayout& layout) {
 // What a row's problem is, whatever its numbers: "status: reason", the reason up to its first ';'
 // (a further reason), without parenthesised details, digits as '#' ("skipped: duplicated id",
 // "failed: planes: no roof plane among # points"). A partial row's reason says how much of it lies
-// outside the tiles, before any fallback's: one key for all of them.
+// outside the tiles, or holds other classes only, before any fallback's: one key for each.
 std::string problem_key(BuildingStatus status, const std::string& reason) {
-  if (status == BuildingStatus::partial) return "partial: partly covered by the tiles given";
+  if (status == BuildingStatus::partial)
+    return reason.rfind("building points in only", 0) == 0
+               ? "partial: building points in only part of the footprint"
+               : "partial: partly covered by the tiles given";
   std::string key = std::string(status_name(status)) + ": ";
   int depth = 0;
   bool digits = false;

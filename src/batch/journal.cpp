@@ -26,7 +26,8 @@ namespace {
 // 4: report rows carry coverage and point_coverage; the status partial.
 // 5: the layout says where its CRS came from, whether to write 3D Tiles, and the run's parameters and
 //    inputs (for the outputs' metadata); features carry val3dity codes as lists.
-constexpr int kJournalVersion = 5;
+// 6: report rows carry building_coverage.
+constexpr int kJournalVersion = 6;
 constexpr std::size_t kHashDigits = 16;
 
 std::string dump(const json& j) { return j.dump(-1, ' ', false, json::error_handler_t::replace); }
@@ -298,7 +299,8 @@ std::string batch_fingerprint(const BatchOptions& o, const std::vector<std::stri
     << num(o.crop.ground_buffer) << '|' << num(o.crop.wide_buffer_factor) << '|' << num(o.crop.ground_percentile)
     << '|' << o.crop.min_ground_points << '\n';
   s << parameters_text(o.reconstruction) << '\n';
-  s << (o.ground_z ? num(*o.ground_z) : "-") << '|' << num(o.min_coverage) << '\n';
+  s << (o.ground_z ? num(*o.ground_z) : "-") << '|' << num(o.min_coverage) << '|'
+    << num(o.min_building_coverage) << '\n';
   // What a building's record holds: its model file, its CityJSONFeature, its mesh for models.<ext>.
   s << static_cast<int>(o.format) << '|' << o.local_coordinates << '|' << o.per_building_files << '|'
     << o.merged_file << '|' << o.timings_in_cityjson << '\n';

@@ -176,6 +176,17 @@ const std::vector<OptionSpec>& option_table() {
            throw ConfigError("option --min-coverage: '" + v + "' is not a share (0-1)");
          o.batch.min_coverage = share;
        }},
+      {"--min-building-coverage", nullptr, "SHARE",
+       "a building whose points lie in less of its footprint's cells with points (the rest hold only other "
+       "classes: a tile whose buildings are not classified, a footprint larger than the building) is "
+       "'partial'; less than --min-coverage gives a note; 0: never",
+       [](const O& o) { return number_text(o.batch.min_building_coverage); },
+       [](O& o, V v) {
+         const double share = parse_double("--min-building-coverage", v);
+         if (!(share >= 0 && share <= 1))
+           throw ConfigError("option --min-building-coverage: '" + v + "' is not a share (0-1)");
+         o.batch.min_building_coverage = share;
+       }},
       {"--crs", nullptr, "CRS",
        "the CRS of the point clouds' coordinates and heights, e.g. EPSG:7415 (RD New + NAP height: AHN) or "
        "EPSG:28992+5709; default: what the point clouds record, else the footprints' (with a warning)",

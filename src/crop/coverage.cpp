@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "city3d/crop.hpp"
@@ -141,21 +144,32 @@ double area_share(const std::vector<Polygon2>& footprint, const std::vector<Box2
   return std::clamp(covered / total, 0.0, 1.0);
 }
 
-/// The share of the footprint's cells (lattice `cell`, aligned in world coordinates; the footprint
-/// local, world = local + origin) where the presence lattice has a point.
-double cell_share(const std::vector<Polygon2>& footprint, const Point3& origin, const PointPresence& presence,
-                  double cell) {
+/// Of the footprint's cells (lattice `cell`, aligned in world coordinates; the footprint and `points`
+/// local, world = local + origin): the share where the presence lattice has a point, and of those the
+/// share holding one of `points` (NaN when none has a point).
+std::pair<double, double> cell_shares(const std::vector<Polygon2>& footprint, const Point3& origin,
+                                      const PointPresence& presence, const std::vector<Point3>& points,
+                                      double cell) {
+  const double unknown = std::numeric_limits<double>::quiet_NaN();
   Box2 box;
   for (const Polygon2& p : footprint)
     for (const Point2& v : p.outer) box.add(v);
-  if (box.empty() || presence.nx == 0) return 0.0;
+  if (box.empty() || presence.nx == 0) return {0.0, unknown};
   // A coverage cell is exactly m x m presence cells: both lattices start at world 0.
   const auto m = static_cast<std::int64_t>(std::llround(cell / presence.cell));
   const auto first_i = static_cast<std::int64_t>(std::floor((box.min.x + origin.x) / cell));
   const auto last_i = static_cast<std::int64_t>(std::floor((box.max.x + origin.x) / cell));
   const auto first_j = static_cast<std::int64_t>(std::floor((box.min.y + origin.y) / cell));
   const auto last_j = static_cast<std::int64_t>(std::floor((box.max.y + origin.y) / cell));
-  std::size_t cells = 0, with_points = 0;
+  // The cells of the box holding a building point (the points lie in the footprint, so in its box).
+  const std::int64_t nx = last_i - first_i + 1, ny = last_j - first_j + 1;
+  std::vector<bool> building(static_cast<std::size_t>(nx * ny), false);
+  for (const Point3& p : points) {
+    const auto i = static_cast<std::int64_t>(std::floor((p.x + origin.x) / cell)) - first_i;
+    const auto j = static_cast<std::int64_t>(std::floor((p.y + origin.y) / cell)) - first_j;
+    if (i >= 0 && j >= 0 && i < nx && j < ny) building[static_cast<std::size_t>(j * nx + i)] = true;
+  }
+  std::size_t cells = 0, with_points = 0, with_building = 0;
   for (std::int64_t j = first_j; j <= last_j; ++j)
     for (std::int64_t i = first_i; i <= last_i; ++i) {
       if (!inside(footprint, (i + 0.5) * cell - origin.x, (j + 0.5) * cell - origin.y)) continue;
@@ -164,11 +178,15 @@ double cell_share(const std::vector<Polygon2>& footprint, const Point3& origin, 
       for (std::int64_t b = j * m; b < (j + 1) * m && !any; ++b)
         for (std::int64_t a = i * m; a < (i + 1) * m && !any; ++a) any = presence.at(a, b);
       with_points += any;
+      with_building += any && building[static_cast<std::size_t>((j - first_j) * nx + (i - first_i))];
     }
-  if (cells > 0) return static_cast<double>(with_points) / static_cast<double>(cells);
+  if (cells > 0)
+    return {
+        static_cast<double>(with_points) / static_cast<double>(cells),
+        with_points > 0 ? static_cast<double>(with_building) / static_cast<double>(with_points) : unknown};
   // A footprint narrower than a cell everywhere: one cell, its box.
   const bool any = std::find(presence.marked.begin(), presence.marked.end(), true) != presence.marked.end();
-  return any ? 1.0 : 0.0;
+  return {any ? 1.0 : 0.0, any ? (points.empty() ? 0.0 : 1.0) : unknown};
 }
 
 }  // namespace
@@ -196,8 +214,8 @@ double coverage_cell_size(double spacing, double presence_cell) {
 FootprintCoverage footprint_coverage(const BuildingInput& input, const std::vector<Box2>& extents, double spacing) {
   FootprintCoverage c;
   c.area = area_share(input.footprint.polygons, extents);
-  c.cells = cell_share(input.footprint.polygons, input.origin, input.presence,
-                       coverage_cell_size(spacing, input.presence.cell));
+  std::tie(c.cells, c.building) = cell_shares(input.footprint.polygons, input.origin, input.presence,
+                                              input.points, coverage_cell_size(spacing, input.presence.cell));
   return c;
 }
 
