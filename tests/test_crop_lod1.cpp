@@ -317,13 +317,57 @@ TEST(Crop, building_classes_select_points_and_other_classes_are_dropped) {
   EXPECT_TRUE(inputs[0].ground_heights.empty());  // the class-2 point is inside the footprint
 }
 
-TEST(Crop, without_classes_every_point_inside_is_a_building_point) {
-  const auto inputs = crop({footprint("sq", {{rectangle(kX, kY, kX + 10, kY + 10), {}}})},
-                           cloud({{kX + 1, kY + 1, 4}, {kX + 2, kY + 1, 9}, {kX + 12, kY + 1, 0}}));
+TEST(Crop, without_classes_every_point_inside_is_a_building_point_and_every_point_around_a_ground_point) {
+  // Inside: two points. Around, in the 3 m buffer: one, then twelve (the ground needs ten), at 0.5 m up
+  // to 1.6 m (a car, a fence); 20 m away: none of them.
+  std::vector<Point3> points{
+      {kX + 1, kY + 1, 4}, {kX + 2, kY + 1, 9}, {kX + 12, kY + 1, 0}, {kX + 30, kY + 1, -9}};
+  auto inputs = crop({footprint("sq", {{rectangle(kX, kY, kX + 10, kY + 10), {}}})}, cloud(points));
   EXPECT_EQ(inputs[0].points.size(), 2u);
-  EXPECT_TRUE(inputs[0].ground_heights.empty());
+  EXPECT_EQ(inputs[0].ground_heights, std::vector<double>{0.0});  // too few to use, still counted
   EXPECT_EQ(inputs[0].ground_method, "lowest building point");
   EXPECT_EQ(inputs[0].ground_z, 4.0);
+  EXPECT_TRUE(inputs[0].footprint.note.find("no ground point near it") != std::string::npos)
+      << inputs[0].footprint.note;
+  for (int k = 0; k < 11; ++k) points.push_back({kX + k, kY - 1, 0.5 + 0.1 * k});
+  CropParams ignore;
+  ignore.use_classes = ClassUse::never;  // --ignore-classes: the classes given are not read
+  inputs = crop({footprint("sq", {{rectangle(kX, kY, kX + 10, kY + 10), {}}})},
+                cloud(points, std::vector<std::uint8_t>(points.size(), 6)), ignore);
+  EXPECT_EQ(inputs[0].points.size(), 2u);
+  EXPECT_EQ(inputs[0].ground_heights.size(), 12u);
+  EXPECT_EQ(inputs[0].ground_method, "ground percentile");
+  EXPECT_NEAR(inputs[0].ground_z, 0.51, 1e-12);  // rank 0.1 * 11 = 1.1 between 0.5 and 0.6
+  EXPECT_TRUE(inputs[0].footprint.note.empty()) << inputs[0].footprint.note;
+}
+
+TEST(Crop, a_ground_above_half_of_the_building_points_is_not_taken) {
+  // Ground points around at 50 m (another datum than the building's), building points at 9-12 m.
+  std::vector<Point3> points;
+  std::vector<std::uint8_t> classes;
+  for (int k = 0; k < 12; ++k) points.push_back({kX + k * 0.5, kY - 1, 50.0}), classes.push_back(2);
+  for (int k = 0; k < 4; ++k) points.push_back({kX + 1 + k, kY + 5, 9.0 + k}), classes.push_back(6);
+  auto inputs = crop({footprint("sq", {{rectangle(kX, kY, kX + 10, kY + 10), {}}})}, cloud(points, classes));
+  EXPECT_EQ(inputs[0].ground_method, "lowest building point");
+  EXPECT_FALSE(inputs[0].ground_measured);
+  EXPECT_EQ(inputs[0].ground_z, 9.0);
+  EXPECT_TRUE(inputs[0].footprint.note.find("lie above half of its points (median 10.500 m)") !=
+              std::string::npos)
+      << inputs[0].footprint.note;
+  // At 10.4 m, below the median: the ground stands (a building on a slope, its lowest points below it).
+  for (std::size_t k = 0; k < 12; ++k) points[k].z = 10.4;
+  inputs = crop({footprint("sq", {{rectangle(kX, kY, kX + 10, kY + 10), {}}})}, cloud(points, classes));
+  EXPECT_EQ(inputs[0].ground_method, "ground percentile");
+  EXPECT_DOUBLE_EQ(inputs[0].ground_z, 10.4);
+  EXPECT_TRUE(inputs[0].footprint.note.empty()) << inputs[0].footprint.note;
+}
+
+TEST(Crop, the_ground_class_cannot_also_be_a_building_class) {
+  CropParams params;
+  params.ground_class = 6;
+  EXPECT_THROW(params.validate(), ConfigError);
+  params.use_classes = ClassUse::never;  // classes not read: no contradiction
+  EXPECT_NO_THROW(params.validate());
 }
 
 TEST(Crop, rejects_a_chunk_whose_classes_do_not_match_its_points) {

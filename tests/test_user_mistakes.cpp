@@ -1104,3 +1104,52 @@ TEST_F(Mistakes, a_footprint_whose_cells_hold_mostly_other_classes_is_partial) {
     EXPECT_GE(row.at("building_coverage").get<double>(), 0.6) << id;
   }
 }
+
+TEST_F(Mistakes,
+       tiles_without_the_ground_class_are_named_and_a_ground_class_that_is_a_building_class_refused) {
+  // The sample tiles with their ground points made class 1: every floor would be a roof's lowest point.
+  std::string tiles;
+  for (const char* tile : {"delft_sample_1.las", "delft_sample_2.las"}) {
+    const city3d::PointCloud cloud =
+        city3d::read_point_cloud(kSample + "/" + tile, city3d::kFieldClassification);
+    std::vector<city3d::test::LasPoint> points;
+    for (std::size_t i = 0; i < cloud.size(); ++i)
+      points.push_back(
+          {cloud.points[i].x, cloud.points[i].y, cloud.points[i].z,
+           static_cast<std::uint8_t>(cloud.classification[i] == 2 ? 1 : cloud.classification[i])});
+    city3d::test::write_las((dir_ / tile).string(), points);
+    tiles += " " + (dir_ / tile).string();
+  }
+  const Result r = run("reconstruct" + tiles + kSampleFootprints + " --lod 1.2 --no-progress -o " +
+                       (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(
+      contains(r.output, "the tiles hold no point of the ground class 2 (--ground-class) but of classes 1 "))
+      << r.output;
+  std::size_t noted = 0;
+  for (const auto& [id, row] : rows_by_id(dir_ / "out")) {
+    EXPECT_EQ(row.at("ground_method"), "lowest building point") << id;
+    noted += contains(row.at("note").get<std::string>(), "no ground point near it");
+  }
+  EXPECT_EQ(noted, 15u);
+  // --ignore-classes takes the ground from every point around the footprints: near the real ground.
+  ASSERT_EQ(run("reconstruct" + tiles + kSampleFootprints + " --lod 1.2 --ignore-classes --no-progress -o " +
+                (dir_ / "ignored").string())
+                .exit_code,
+            0);
+  const auto ignored = rows_by_id(dir_ / "ignored");
+  ASSERT_EQ(run("reconstruct " + kSampleTiles + kSampleFootprints + " --lod 1.2 --no-progress -o " +
+                (dir_ / "sample").string())
+                .exit_code,
+            0);
+  for (const auto& [id, row] : rows_by_id(dir_ / "sample")) {
+    EXPECT_EQ(ignored.at(id).at("ground_method"), "ground percentile") << id;
+    EXPECT_NEAR(ignored.at(id).at("ground_z").get<double>(), row.at("ground_z").get<double>(), 0.5) << id;
+  }
+  // The ground class among the building classes: a contradiction, refused before anything is read.
+  const Result both = run("reconstruct " + kSampleTiles + kSampleFootprints +
+                          " --ground-class 6 --no-progress -o " + (dir_ / "both").string());
+  EXPECT_EQ(both.exit_code, 2) << both.output;
+  EXPECT_TRUE(contains(both.output, "also a building class")) << both.output;
+  EXPECT_FALSE(fs::exists(dir_ / "both"));
+}

@@ -64,9 +64,11 @@ struct BuildingInput {
 
 /// How points are classified while cropping.
 enum class ClassUse {
-  automatic,  ///< per chunk: use classes when the chunk has them, else every point is a building point
+  automatic,  ///< per chunk: use classes when the chunk has them, else as `never`
   always,     ///< require classes; a chunk without them throws Error
-  never,      ///< ignore classes: every point inside a footprint is a building point, no ground points
+  /// ignore classes: every point inside a footprint is a building point, and every point outside them
+  /// (within the buffers) a ground point
+  never,
 };
 
 /// Parameters of the crop stage.

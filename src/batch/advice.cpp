@@ -20,6 +20,15 @@ std::string with_thousands(std::uint64_t n) {
 
 }  // namespace
 
+std::string classes_present(const ClassCounts& classes) {
+  std::string present;
+  for (int c = 0; c < 256; ++c)
+    if (classes.n[static_cast<std::size_t>(c)] > 0)
+      present += (present.empty() ? "" : ", ") + std::to_string(c) + " (" + las_class_name(c) + ", " +
+                 with_thousands(classes.n[static_cast<std::size_t>(c)]) + ")";
+  return present;
+}
+
 std::string advice_for(const BatchSummary& s, const ClassCounts* classes, const std::string& building_classes) {
   if (s.main_problem.empty()) return {};
   const std::string rows = std::to_string(s.main_problem_rows) + " of " + std::to_string(s.buildings);
@@ -31,10 +40,7 @@ std::string advice_for(const BatchSummary& s, const ClassCounts* classes, const 
     std::string present, wanted;
     bool building_points = false;
     if (classes) {
-      for (int c = 0; c < 256; ++c)
-        if (classes->n[static_cast<std::size_t>(c)] > 0)
-          present += (present.empty() ? "" : ", ") + std::to_string(c) + " (" + las_class_name(c) + ", " +
-                     with_thousands(classes->n[static_cast<std::size_t>(c)]) + ")";
+      present = classes_present(*classes);
       std::stringstream list(building_classes);
       for (std::string c; std::getline(list, c, ',');)
         building_points = building_points || (!c.empty() && classes->n[static_cast<std::size_t>(std::stoi(c)) & 255] > 0);

@@ -19,6 +19,9 @@ struct ClassCounts {
   std::array<std::uint64_t, 256> n{};   ///< points per class
 };
 
+/// The classes `classes` counted, each with its name and count: "1 (unclassified, 282,445), 2 (ground, ...)".
+std::string classes_present(const ClassCounts& classes);
+
 /// One line naming the problem most rows share (BatchSummary::main_problem) and its likely fix, from
 /// what the run knows: the classes its tiles hold (`classes`, when it streamed any with classes) and
 /// its options (`building_classes`: --building-classes as given; empty for a merge). Empty without a

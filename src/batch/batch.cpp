@@ -692,6 +692,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   };
 
   const double reach = options.crop.ground_buffer * options.crop.wide_buffer_factor + 1.0;
+  bool ground_class_missing_told = false;
   for (const std::vector<std::size_t>& group : groups) {
     std::vector<std::uint64_t> indices;
     for (std::size_t b : group) indices.insert(indices.end(), plan.blocks[b].begin(), plan.blocks[b].end());
@@ -763,6 +764,18 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
     progress.reading(files.size(), indices.size());
     crop_tiles(files, regions, static_cast<unsigned>(options.threads), cropper, tile_bounds, classes,
                chunk_extents);
+    // Tiles classified without the ground class (another class number, or none): every floor would be
+    // a roof's lowest point, metres above the street, each building's ground_method alone saying so.
+    if (!ground_class_missing_told && options.crop.use_classes != ClassUse::never && classes.any &&
+        classes.n[options.crop.ground_class] == 0) {
+      ground_class_missing_told = true;
+      log_warning(
+          "crop: the tiles hold no point of the ground class " + std::to_string(options.crop.ground_class) +
+          " (--ground-class) but of classes " + detail::classes_present(classes) +
+          ": every floor is its building's lowest point, the eaves where only the roof has points; give "
+          "the ground class with --ground-class, or --ignore-classes to take the ground from every point "
+          "around the footprints");
+    }
     // Keep only the group's own inputs (the first indices.size()).
     std::vector<BuildingInput> inputs = cropper.finish();
     inputs.resize(indices.size());

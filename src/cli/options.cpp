@@ -153,7 +153,7 @@ const std::vector<OptionSpec>& option_table() {
        [](const O& o) { return std::to_string(o.batch.crop.ground_class); },
        [](O& o, V v) { o.batch.crop.ground_class = parse_classes("--ground-class", v).front(); }},
       {"--ignore-classes", nullptr, nullptr,
-       "every point inside a footprint is a building point (no ground points)",
+       "every point inside a footprint is a building point, every point outside them near one a ground point",
        [](const O& o) { return yes_no(o.batch.crop.use_classes == ClassUse::never); },
        [](O& o, V) { o.batch.crop.use_classes = ClassUse::never; }},
       {"--ground-buffer", nullptr, "M",

@@ -8,6 +8,7 @@
 #include <cassert>
 #include <cmath>
 #include <cstdint>
+#include <iomanip>
 #include <limits>
 #include <numeric>
 #include <sstream>
@@ -205,6 +206,10 @@ void CropParams::validate() const {
   if (min_ground_points < 1) bad("min_ground_points", 0, ">= 1");
   if (building_classes.empty() && use_classes != ClassUse::never)
     problems.push_back("building_classes is empty");
+  if (use_classes != ClassUse::never &&
+      std::find(building_classes.begin(), building_classes.end(), ground_class) != building_classes.end())
+    problems.push_back("ground_class = " + std::to_string(ground_class) +
+                       " (also a building class: its points would be the building's, none the ground's)");
   if (problems.empty()) return;
   std::string message = "crop: invalid parameters: ";
   for (std::size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];
@@ -349,7 +354,10 @@ void Cropper::add(const PointCloud& chunk) {
         ++stats_.building_points;
       }
     }
-    if (kind != kGround || inside_any) continue;
+    // Without classes, every point outside the footprints may be ground: the buffer's percentile then
+    // takes the ground from under the cars, trees and fences there (the lowest building point, the
+    // ladder's next rung, is the eaves where only the roof has points).
+    if (inside_any || (use_classes && kind != kGround)) continue;
 
     for (const std::uint32_t* it = first; it != last; ++it) {
       const detail::PreparedFootprint& f = index.prepared[*it];
@@ -406,12 +414,35 @@ std::vector<BuildingInput> Cropper::finish() {
       b.ground_z = percentile(heights, params_.ground_percentile);
       b.ground_method = c.wide_ground.empty() ? "ground percentile" : "ground percentile (wide buffer)";
       b.ground_measured = true;
-    } else if (!b.points.empty()) {
+    }
+    // A ground above half of the building's points is not its ground (ground points in another height
+    // datum than the building's, a tile of other heights beside): as the ground field's (input_check.hpp),
+    // it is not taken, and the note says so.
+    if (b.ground_measured && !b.points.empty()) {
+      std::vector<double> z;
+      z.reserve(b.points.size());
+      for (const Point3& p : b.points) z.push_back(p.z);
+      const double median = percentile(z, 50.0);
+      if (b.ground_z > median) {
+        std::ostringstream note;
+        note << std::fixed << std::setprecision(3) << "its ground points (" << b.ground_method << " "
+             << b.ground_z + origin.z << " m) lie above half of its points (median " << median + origin.z
+             << " m): heights of another datum? the floor is its lowest point instead";
+        b.footprint.note += (b.footprint.note.empty() ? "" : "; ") + note.str();
+        b.ground_measured = false;
+      }
+    }
+    if (!b.ground_measured && !b.points.empty()) {
       b.ground_z = std::min_element(b.points.begin(), b.points.end(), [](const Point3& a, const Point3& q) {
                      return a.z < q.z;
                    })->z;
+      if (b.ground_heights.size() < min_ground)
+        b.footprint.note +=
+            std::string(b.footprint.note.empty() ? "" : "; ") +
+            "no ground point near it: the floor is its lowest point (the eaves where only its roof "
+            "has points)";
       b.ground_method = "lowest building point";
-    } else {
+    } else if (!b.ground_measured) {
       b.ground_z = 0.0;
       b.ground_method = "none";
     }
