@@ -1153,3 +1153,36 @@ TEST_F(Mistakes,
   EXPECT_TRUE(contains(both.output, "also a building class")) << both.output;
   EXPECT_FALSE(fs::exists(dir_ / "both"));
 }
+
+TEST_F(Mistakes, a_single_building_cloud_leaves_its_noise_out_and_names_a_stray_far_below_its_points) {
+  // A 20 x 20 m roof at 8-10 m, and one point 30 m below it: class 7 (noise) in the LAS, unclassified
+  // in the PLY (which has no LAS classes).
+  std::vector<city3d::test::LasPoint> points;
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j)
+      points.push_back({1000 + 0.5 * i, 2000 + 0.5 * j, 8 + 0.1 * std::min(i, 39 - i), 6});
+  points.push_back({1010, 2010, -22, 7});
+  city3d::test::write_las((dir_ / "noise.las").string(), points);
+  const Result las = run("reconstruct " + (dir_ / "noise.las").string() + " --lod 1.2 --no-progress -o " +
+                         (dir_ / "las").string());
+  ASSERT_EQ(las.exit_code, 0) << las.output;
+  const json row = rows_by_id(dir_ / "las").at("noise");
+  EXPECT_EQ(row.at("points"), 1600) << row;
+  EXPECT_GT(row.at("ground_z").get<double>(), 7.9) << row;  // the roof's lowest point, not -22
+  EXPECT_TRUE(contains(row.at("note").get<std::string>(), "1 points classified noise (7, 18) left out"))
+      << row;
+  {
+    std::ofstream ply(dir_ / "stray.ply");
+    ply << "ply\nformat ascii 1.0\nelement vertex " << points.size()
+        << "\nproperty double x\nproperty double y\n"
+        << "property double z\nend_header\n";
+    for (const auto& p : points) ply << p.x << ' ' << p.y << ' ' << p.z << '\n';
+  }
+  const Result ply = run("reconstruct " + (dir_ / "stray.ply").string() + " --lod 1.2 --no-progress -o " +
+                         (dir_ / "ply").string());
+  ASSERT_EQ(ply.exit_code, 0) << ply.output;
+  const std::string note = rows_by_id(dir_ / "ply").at("stray").at("note").get<std::string>();
+  EXPECT_TRUE(contains(note, "1 point more than 10 m below all but the lowest 0.1% (down to z -22.000"))
+      << note;
+  EXPECT_TRUE(contains(ply.output, "strays?")) << ply.output;  // and a warning
+}
