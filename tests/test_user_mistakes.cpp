@@ -1186,3 +1186,27 @@ TEST_F(Mistakes, a_single_building_cloud_leaves_its_noise_out_and_names_a_stray_
       << note;
   EXPECT_TRUE(contains(ply.output, "strays?")) << ply.output;  // and a warning
 }
+
+TEST_F(Mistakes, records_beyond_a_las_headers_count_are_named_not_dropped_in_silence) {
+  // The sample's tile 1 with its header's count halved: the other half of its records follows unread.
+  fs::copy_file(kSample + "/delft_sample_1.las", dir_ / "half.las");
+  std::uint32_t count = 0;
+  {
+    std::fstream f(dir_ / "half.las", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekg(107);  // LAS 1.2 header: number of point records
+    f.read(reinterpret_cast<char*>(&count), sizeof count);
+    const std::uint32_t half = count / 2;
+    f.seekp(107);
+    f.write(reinterpret_cast<const char*>(&half), sizeof half);
+  }
+  const std::string uncounted = std::to_string(count - count / 2);
+  const Result r = run("reconstruct " + (dir_ / "half.las").string() + " " + kSample + "/delft_sample_2.las" +
+                       kSampleFootprints + " --lod 1.2 --no-progress -o " + (dir_ / "out").string());
+  EXPECT_TRUE(contains(r.output, "half.las: its header counts " + std::to_string(count / 2) +
+                                     " points, but " + uncounted + " more records follow them"))
+      << r.output;
+  const Result info = run("info " + (dir_ / "half.las").string());
+  EXPECT_TRUE(contains(info.output, "uncounted: " + uncounted + " more records")) << info.output;
+  // The sample's own tiles: nothing of the kind.
+  EXPECT_FALSE(contains(run("info " + kSample + "/delft_sample_1.las").output, "uncounted")) << info.output;
+}

@@ -32,6 +32,9 @@ struct PointCloudInfo {
   PointFields fields = kFieldXyz;  ///< attributes the file can provide
   std::vector<std::string> vlrs;   ///< "user_id/record_id (n bytes)" of each VLR and EVLR, for `info`
   std::uint64_t mesh_faces = 0;  ///< PLY: items of its 'face' element (a mesh, such as a model, not a cloud)
+  /// LAS: whole point records' worth of bytes after the counted points that neither waveform packets
+  /// nor EVLRs claim (a header whose count was not rewritten when points were added); not read.
+  std::uint64_t uncounted_records = 0;
 };
 
 /// A streaming reader over one file. Open with open_point_cloud(); call read() until it returns 0.

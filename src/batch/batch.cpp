@@ -481,6 +481,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   std::vector<PointCloudInfo> infos;
   for (const std::string& f : files) infos.push_back(read_point_cloud_info(f));
   detail::warn_of_meshes(infos);
+  detail::warn_of_uncounted_records(infos);
   // Each tile's bounds (a PLY's once its points are streamed), for the footprints' coverage.
   std::vector<Box3> tile_bounds;
   for (const PointCloudInfo& info : infos) tile_bounds.push_back(info.bounds);

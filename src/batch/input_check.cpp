@@ -383,6 +383,15 @@ void warn_of_meshes(const std::vector<PointCloudInfo>& infos) {
                   " vertices are read as points");
 }
 
+void warn_of_uncounted_records(const std::vector<PointCloudInfo>& infos) {
+  for (const PointCloudInfo& info : infos)
+    if (info.uncounted_records > 0)
+      log_warning("input: " + info.path + ": its header counts " + std::to_string(info.point_count) +
+                  " points, but " + std::to_string(info.uncounted_records) +
+                  " more records follow them (a header not rewritten when points were added?): only the " +
+                  std::to_string(info.point_count) + " counted are read");
+}
+
 CloudPoints read_building_cloud(const std::string& path) {
   // LAS classes only: a PLY's class or label property follows a scheme of its own (DALES: 2 is vegetation).
   const bool las = read_point_cloud_info(path).format != "PLY";

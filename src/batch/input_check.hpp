@@ -99,6 +99,10 @@ struct CloudPoints {
 };
 CloudPoints read_building_cloud(const std::string& path);
 
+/// One warning per LAS file with whole records after its counted points that nothing else in the file
+/// claims (PointCloudInfo::uncounted_records): they are not read.
+void warn_of_uncounted_records(const std::vector<PointCloudInfo>& infos);
+
 /// Each input's ground from its footprint's ground field (Footprint::ground_z, read with
 /// --ground-field `field`), unless that stands above half of the building's points (another field
 /// than a height, or heights in another datum): then the ground measured from the points stays, a

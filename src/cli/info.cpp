@@ -93,6 +93,10 @@ std::string describe_point_cloud(const PointCloudSummary& s) {
   if (i.point_format >= 0) out << ", point format " << i.point_format << ", record length " << i.record_length;
   out << "\n";
   out << "points: " << i.point_count << "\n";
+  if (i.uncounted_records > 0)
+    out << "uncounted: " << i.uncounted_records
+        << " more records follow the counted points (a header not rewritten when points were added?): not "
+           "read\n";
   if (i.mesh_faces > 0) out << "faces: " << i.mesh_faces << " (a mesh, such as a model: not a point cloud)\n";
   if (!i.bounds.empty()) {
     out << "bounds: x " << fixed(i.bounds.min.x, d) << " .. " << fixed(i.bounds.max.x, d) << ", y "

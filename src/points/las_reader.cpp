@@ -343,11 +343,20 @@ LasHeader read_header(InputFile& file, PointCloudInfo& info) {
     throw IoError(message);
   }
 
-  if (has_14_fields) {
-    const std::uint64_t points_end =
-        h.compressed ? h.offset_to_point_data
-                     : h.offset_to_point_data + h.point_count * h.record_length;
+  const std::uint64_t points_end =
+      h.compressed ? h.offset_to_point_data : h.offset_to_point_data + h.point_count * h.record_length;
+  if (has_14_fields)
     walk_evlrs(file, get<std::uint64_t>(b + 235), get<std::uint32_t>(b + 243), points_end, info, crs);
+  // Whole records after the counted ones that no later part of the file claims (LAS 1.3's waveform
+  // packets, 1.4's EVLRs): a header whose count was not rewritten when points were added.
+  if (!h.compressed && h.record_length > 0) {
+    std::uint64_t end = file_size;
+    const auto claim = [&](std::uint64_t start) {
+      if (start >= points_end && start < end) end = start;
+    };
+    if (minor >= 3 && h.header_size >= 235) claim(get<std::uint64_t>(b + 227));
+    if (has_14_fields && get<std::uint32_t>(b + 243) > 0) claim(get<std::uint64_t>(b + 235));
+    info.uncounted_records = (end - points_end) / h.record_length;
   }
 
   info.format = h.compressed ? "LAZ" : "LAS";
