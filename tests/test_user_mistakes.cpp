@@ -12,15 +12,15 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
-#include "city3d/point_cloud_io.hpp"
 #include "batch/input_check.hpp"
+#include "city3d/footprint_io.hpp"
+#include "city3d/point_cloud_io.hpp"
 #include "las_writer.hpp"
 
 namespace fs = std::filesystem;
@@ -1209,4 +1209,44 @@ TEST_F(Mistakes, records_beyond_a_las_headers_count_are_named_not_dropped_in_sil
   EXPECT_TRUE(contains(info.output, "uncounted: " + uncounted + " more records")) << info.output;
   // The sample's own tiles: nothing of the kind.
   EXPECT_FALSE(contains(run("info " + kSample + "/delft_sample_1.las").output, "uncounted")) << info.output;
+}
+
+TEST_F(Mistakes, footprints_that_declare_degrees_but_hold_metres_are_not_taken_for_degrees) {
+  // The sample's footprints as a GeoJSON file without a "crs" member (as many tools write RFC 7946
+  // GeoJSON): WGS 84 by the standard, RD New metres in fact.
+  city3d::FootprintReadOptions read;
+  read.id_field = "gml_id";
+  const city3d::FootprintSet sample =
+      city3d::read_footprints(kSample + "/delft_sample_footprints.gpkg", read);
+  {
+    std::ofstream g(dir_ / "rfc7946.geojson");
+    g.precision(12);
+    g << R"({"type":"FeatureCollection","features":[)";
+    for (std::size_t k = 0; k < sample.footprints.size(); ++k) {
+      g << (k ? "," : "") << R"({"type":"Feature","properties":{"gml_id":")" << sample.footprints[k].id
+        << R"("},"geometry":{"type":"Polygon","coordinates":[[)";
+      const auto& ring = sample.footprints[k].polygons.at(0).outer;
+      for (std::size_t i = 0; i <= ring.size(); ++i)
+        g << (i ? "," : "") << "[" << ring[i % ring.size()].x << "," << ring[i % ring.size()].y << "]";
+      g << "]]}}";
+    }
+    g << "]}";
+  }
+  const std::string footprints =
+      " -f " + (dir_ / "rfc7946.geojson").string() + " --id-field gml_id --no-progress";
+  const Result r = run("reconstruct " + kSampleTiles + footprints + " -o " + (dir_ / "none").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(
+      contains(r.output, "declares EPSG:4326 (degrees; a GeoJSON file without a \"crs\" member is WGS 84"))
+      << r.output;
+  EXPECT_TRUE(contains(r.output, "which are no degrees: that CRS is ignored")) << r.output;
+  // No CRS in the outputs rather than WGS 84 over metres.
+  EXPECT_FALSE(contains(read_file(dir_ / "none" / "buildings.city.json"), "4326"));
+  // With --crs the footprints are taken to be in it, not reprojected from degrees (which PROJ refuses).
+  const Result given =
+      run("reconstruct " + kSampleTiles + footprints + " --crs EPSG:7415 -o " + (dir_ / "rd").string());
+  ASSERT_EQ(given.exit_code, 0) << given.output;
+  EXPECT_FALSE(contains(given.output, "reproject")) << given.output;
+  EXPECT_EQ(report(dir_ / "rd").at("summary").at("ok"), 15) << given.output;
+  EXPECT_TRUE(contains(read_file(dir_ / "rd" / "buildings.city.json"), "EPSG/0/7415"));
 }

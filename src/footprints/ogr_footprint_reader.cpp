@@ -13,6 +13,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <memory>
 #include <mutex>
@@ -325,13 +326,25 @@ std::string describe_srs(const OGRSpatialReference& srs) {
   return text;
 }
 
+/// Whether the layer declares a geographic CRS (degrees) while its coordinates reach beyond longitude
+/// and latitude: a GeoJSON file without a "crs" member is WGS 84 by its standard, whatever it holds,
+/// and a wrong .prj says degrees as easily. `extent` gets the layer's extent.
+bool degrees_in_name_only(OGRLayer& layer, OGREnvelope& extent) {
+  const OGRSpatialReference* srs = layer.GetSpatialRef();
+  if (srs == nullptr || !srs->IsGeographic() || layer.GetExtent(&extent, TRUE) != OGRERR_NONE) return false;
+  // Either axis order: what matters is that neither reads as degrees.
+  const double a = std::max(std::fabs(extent.MinX), std::fabs(extent.MaxX));
+  const double b = std::max(std::fabs(extent.MinY), std::fabs(extent.MaxY));
+  return std::max(a, b) > 180.0 || std::min(a, b) > 90.0;
+}
+
 /// The transformation from the layer's CRS into `target` (the points' CRS), or nullptr when either
 /// is unknown or they are the same. Updates set.srs / set.reprojected_from. Throws IoError when the
 /// target cannot be understood or PROJ has no transformation between the two.
 std::unique_ptr<OGRCoordinateTransformation> reprojection(OGRLayer& layer, const std::string& target_text,
                                                           const std::string& path, FootprintSet& set) {
   const OGRSpatialReference* layer_srs = layer.GetSpatialRef();
-  if (target_text.empty() || layer_srs == nullptr) return nullptr;
+  if (target_text.empty() || layer_srs == nullptr || set.srs.empty()) return nullptr;  // none, or ignored
   OGRSpatialReference source(*layer_srs);
   OGRSpatialReference target;
   if (target.SetFromUserInput(target_text.c_str()) != OGRERR_NONE)
@@ -444,6 +457,22 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
   set.driver = dataset->GetDriver() != nullptr ? dataset->GetDriver()->GetDescription() : "";
   set.layer = layer.GetName();
   set.srs = describe_srs(layer);
+  if (OGREnvelope extent; degrees_in_name_only(layer, extent)) {
+    if (!mode.quiet) {
+      char reach[160];
+      std::snprintf(reach, sizeof reach, "x %.3f .. %.3f, y %.3f .. %.3f", extent.MinX, extent.MaxX,
+                    extent.MinY, extent.MaxY);
+      log_warning(
+          kModule + path + " declares " + set.srs.substr(0, 80) +
+          (set.driver == "GeoJSON"
+               ? " (degrees; a GeoJSON file without a \"crs\" member is WGS 84 by its standard)"
+               : " (degrees)") +
+          " but its coordinates reach " + reach +
+          ", which are no degrees: that CRS is ignored, the footprints taken to be in the point clouds' (or "
+          "--crs)");
+    }
+    set.srs.clear();
+  }
   std::unique_ptr<OGRCoordinateTransformation> transform = reprojection(layer, options.target_srs, path, set);
   if (transform && !mode.quiet)
     log_warning(kModule + path + " is in " + set.reprojected_from.substr(0, 80) + ", the point clouds in " +
