@@ -476,6 +476,39 @@ TEST_F(BrokenFeatures, the_same_polygon_under_another_id_is_skipped_naming_the_f
   EXPECT_TRUE(contains(again->reason, "the same polygon as parts")) << again->reason;
 }
 
+TEST_F(BrokenFeatures, ids_of_a_real_field_are_written_whole_or_to_the_last_digit_that_tells_them_apart) {
+  // 16-digit integers in a real field (as sources that export big ids as doubles keep them): OGR's
+  // own text has 15 digits, 1.23456789012346e+15 for both of the first two, so they were one id.
+  const fs::path path =
+      fs::temp_directory_path() / ("city3d_real_ids_" + std::to_string(::getpid()) + ".geojson");
+  {
+    std::ofstream out(path);
+    out << R"({"type":"FeatureCollection","features":[)";
+    const char* ids[] = {"1234567890123456.0", "1234567890123457.0", "503100000028000.5", "0.1"};
+    for (int k = 0; k < 4; ++k)
+      out << (k ? "," : "") << R"({"type":"Feature","properties":{"key":)" << ids[k]
+          << R"(},"geometry":{"type":"Polygon","coordinates":[[[)" << 20 * k << ",0],[" << 20 * k + 10
+          << ",0],[" << 20 * k + 10 << ",10],[" << 20 * k << ",10],[" << 20 * k << ",0]]]}}";
+    out << "]}";
+  }
+  FootprintReadOptions options;
+  options.id_field = "key";
+  const FootprintSet set = read_footprints(path.string(), options);
+  std::size_t features = 0;
+  const std::vector<FieldSummary> fields = summarise_fields(path.string(), options, 100, features);
+  fs::remove(path);
+  std::vector<std::string> ids;
+  for (const Footprint& f : set.footprints) ids.push_back(f.id);
+  EXPECT_EQ(ids,
+            (std::vector<std::string>{"1234567890123456", "1234567890123457", "503100000028000.5", "0.1"}));
+  EXPECT_TRUE(set.skipped.empty());
+  const auto key =
+      std::find_if(fields.begin(), fields.end(), [](const FieldSummary& f) { return f.name == "key"; });
+  ASSERT_NE(key, fields.end());
+  EXPECT_EQ(key->type, "Real");
+  EXPECT_TRUE(key->unique(features)) << key->distinct;
+}
+
 TEST_F(BrokenFeatures, bow_tie_is_repaired_into_two_valid_triangles) {
   const FootprintSet set = read(true);
   EXPECT_EQ(set.repaired, 1u);

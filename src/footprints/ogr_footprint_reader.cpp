@@ -326,6 +326,25 @@ std::string describe_srs(const OGRSpatialReference& srs) {
   return text;
 }
 
+/// A field's value as an id's text. OGR writes reals with 15 significant digits, which is not enough for
+/// the 16-digit integers many sources keep in real fields (1234567890123456 and ...457 both read
+/// "1.23456789012346e+15": distinct ids taken for duplicates); a whole number is written whole, any
+/// other real with the fewest digits that read back as the same number.
+std::string field_text(OGRFeature& feature, int index) {
+  if (feature.GetFieldDefnRef(index)->GetType() != OFTReal) return feature.GetFieldAsString(index);
+  const double v = feature.GetFieldAsDouble(index);
+  char text[40];
+  if (std::isfinite(v) && v == std::trunc(v) && std::fabs(v) < 9.2e18) {
+    std::snprintf(text, sizeof text, "%.0f", v);
+    return text;
+  }
+  for (int digits = 15; digits <= 17; ++digits) {
+    std::snprintf(text, sizeof text, "%.*g", digits, v);
+    if (std::strtod(text, nullptr) == v) break;
+  }
+  return text;
+}
+
 /// Whether the layer declares a geographic CRS (degrees) while its coordinates reach beyond longitude
 /// and latitude: a GeoJSON file without a "crs" member is WGS 84 by its standard, whatever it holds,
 /// and a wrong .prj says degrees as easily. `extent` gets the layer's extent.
@@ -432,7 +451,7 @@ std::vector<FieldSummary> summarise_ogr_fields(const std::string& path, const Fo
     for (std::size_t i = 0; i < fields.size(); ++i) {
       if (!feature->IsFieldSetAndNotNull(static_cast<int>(i))) continue;
       ++fields[i].values;
-      if (seen[i].insert(feature->GetFieldAsString(static_cast<int>(i))).second) ++fields[i].distinct;
+      if (seen[i].insert(field_text(*feature, static_cast<int>(i))).second) ++fields[i].distinct;
     }
   }
   return fields;
@@ -603,7 +622,7 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
       skip(fid_text, "no id (field '" + options.id_field + "' is null)");
       continue;
     } else {
-      id = feature->GetFieldAsString(id_index);
+      id = field_text(*feature, id_index);
       if (id.find_first_not_of(" \t\r\n") == std::string::npos) {
         skip(fid_text,
              "no id (field '" + options.id_field + "' is " + (id.empty() ? "empty" : "blank") + ")");
