@@ -370,6 +370,36 @@ TEST(Crop, the_ground_class_cannot_also_be_a_building_class) {
   EXPECT_NO_THROW(params.validate());
 }
 
+TEST(Crop, footprints_that_overlap_are_noted_with_the_other_footprint) {
+  // A 10 x 10 m building, a block polygon over it and its neighbour, and the neighbour, apart from it
+  // (no ground points: each note goes on to say so).
+  std::vector<Point3> points;
+  for (int i = 0; i < 10; ++i)
+    for (int j = 0; j < 10; ++j) {
+      points.push_back({kX + 0.5 + i, kY + 0.5 + j, 8});
+      points.push_back({kX + 20.5 + i, kY + 0.5 + j, 9});
+    }
+  const auto inputs = crop({footprint("house", {{rectangle(kX, kY, kX + 10, kY + 10), {}}}),
+                            footprint("block", {{rectangle(kX - 5, kY - 5, kX + 35, kY + 15), {}}}),
+                            footprint("neighbour", {{rectangle(kX + 20, kY, kX + 30, kY + 10), {}}})},
+                           cloud(points, std::vector<std::uint8_t>(points.size(), 6)));
+  EXPECT_EQ(inputs[0].footprint.note.rfind(
+                "100 of its 100 points lie in footprint block too: the footprints overlap", 0),
+            0u);
+  EXPECT_EQ(inputs[1].footprint.note.rfind(
+                "200 of its 200 points lie in footprint house too: the footprints overlap", 0),
+            0u);
+  EXPECT_EQ(inputs[2].footprint.note.rfind(
+                "100 of its 100 points lie in footprint block too: the footprints overlap", 0),
+            0u);
+  // Footprints that only touch share no point.
+  const auto apart = crop({footprint("a", {{rectangle(kX, kY, kX + 10, kY + 10), {}}}),
+                           footprint("b", {{rectangle(kX + 10, kY, kX + 20, kY + 10), {}}})},
+                          cloud(points, std::vector<std::uint8_t>(points.size(), 6)));
+  EXPECT_EQ(apart[0].footprint.note.find("overlap"), std::string::npos) << apart[0].footprint.note;
+  EXPECT_EQ(apart[1].footprint.note.find("overlap"), std::string::npos) << apart[1].footprint.note;
+}
+
 TEST(Crop, rejects_a_chunk_whose_classes_do_not_match_its_points) {
   Cropper cropper({footprint("sq", {{rectangle(kX, kY, kX + 10, kY + 10), {}}})});
   EXPECT_THROW(cropper.add(cloud({{kX + 1, kY + 1, 4}, {kX + 2, kY + 1, 9}}, {6})), Error);

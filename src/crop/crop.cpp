@@ -100,6 +100,10 @@ struct Collected {
   std::vector<double> near_ground;  ///< heights of the ground points within ground_buffer of the polygon
   std::vector<double> wide_ground;  ///< in the wide box but not near; kept only while near is short
   PointPresence presence;           ///< cells of the footprint's box where a point of any class fell
+  /// Building points also inside another footprint, and the first such footprint: footprints that
+  /// overlap (a parcel or block polygon among the buildings', a footprint given twice, shifted).
+  std::size_t shared = 0;
+  std::uint32_t shared_with = 0;
 };
 
 /// An empty presence lattice over a footprint's box: 0.25 m cells, doubled until they are few enough.
@@ -343,6 +347,8 @@ void Cropper::add(const PointCloud& chunk) {
     // One walk over the cell's footprints: every point in a footprint's box, whatever its class, says
     // that the tiles have data there; building and ground points are then tested against its rings.
     bool inside_any = false;
+    std::array<std::uint32_t, 4> holders;  // the first footprints holding this building point
+    std::size_t held = 0;
     for (const std::uint32_t* it = first; it != last; ++it) {
       const detail::PreparedFootprint& f = index.prepared[*it];
       if (!detail::box_contains(f.box, p.x, p.y)) continue;
@@ -352,7 +358,12 @@ void Cropper::add(const PointCloud& chunk) {
       if (kind == kBuilding) {
         index.collected[*it].building.push_back({p.x - f.origin.x, p.y - f.origin.y, p.z - f.origin.z});
         ++stats_.building_points;
+        if (held < holders.size()) holders[held++] = *it;
       }
+    }
+    for (std::size_t h = 0; held > 1 && h < held; ++h) {
+      detail::Collected& c = index.collected[holders[h]];
+      if (c.shared++ == 0) c.shared_with = holders[h == 0 ? 1 : 0];
     }
     // Without classes, every point outside the footprints may be ground: the buffer's percentile then
     // takes the ground from under the cars, trees and fences there (the lowest building point, the
@@ -404,6 +415,15 @@ std::vector<BuildingInput> Cropper::finish() {
     }
     b.points = std::move(c.building);
     b.presence = std::move(c.presence);
+    // Footprints that overlap: both models hold the points of the overlap, and the ground points there
+    // are no one's (they lie inside a footprint).
+    if (c.shared > 0 && c.shared * 100 >= b.points.size()) {
+      std::ostringstream note;
+      note << c.shared << " of its " << b.points.size() << " points lie in footprint "
+           << (c.shared_with < i ? result[c.shared_with].id : index.footprints[c.shared_with].id)
+           << " too: the footprints overlap";
+      b.footprint.note += (b.footprint.note.empty() ? "" : "; ") + note.str();
+    }
 
     // The ground ladder: buffer percentile, wide-buffer percentile, lowest building point, nothing.
     b.ground_heights = std::move(c.near_ground);
