@@ -661,6 +661,29 @@ TEST_F(Mistakes, a_ground_field_of_dates_is_refused_and_one_of_other_numbers_is_
       EXPECT_DOUBLE_EQ(row.at("ground_z").get<double>(), 0.25) << id;
     }
   }
+  // Heights of another datum for one footprint (43 m below, as ellipsoidal heights against NAP): not
+  // taken, the ground measured around it is, and its note says why.
+  const fs::path datum = dir_ / "datum.gpkg";
+  ASSERT_EQ(run_shell("ogr2ogr -f GPKG " + datum.string() + " " + kSample +
+                      "/delft_sample_footprints.gpkg -dialect sqlite -sql \"SELECT *, CASE gml_id WHEN "
+                      "'b31e1d795-00ba-11e6-b420-2bdcc4ab5d7f' THEN -43.2 ELSE -0.5 END AS floor FROM "
+                      "buildingpart\" -nln buildingpart")
+                .exit_code,
+            0);
+  const Result below = run("reconstruct " + kSampleTiles + " -f " + datum.string() +
+                           " --id-field gml_id --ground-field floor" + tail + (dir_ / "below").string());
+  ASSERT_EQ(below.exit_code, 0) << below.output;
+  for (const auto& [id, row] : rows_by_id(dir_ / "below")) {
+    if (row.at("status") == "skipped") continue;
+    if (id == "b31e1d795-00ba-11e6-b420-2bdcc4ab5d7f") {
+      EXPECT_EQ(row.at("ground_z"), measured.at(id).at("ground_z"));
+      EXPECT_TRUE(
+          contains(row.at("note").get<std::string>(), "(-43.2) more than 10 m below the ground measured"))
+          << row;
+    } else {
+      EXPECT_EQ(row.at("ground_method"), "footprint attribute") << id;  // half a metre below: taken
+    }
+  }
 }
 
 TEST_F(Mistakes, a_folder_of_tiles_is_not_the_output_folder_and_a_mesh_among_clouds_is_named) {

@@ -46,6 +46,11 @@ struct BatchOptions {
   /// than min_coverage gives a note. 0: never. Delft's 160 footprints: 0.625 at the least (a
   /// footprint of 8 cells), then 0.781 (b31bc2699, whose low part is classified otherwise).
   double min_building_coverage = 0.5;
+  /// A --ground-field value more than this many metres below the ground measured from the points around
+  /// the footprint is not taken (heights of another datum, or a field of other numbers, e.g. a level
+  /// code): the measured ground stays, and the note says so. A value above half of the building's
+  /// points is never taken.
+  double ground_field_max_below = 10.0;
 
   std::string output_dir = "city3d_out";
   MeshFormat format = MeshFormat::obj;

@@ -456,7 +456,7 @@ CloudPoints read_building_cloud(const std::string& path) {
   return out;
 }
 
-void take_ground_fields(std::vector<BuildingInput>& inputs, const std::string& field) {
+void take_ground_fields(std::vector<BuildingInput>& inputs, const std::string& field, double max_below) {
   std::size_t ignored = 0;
   std::string first_ignored;
   for (BuildingInput& in : inputs) {
@@ -469,6 +469,15 @@ void take_ground_fields(std::vector<BuildingInput>& inputs, const std::string& f
       std::ostringstream note;
       note << "ground field '" << field << "' (" << *in.footprint.ground_z
            << ") above half of the building's points: the ground is " << in.ground_method;
+      in.footprint.note += (in.footprint.note.empty() ? "" : "; ") + note.str();
+      if (ignored++ == 0) first_ignored = in.id + ": " + note.str();
+      continue;
+    }
+    if (in.ground_measured && field_z < in.ground_z - max_below) {
+      std::ostringstream note;
+      note << "ground field '" << field << "' (" << *in.footprint.ground_z << ") more than " << max_below
+           << " m below the ground measured around it (" << in.ground_z + in.origin.z << "): the ground is "
+           << in.ground_method;
       in.footprint.note += (in.footprint.note.empty() ? "" : "; ") + note.str();
       if (ignored++ == 0) first_ignored = in.id + ": " + note.str();
       continue;

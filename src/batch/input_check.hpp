@@ -104,9 +104,10 @@ CloudPoints read_building_cloud(const std::string& path);
 void warn_of_uncounted_records(const std::vector<PointCloudInfo>& infos);
 
 /// Each input's ground from its footprint's ground field (Footprint::ground_z, read with
-/// --ground-field `field`), unless that stands above half of the building's points (another field
-/// than a height, or heights in another datum): then the ground measured from the points stays, a
-/// note says why, and one warning counts them.
-void take_ground_fields(std::vector<BuildingInput>& inputs, const std::string& field);
+/// --ground-field `field`), unless that stands above half of the building's points, or more than
+/// `max_below` metres below the ground measured from the points around it (another field than a
+/// height, or heights in another datum): then the ground measured from the points stays, a note says
+/// why, and one warning counts them.
+void take_ground_fields(std::vector<BuildingInput>& inputs, const std::string& field, double max_below);
 
 }  // namespace city3d::detail
