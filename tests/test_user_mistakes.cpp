@@ -1208,6 +1208,23 @@ TEST_F(Mistakes, a_single_building_cloud_leaves_its_noise_out_and_names_a_stray_
   EXPECT_TRUE(contains(note, "1 point more than 10 m below all but the lowest 0.1% (down to z -22.000"))
       << note;
   EXPECT_TRUE(contains(ply.output, "strays?")) << ply.output;  // and a warning
+  // The same roof in millimetres: 20 km across.
+  {
+    std::ofstream mm(dir_ / "mm.ply");
+    mm << "ply\nformat ascii 1.0\nelement vertex " << points.size() - 1
+       << "\nproperty double x\nproperty double y\n"
+       << "property double z\nend_header\n";
+    for (std::size_t k = 0; k + 1 < points.size(); ++k)
+      mm << 1000 * points[k].x << ' ' << 1000 * points[k].y << ' ' << 1000 * points[k].z << '\n';
+  }
+  const Result mm = run("reconstruct " + (dir_ / "mm.ply").string() + " --lod 1.2 --no-progress -o " +
+                        (dir_ / "mm").string());
+  ASSERT_TRUE(fs::exists(dir_ / "mm" / "report.json")) << mm.output;
+  EXPECT_TRUE(contains(
+      rows_by_id(dir_ / "mm").at("mm").at("note").get<std::string>(),
+      "it spans 19500 m in plan, more than any building (--max-footprint-size 5000 m): coordinates in "
+      "millimetres"))
+      << mm.output;
 }
 
 TEST_F(Mistakes, records_beyond_a_las_headers_count_are_named_not_dropped_in_silence) {

@@ -706,7 +706,8 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
       reconstruct_all(
           indices, [&](std::size_t k) { return plan.cloud_ids[indices[k]].id; },
           [&](std::size_t k) {
-            detail::CloudPoints cloud = detail::read_building_cloud(files[indices[k]]);
+            detail::CloudPoints cloud =
+                detail::read_building_cloud(files[indices[k]], options.footprint.max_extent);
             BuildingInput input =
                 building_from_cloud(plan.cloud_ids[indices[k]].id, cloud.points, options.ground_z);
             if (!cloud.note.empty()) {

@@ -392,7 +392,7 @@ void warn_of_uncounted_records(const std::vector<PointCloudInfo>& infos) {
                   std::to_string(info.point_count) + " counted are read");
 }
 
-CloudPoints read_building_cloud(const std::string& path) {
+CloudPoints read_building_cloud(const std::string& path, double max_extent) {
   // LAS classes only: a PLY's class or label property follows a scheme of its own (DALES: 2 is vegetation).
   const bool las = read_point_cloud_info(path).format != "PLY";
   PointCloud cloud = read_point_cloud(path, las ? kFieldXyz | kFieldClassification : kFieldXyz);
@@ -442,6 +442,22 @@ CloudPoints read_building_cloud(const std::string& path) {
           "%td point%s more than %.0f m below all but the lowest 0.1%% (down to z %.3f, the rest from %.3f): "
           "strays? the floor is the lowest point unless --ground-z",
           strays, strays == 1 ? "" : "s", kStrayDrop, lowest, reference);
+      out.note += std::string(out.note.empty() ? "" : "; ") + text;
+    }
+  }
+  // Millimetres read as metres: the building is kilometres wide (as no footprint may be:
+  // --max-footprint-size).
+  {
+    Box3 span;
+    for (const Point3& p : out.points) span.add(p);
+    const double width = std::max(span.max.x - span.min.x, span.max.y - span.min.y);
+    if (out.points.size() >= 2 && width > max_extent) {
+      char text[200];
+      std::snprintf(
+          text, sizeof text,
+          "it spans %.0f m in plan, more than any building (--max-footprint-size %.0f m): coordinates in "
+          "millimetres or centimetres? city3d needs metres",
+          width, max_extent);
       out.note += std::string(out.note.empty() ? "" : "; ") + text;
     }
   }

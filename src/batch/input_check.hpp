@@ -97,7 +97,7 @@ struct CloudPoints {
   std::vector<Point3> points;
   std::string note;
 };
-CloudPoints read_building_cloud(const std::string& path);
+CloudPoints read_building_cloud(const std::string& path, double max_extent);
 
 /// One warning per LAS file with whole records after its counted points that nothing else in the file
 /// claims (PointCloudInfo::uncounted_records): they are not read.
