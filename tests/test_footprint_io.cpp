@@ -379,6 +379,17 @@ TEST(FootprintErrors, bad_attribute_filter_is_reported_with_gdals_reason) {
   EXPECT_TRUE(contains(message, "GDAL: ")) << message;
 }
 
+TEST(FootprintErrors, a_filter_that_breaks_the_drivers_own_sql_is_named_when_the_read_fails) {
+  // Accepted as a filter, but spliced into the GeoPackage's R-tree query it comments the rest out.
+  FootprintReadOptions options;
+  options.attribute_filter = "1=1 --";
+  options.bbox = Box2{{84800, 447400}, {85100, 447700}};
+  const std::string message =
+      io_error_of([&] { read_footprints(kDelft + "bgt_pand_laz_area.gpkg", options); });
+  EXPECT_TRUE(contains(message, "error while reading")) << message;
+  EXPECT_TRUE(contains(message, "with --where \"1=1 --\"")) << message;
+}
+
 TEST(FootprintErrors, layer_without_polygons_is_reported) {
   const std::string message = io_error_of([] { read_footprints(kLocal + "points_only.geojson"); });
   EXPECT_TRUE(contains(message, "points_only.geojson layer 'trees' has no polygon features")) << message;

@@ -598,7 +598,11 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
     if (!feature) {
       // A driver that fails half-way (corrupt file) ends the iteration early with a CE_Failure.
       if (CPLGetLastErrorType() == CE_Failure) {
-        throw IoError(kModule + std::string("error while reading ") + where + gdal_message());
+        // A filter the driver splices into its own SQL ("1=1 --" comments the rest of it out) fails only
+        // here.
+        const std::string filter =
+            options.attribute_filter.empty() ? "" : " with --where \"" + options.attribute_filter + "\"";
+        throw IoError(kModule + std::string("error while reading ") + where + filter + gdal_message());
       }
       break;
     }
