@@ -946,6 +946,17 @@ TEST_F(Mistakes, a_source_of_two_polygon_layers_needs_layer_and_a_model_is_no_fo
                 (dir_ / "b").string())
                 .exit_code,
             0);
+  // An empty polygon layer beside the footprints' (a template layer) is nothing to choose between.
+  const fs::path empty = dir_ / "empty.gpkg";
+  fs::copy_file(kSample + "/delft_sample_footprints.gpkg", empty);
+  ASSERT_EQ(run_shell("ogr2ogr -update " + empty.string() + " " + kSample +
+                      "/delft_sample_footprints.gpkg -nln " + "template -where \"1=0\" -nlt POLYGON")
+                .exit_code,
+            0);
+  const Result one =
+      run("reconstruct " + kSampleTiles + " -f " + empty.string() + tail + (dir_ / "e").string());
+  EXPECT_EQ(one.exit_code, 0) << one.output;
+  EXPECT_EQ(report(dir_ / "e").at("summary").at("buildings"), 15);
   // City3D's own model of a building, given as its footprints: its walls were footprints.
   const std::string smoke = kShared + "/city3d_smoke/AHN3/00295";
   if (!fs::exists(smoke + ".ply")) GTEST_SKIP() << "../shared/data is not beside the repository";

@@ -159,9 +159,10 @@ OGRLayer& select_layer(GDALDataset& dataset, const std::string& path, const std:
   if (dataset.GetLayerCount() == 1) return *dataset.GetLayer(0);
   // Several polygon layers (a parcel layer beside the buildings, 3DBAG's pand beside its lod12_2d):
   // taking the first would model the wrong polygons without a word.
+  // Empty ones (a template layer, one emptied by an edit) hold nothing to choose between.
   std::vector<OGRLayer*> polygonal;
   for (OGRLayer* layer : dataset.GetLayers())
-    if (is_polygonal(layer->GetGeomType())) polygonal.push_back(layer);
+    if (is_polygonal(layer->GetGeomType()) && layer->GetFeatureCount(TRUE) != 0) polygonal.push_back(layer);
   if (polygonal.size() > 1) {
     std::vector<std::string> names;
     for (OGRLayer* layer : polygonal) names.emplace_back(layer->GetName());
