@@ -1301,3 +1301,20 @@ TEST_F(Mistakes, footprints_that_declare_degrees_but_hold_metres_are_not_taken_f
   EXPECT_EQ(report(dir_ / "rd").at("summary").at("ok"), 15) << given.output;
   EXPECT_TRUE(contains(read_file(dir_ / "rd" / "buildings.city.json"), "EPSG/0/7415"));
 }
+
+TEST_F(Mistakes, a_bbox_that_leaves_no_reprojected_footprint_says_which_crs_it_was_read_in) {
+  // The sample's footprints in UTM 31N, a box in UTM given: the footprints are reprojected into the
+  // points' RD New, and the box is read there.
+  const fs::path utm = dir_ / "utm.gpkg";
+  ASSERT_EQ(run_shell("ogr2ogr -f GPKG -t_srs EPSG:32631 " + utm.string() + " " + kSample +
+                      "/delft_sample_footprints.gpkg")
+                .exit_code,
+            0);
+  const Result r = run("reconstruct " + kSampleTiles + " -f " + utm.string() +
+                       " --crs EPSG:7415 --bbox 593800,5763200,593900,5763300 --no-progress -o " +
+                       (dir_ / "out").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_TRUE(contains(
+      r.output, "(in EPSG:28992, the point clouds' CRS: the footprints are reprojected from EPSG:32631)"))
+      << r.output;
+}

@@ -338,6 +338,11 @@ void check_selection(const FootprintSet& set, const BatchOptions& o) {
     char box[160];
     std::snprintf(box, sizeof box, "--bbox %.3f,%.3f,%.3f,%.3f", b.min.x, b.min.y, b.max.x, b.max.y);
     filters += (filters.empty() ? "" : " and ") + std::string(box);
+    // Reprojected footprints are filtered in the points' CRS, not in their own.
+    if (!set.reprojected_from.empty())
+      filters += " (in " + set.srs.substr(0, 60) +
+                 ", the point clouds' CRS: the footprints are reprojected from " +
+                 set.reprojected_from.substr(0, 60) + ")";
   }
   throw IoError("footprints: " + filters + " leave" + (o.footprint.attribute_filter.empty() || !o.footprint.bbox ? "s" : "") +
                 " no footprint of the " + std::to_string(set.unfiltered_count) + " features of " + set.path +
