@@ -19,32 +19,32 @@
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
-#include <functional>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <numeric>
 #include <set>
 #include <sstream>
 #include <system_error>
 #include <thread>
 
-#include <nlohmann/json.hpp>
-
-#include "city3d/error.hpp"
-#include "city3d/log.hpp"
-#include "city3d/rings.hpp"
-#include "city3d/model_io.hpp"
-#include "city3d/point_cloud_io.hpp"
 #include "batch/advice.hpp"
 #include "batch/crop_tiles.hpp"
-#include "batch/input_check.hpp"
-#include "files/output_folder.hpp"
-#include "files/atomic_file.hpp"
 #include "batch/finalise.hpp"
+#include "batch/input_check.hpp"
 #include "batch/journal.hpp"
+#include "batch/progress.hpp"
+#include "city3d/error.hpp"
+#include "city3d/log.hpp"
+#include "city3d/model_io.hpp"
+#include "city3d/point_cloud_io.hpp"
+#include "city3d/rings.hpp"
+#include "files/atomic_file.hpp"
+#include "files/output_folder.hpp"
 #include "reports/report.hpp"
 
 namespace city3d {
@@ -262,57 +262,6 @@ detail::BuildingRecord skipped_record(std::uint64_t index, const SkippedFootprin
   record.report_json = detail::report_json_row(row);
   return record;
 }
-
-/// The progress line on stderr. Its rate counts the buildings this run reconstructed over the time
-/// it spent reconstructing (reading tiles and resumed buildings left out: they made the first
-/// estimate of the Delft block 86 s for a 5.8 s run), and it says nothing of the time left until
-/// a few buildings (kProgressSample, or 2% of them) are done.
-class Progress {
- public:
-  static constexpr std::size_t kProgressSample = 5;
-  Progress(bool on, std::size_t total, std::size_t resumed) : on_(on), total_(total), done_(resumed) {}
-  /// While tiles are read for the next buildings.
-  void reading(std::size_t tiles, std::size_t buildings) {
-    if (!on_) return;
-    std::lock_guard<std::mutex> lock(mutex_);
-    std::fprintf(stderr, "\rbuildings %zu/%zu  reading %zu tile%s for the next %zu...%20s", done_, total_, tiles,
-                 tiles == 1 ? "" : "s", buildings, "");
-    std::fflush(stderr);
-  }
-  void start_reconstructing() { std::lock_guard<std::mutex> lock(mutex_); since_ = Clock::now(); }
-  void stop_reconstructing() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    spent_ += seconds_since(since_);
-  }
-  /// One more building finished.
-  void building_done() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    ++done_;
-    ++built_;
-    if (!on_) return;
-    const double spent = spent_ + seconds_since(since_);
-    const double rate = spent > 0 ? built_ / spent : 0.0;
-    if (built_ < std::max<std::size_t>(kProgressSample, total_ / 50) || rate <= 0)
-      std::fprintf(stderr, "\rbuildings %zu/%zu  estimating the time left...%20s", done_, total_, "");
-    else
-      std::fprintf(stderr, "\rbuildings %zu/%zu  %.1f/s  about %.0f s left%20s", done_, total_, rate,
-                   std::ceil((total_ - done_) / rate), "");
-    std::fflush(stderr);
-  }
-  /// Ends the line (the summary follows on its own).
-  void finish() {
-    if (!on_) return;
-    std::fprintf(stderr, "\rbuildings %zu/%zu%60s\n", done_, total_, "");
-    std::fflush(stderr);
-  }
-
- private:
-  bool on_;
-  std::size_t total_, done_, built_ = 0;
-  double spent_ = 0.0;
-  Clock::time_point since_ = Clock::now();
-  std::mutex mutex_;
-};
 
 // What a run does, known before any building is reconstructed and the same in every shard: the
 // buildings (in output order), their blocks, and the footprints that were not kept.
@@ -632,7 +581,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   // Reconstructs buildings `indices` (global, output order) in parallel; id_of(k) and make_input(k)
   // give the id and input of indices[k], the input made by the worker that reconstructs it.
   const std::size_t total = header.expected;
-  Progress progress(options.progress, total, journal.restored());
+  detail::Progress progress(options.progress, total, journal.restored());
   // outline_of(k) gives its footprint's polygons in world coordinates (nullptr for clouds).
   // amend(k, result) adds what the run knows about the building beyond its input (coverage, how
   // its id was made). `work` (empty, or one figure per building) orders the buildings for the

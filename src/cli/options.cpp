@@ -29,6 +29,12 @@ double parse_double(const std::string& flag, const std::string& text) {
   return v;
 }
 
+double parse_share(const std::string& flag, const std::string& text) {
+  const double v = parse_double(flag, text);
+  if (!(v >= 0 && v <= 1)) throw ConfigError("option " + flag + ": '" + text + "' is not a share (0-1)");
+  return v;
+}
+
 double parse_non_negative(const std::string& flag, const std::string& text) {
   const double v = parse_double(flag, text);
   if (v < 0) throw ConfigError("option " + flag + ": '" + text + "' is negative");
@@ -170,23 +176,13 @@ const std::vector<OptionSpec>& option_table() {
        "a building with less of its footprint's area inside the tiles' extents is 'partial', not ok (a tile "
        "missing at a seam); less of its cells with points gives a note; 0: never",
        [](const O& o) { return number_text(o.batch.min_coverage); },
-       [](O& o, V v) {
-         const double share = parse_double("--min-coverage", v);
-         if (!(share >= 0 && share <= 1))
-           throw ConfigError("option --min-coverage: '" + v + "' is not a share (0-1)");
-         o.batch.min_coverage = share;
-       }},
+       [](O& o, V v) { o.batch.min_coverage = parse_share("--min-coverage", v); }},
       {"--min-building-coverage", nullptr, "SHARE",
        "a building whose points lie in less of its footprint's cells with points (the rest hold only other "
        "classes: a tile whose buildings are not classified, a footprint larger than the building) is "
        "'partial'; less than --min-coverage gives a note; 0: never",
        [](const O& o) { return number_text(o.batch.min_building_coverage); },
-       [](O& o, V v) {
-         const double share = parse_double("--min-building-coverage", v);
-         if (!(share >= 0 && share <= 1))
-           throw ConfigError("option --min-building-coverage: '" + v + "' is not a share (0-1)");
-         o.batch.min_building_coverage = share;
-       }},
+       [](O& o, V v) { o.batch.min_building_coverage = parse_share("--min-building-coverage", v); }},
       {"--crs", nullptr, "CRS",
        "the CRS of the point clouds' coordinates and heights, e.g. EPSG:7415 (RD New + NAP height: AHN) or "
        "EPSG:28992+5709; default: what the point clouds record, else the footprints' (with a warning)",

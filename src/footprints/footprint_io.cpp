@@ -1,5 +1,6 @@
-// FootprintSource: footprints read block by block through OGR spatial filters, so that a country's
-// footprint layer is never held in memory; the scan keeps only (FID, number) pairs.
+// The footprint readers' entry points (an OBJ file or any OGR source), and FootprintSource: footprints read
+// block by block through OGR spatial filters, so that a country's footprint layer is never held in memory;
+// the scan keeps only (FID, number) pairs.
 #include <algorithm>
 #include <filesystem>
 
@@ -35,6 +36,27 @@ Box2 bounds(const Footprint& f) {
   return box;
 }
 }  // namespace
+
+// OBJ by extension (case-insensitive); every other path goes to OGR, which sniffs the format.
+FootprintSet read_footprints(const std::string& path, const FootprintReadOptions& options) {
+  return is_obj(path) ? detail::read_obj_footprints(path, options)
+                      : detail::read_ogr_footprints(path, options);
+}
+
+std::vector<FieldSummary> summarise_fields(const std::string& path, const FootprintReadOptions& options,
+                                           std::size_t max_features, std::size_t& features) {
+  features = 0;
+  if (is_obj(path)) return {};
+  return detail::summarise_ogr_fields(path, options, max_features, features);
+}
+
+std::vector<std::string> list_footprint_layers(const std::string& path) {
+  if (is_obj(path)) {
+    detail::read_obj_footprints(path, {});  // validates the file like the OGR branch does
+    return {"obj"};
+  }
+  return detail::list_ogr_layers(path);
+}
 
 FootprintSource::FootprintSource(std::string path, FootprintReadOptions options) : impl_(new Impl) {
   impl_->path = std::move(path);

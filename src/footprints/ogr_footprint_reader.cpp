@@ -783,37 +783,6 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
 
 }  // namespace detail
 
-namespace {
-/// OBJ by extension (case-insensitive); every other path goes to OGR, which sniffs the format.
-bool is_obj_path(const std::string& path) {
-  if (path.size() < 4) return false;
-  std::string extension = path.substr(path.size() - 4);
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return extension == ".obj";
-}
-}  // namespace
-
-FootprintSet read_footprints(const std::string& path, const FootprintReadOptions& options) {
-  return is_obj_path(path) ? detail::read_obj_footprints(path, options)
-                           : detail::read_ogr_footprints(path, options);
-}
-
-std::vector<FieldSummary> summarise_fields(const std::string& path, const FootprintReadOptions& options,
-                                           std::size_t max_features, std::size_t& features) {
-  features = 0;
-  if (is_obj_path(path)) return {};
-  return detail::summarise_ogr_fields(path, options, max_features, features);
-}
-
-std::vector<std::string> list_footprint_layers(const std::string& path) {
-  if (is_obj_path(path)) {
-    detail::read_obj_footprints(path, {});  // validates the file like the OGR branch does
-    return {"obj"};
-  }
-  return detail::list_ogr_layers(path);
-}
-
 SimplifiedFootprint simplify_footprint(const std::vector<Polygon2>& polygons, std::size_t max_vertices) {
   const auto count = [](const std::vector<Polygon2>& ps) {
     std::size_t n = 0;
