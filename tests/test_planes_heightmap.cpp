@@ -360,6 +360,35 @@ TEST(DetectPlanes, few_points_of_a_sparse_gable_give_its_two_planes_through_trip
   EXPECT_TRUE(detect_planes_of_few_points(points, PlaneParams{}, 7, 20).empty());
 }
 
+// A few returns at two heights, 3 m apart across a step 1 m wide: triples spanning both make planes
+// of about 72 degrees, steeper than few_points_max_slope, which are not taken; each level is a plane.
+TEST(DetectPlanes, few_points_at_two_heights_across_a_step_give_two_levels_not_a_steep_plane) {
+  std::vector<Point3> points;
+  for (int i = 0; i < 5; ++i) {
+    points.push_back({0.5 * i, 0.0, 3.0});  // the lower level's edge...
+    points.push_back({0.5 * i, 1.0, 6.0});  // ...and the upper's
+  }
+  for (int i = 0; i < 3; ++i) {
+    points.push_back({0.5 + 0.5 * i, -1.0 - 0.5 * i, 3.0});  // each level's points off its edge
+    points.push_back({0.5 + 0.5 * i, 2.0 + 0.5 * i, 6.0});
+  }
+  const auto levels = detect_planes_of_few_points(points, PlaneParams{}, 4);
+  ASSERT_EQ(levels.size(), 2u);
+  for (const auto& s : levels) {
+    EXPECT_EQ(s.points.size(), 8u);
+    EXPECT_LT(tilt_degrees(s.plane), 1.0);
+  }
+  // Allowed up to 80 degrees, the steep plane through the two edges, ten points, is the first found.
+  PlaneParams steep;
+  steep.few_points_max_slope = 80.0;
+  const auto blade = detect_planes_of_few_points(points, steep, 4);
+  ASSERT_GE(blade.size(), 1u);
+  EXPECT_EQ(blade[0].points.size(), 10u);
+  EXPECT_NEAR(tilt_degrees(blade[0].plane), 71.6, 0.5);
+  steep.few_points_max_slope = 0.0;
+  EXPECT_THROW(steep.validate(), city3d::ConfigError);
+}
+
 TEST(DetectPlanes, two_flat_roofs_at_different_heights_give_two_planes) {
   const auto points = two_flat_roofs(3);
   const auto segments = detect_planes(points, PlaneParams{});

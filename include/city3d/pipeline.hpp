@@ -74,6 +74,14 @@ struct RebuildParams {
   /// ...and within this of each other in height, metres (the step lines' min_step: a larger difference
   /// is a step between two levels). Links chain: a level can span more height than this.
   double level_link_height = 0.5;
+  /// A roof level or plane of left-out points needs as many points as cover this much area at the
+  /// building's density, where that is fewer than the smaller planes' count (at least 3), square
+  /// metres; 0: always the smaller planes' count.
+  double min_level_area = 4.0;
+  /// A group of left-out points is searched for planes through triples of its points only up to this
+  /// many points (the triples grow with the cube of the count; a larger group makes planes by region
+  /// growing).
+  std::size_t max_left_out_plane_points = 60;
   /// A left-out plane's rectangle thinner than this is no cell of its own (a row of returns), metres.
   double min_left_out_width = 0.1;
 };

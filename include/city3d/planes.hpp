@@ -33,6 +33,11 @@ struct PlaneParams {
   /// Fewest points of a plane when a building is retried with smaller planes (a shed or a garage of
   /// fewer than min_points in all) and in explain_more's rebuilds, >= 3.
   int small_min_points = 10;
+  /// A plane through triples of few points (detect_planes_of_few_points) that is neither a wall nor
+  /// a roof of at most this slope, degrees, is not taken: among a few returns at two heights (a step,
+  /// an eave over a lower part), a triple spanning both makes a plane steeper than roofs are, a blade
+  /// over the lower part. In (0, 90].
+  double few_points_max_slope = 70.0;
 
   /// Throws ConfigError listing every invalid field ("planes: invalid parameters: ...; ...").
   void validate() const;
@@ -105,7 +110,8 @@ class PlaneDetector {
 /// by least squares, its points taken; again on the rest while a plane holds at least `min_inliers`
 /// (at least 4: any three points make a plane) of them. Labelled and ordered as detect_planes() does.
 /// Returns nothing for fewer than min_inliers or more than `max_points` points (the triples grow with
-/// the cube of the count), or a non-finite coordinate. Deterministic.
+/// the cube of the count), or a non-finite coordinate. Planes steeper than `params.few_points_max_slope`
+/// but not walls are not taken (their points are left to the next plane). Deterministic.
 std::vector<PlanarSegment> detect_planes_of_few_points(const std::vector<Point3>& local_points,
                                                        const PlaneParams& params, std::size_t min_inliers,
                                                        std::size_t max_points = 60);

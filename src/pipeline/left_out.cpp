@@ -12,19 +12,25 @@
 
 namespace city3d::detail {
 
-std::vector<PlanarSegment> left_out_levels(const std::vector<Point3>& points, const std::vector<PlanarSegment>& segments,
-                                           const std::vector<bool>& unexplained, double spacing,
-                                           std::size_t min_points, const RebuildParams& params) {
-  std::vector<PlanarSegment> levels;
-  std::vector<bool> segmented(points.size());
+namespace {
+
+// The loose points: left out, and in no segment (ascending).
+std::vector<std::uint32_t> loose_points(std::size_t n, const std::vector<PlanarSegment>& segments,
+                                        const std::vector<bool>& unexplained) {
+  std::vector<bool> segmented(n);
   for (const PlanarSegment& s : segments)
     for (std::uint32_t i : s.points) segmented[i] = true;
-  std::vector<std::uint32_t> loose;  // ascending
-  for (std::uint32_t i = 0; i < points.size(); ++i)
+  std::vector<std::uint32_t> loose;
+  for (std::uint32_t i = 0; i < n; ++i)
     if (unexplained[i] && !segmented[i]) loose.push_back(i);
-  const double radius = params.level_link_spacings * spacing;
-  if (loose.size() < min_points || !(radius > 0)) return levels;
+  return loose;
+}
 
+// The groups of `loose` whose points are linked within `radius` in plan and `height` in height, links
+// chained; each group ascending, the groups in the order of their smallest point.
+std::vector<std::vector<std::uint32_t>> linked_groups(const std::vector<Point3>& points,
+                                                      const std::vector<std::uint32_t>& loose, double radius,
+                                                      double height) {
   // Union-find over the loose points; neighbours from a grid of radius-sized cells.
   std::vector<std::uint32_t> parent(loose.size());
   std::iota(parent.begin(), parent.end(), 0u);
@@ -47,17 +53,33 @@ std::vector<PlanarSegment> left_out_levels(const std::vector<Point3>& points, co
         for (std::uint32_t j : it->second) {
           if (j <= k) continue;
           const Point3& q = points[loose[j]];
-          if (std::hypot(p.x - q.x, p.y - q.y) <= radius && std::fabs(p.z - q.z) <= params.level_link_height) {
+          if (std::hypot(p.x - q.x, p.y - q.y) <= radius && std::fabs(p.z - q.z) <= height) {
             const std::uint32_t a = root(k), b = root(j);
             if (a != b) parent[std::max(a, b)] = std::min(a, b);
           }
         }
       }
   }
-  // Groups in the order of their smallest point (each root is its group's smallest member).
+  // Each root is its group's smallest member.
   std::map<std::uint32_t, std::vector<std::uint32_t>> groups;
   for (std::uint32_t k = 0; k < loose.size(); ++k) groups[root(k)].push_back(loose[k]);
-  for (auto& [first, members] : groups) {
+  std::vector<std::vector<std::uint32_t>> out;
+  out.reserve(groups.size());
+  for (auto& [first, members] : groups) out.push_back(std::move(members));
+  return out;
+}
+
+}  // namespace
+
+std::vector<PlanarSegment> left_out_levels(const std::vector<Point3>& points,
+                                           const std::vector<PlanarSegment>& segments,
+                                           const std::vector<bool>& unexplained, double spacing,
+                                           std::size_t min_points, const RebuildParams& params) {
+  std::vector<PlanarSegment> levels;
+  const std::vector<std::uint32_t> loose = loose_points(points.size(), segments, unexplained);
+  const double radius = params.level_link_spacings * spacing;
+  if (loose.size() < min_points || !(radius > 0)) return levels;
+  for (std::vector<std::uint32_t>& members : linked_groups(points, loose, radius, params.level_link_height)) {
     if (members.size() < min_points) continue;
     std::vector<double> z;
     z.reserve(members.size());
@@ -74,6 +96,34 @@ std::vector<PlanarSegment> left_out_levels(const std::vector<Point3>& points, co
     levels.push_back(std::move(level));
   }
   return levels;
+}
+
+std::vector<PlanarSegment> left_out_planes(const std::vector<Point3>& points,
+                                           const std::vector<PlanarSegment>& segments,
+                                           const std::vector<bool>& unexplained, double spacing,
+                                           std::size_t min_points, const PlaneParams& plane_params,
+                                           const RebuildParams& params) {
+  std::vector<PlanarSegment> planes;
+  const std::vector<std::uint32_t> loose = loose_points(points.size(), segments, unexplained);
+  const double radius = params.level_link_spacings * spacing;
+  min_points = std::max<std::size_t>(min_points, 4);
+  if (loose.size() < min_points || !(radius > 0)) return planes;
+  const double any_height = std::numeric_limits<double>::infinity();
+  for (const std::vector<std::uint32_t>& members : linked_groups(points, loose, radius, any_height)) {
+    if (members.size() < min_points || members.size() > params.max_left_out_plane_points) continue;
+    std::vector<Point3> group;
+    group.reserve(members.size());
+    for (std::uint32_t i : members) group.push_back(points[i]);
+    // A plane of at least half the group: the group is mostly that plane, or it is left to its level.
+    const std::size_t least = std::max(min_points, (members.size() + 1) / 2);
+    for (PlanarSegment& s :
+         detect_planes_of_few_points(group, plane_params, least, params.max_left_out_plane_points)) {
+      if (s.kind != PlanarSegment::Kind::roof) continue;
+      for (std::uint32_t& i : s.points) i = members[i];  // members ascending: the order stays
+      planes.push_back(std::move(s));
+    }
+  }
+  return planes;
 }
 
 std::vector<Segment2> left_out_plane_lines(const std::vector<Point3>& points, const std::vector<PlanarSegment>& roofs,

@@ -3,7 +3,8 @@
 // farther than 1 m away, the rung is rebuilt with
 //  - a horizontal roof level for every group of such points that lie in no plane (an upper part
 //    whose few or scattered returns form no plane: a crown of returns above a shed, AHN3 large/09083),
-//    and
+//    and the planes through triples of a small group's points (a gable's other slope at 2 points per
+//    m2, under the one slope extended over the whole house), and
 //  - a cell of their own for the roof planes whose points are mostly left out, levels included: the
 //    rectangle around those points joins the arrangement's lines after the regularisation, which
 //    would merge a part narrower than its cluster distance into the wall beside it (a parapet along
@@ -32,6 +33,18 @@ namespace city3d::detail {
 std::vector<PlanarSegment> left_out_levels(const std::vector<Point3>& points, const std::vector<PlanarSegment>& segments,
                                            const std::vector<bool>& unexplained, double spacing,
                                            std::size_t min_points, const RebuildParams& params);
+
+/// The roof planes of the left-out points that are in no segment: points linked in plan as for the
+/// levels (at any height) form a group, and a group of `min_points` (at least 4) to
+/// `params.max_left_out_plane_points` points gets the planes through triples of its points that hold
+/// at least `min_points` of them (detect_planes_of_few_points with `plane_params`; roof planes only):
+/// the other slope of a gable roof, or a sloped annex, whose few returns region growing did not make a
+/// plane of. Ordered by group, then as detect_planes_of_few_points orders them. Deterministic.
+std::vector<PlanarSegment> left_out_planes(const std::vector<Point3>& points,
+                                           const std::vector<PlanarSegment>& segments,
+                                           const std::vector<bool>& unexplained, double spacing,
+                                           std::size_t min_points, const PlaneParams& plane_params,
+                                           const RebuildParams& params);
 
 /// The lines of a cell of its own for every roof plane of which at least half the points are
 /// left out: the four sides of the rectangle around those points, in the direction of an outline edge

@@ -3,6 +3,7 @@
 #include "pipeline/lod2.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <optional>
 #include <utility>
 
@@ -194,13 +195,21 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
   const std::vector<Polygon2> outline =
       building_outline(input, *raster.heightmap, planes.roofs, params, variant.wide_outline, report);
   if (variant.unexplained) {
-    // explain_more's variant for left-out points (pipeline/left_out.hpp): their roof levels.
-    const std::size_t min_points =
+    // explain_more's variant for left-out points (pipeline/left_out.hpp): their roof levels and planes,
+    // of the smaller planes' count of points, or of as many as cover min_level_area at the building's
+    // density where that is fewer (at least 3): at 1 point per m2 a low annex holds a few returns.
+    const double spacing = point_spacing(outline, points.size());
+    std::size_t min_points =
         static_cast<std::size_t>(std::max<int>(params.planes.small_min_points, params.planes.min_points / 2));
-    const std::vector<PlanarSegment> levels = left_out_levels(points, planes.segments, *variant.unexplained,
-                                                              point_spacing(outline, points.size()), min_points,
-                                                              params.rebuild);
+    const double cover = spacing > 0 ? std::ceil(params.rebuild.min_level_area / (spacing * spacing)) : 0.0;
+    if (cover > 0 && cover < static_cast<double>(min_points))
+      min_points = std::max<std::size_t>(3, static_cast<std::size_t>(cover));
+    const std::vector<PlanarSegment> levels =
+        left_out_levels(points, planes.segments, *variant.unexplained, spacing, min_points, params.rebuild);
+    const std::vector<PlanarSegment> sloped = left_out_planes(
+        points, planes.segments, *variant.unexplained, spacing, min_points, params.planes, params.rebuild);
     planes.roofs.insert(planes.roofs.end(), levels.begin(), levels.end());
+    planes.roofs.insert(planes.roofs.end(), sloped.begin(), sloped.end());
     report.planes = planes.roofs.size();
   }
   stage.reset();

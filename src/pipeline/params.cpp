@@ -46,6 +46,8 @@ void ReconstructionParams::validate() const {
        "rebuild.level_link_height must be >= 0 (metres)");
   need(rebuild.min_left_out_width >= 0 && finite(rebuild.min_left_out_width),
        "rebuild.min_left_out_width must be >= 0 (metres)");
+  need(rebuild.min_level_area >= 0 && finite(rebuild.min_level_area),
+       "rebuild.min_level_area must be >= 0 (m2)");
   need(roof_type.flat_angle >= 0 && roof_type.flat_angle <= 90, "roof_type.flat_angle must be in [0, 90] (degrees)");
   need(roof_type.level_gap >= 0 && finite(roof_type.level_gap), "roof_type.level_gap must be >= 0 (metres)");
   need(full_rung_time_share > 0 && full_rung_time_share <= 1, "full_rung_time_share must be in (0, 1]");
@@ -73,6 +75,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("planes.absorb_rounds", p.planes.absorb_rounds);
   put("planes.wall_max_normal_z", p.planes.wall_max_normal_z);
   put("planes.small_min_points", p.planes.small_min_points);
+  put("planes.few_points_max_slope", p.planes.few_points_max_slope);
   put("heightmap.resolution", p.heightmap.resolution);
   put("heightmap.resolution_per_spacing", p.heightmap.resolution_per_spacing);
   put("heightmap.min_resolution", p.heightmap.min_resolution);
@@ -160,6 +163,8 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("rebuild.level_link_spacings", p.rebuild.level_link_spacings);
   put("rebuild.level_link_height", p.rebuild.level_link_height);
   put("rebuild.min_left_out_width", p.rebuild.min_left_out_width);
+  put("rebuild.min_level_area", p.rebuild.min_level_area);
+  put("rebuild.max_left_out_plane_points", p.rebuild.max_left_out_plane_points);
   put("roof_type.flat_angle", p.roof_type.flat_angle);
   put("roof_type.level_gap", p.roof_type.level_gap);
   put("output_grid", p.output_grid);

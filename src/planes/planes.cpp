@@ -43,6 +43,9 @@ void PlaneParams::validate() const {
   if (!(wall_max_normal_z >= 0.0 && wall_max_normal_z < 1.0))
     problems.push_back("wall_max_normal_z = " + std::to_string(wall_max_normal_z) +
                        ", need in [0, 1)");
+  if (!(few_points_max_slope > 0.0 && few_points_max_slope <= 90.0))
+    problems.push_back("few_points_max_slope = " + std::to_string(few_points_max_slope) +
+                       " deg, need in (0, 90]");
   if (problems.empty()) return;
   std::string message = "planes: invalid parameters: ";
   for (std::size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];
@@ -399,6 +402,11 @@ std::vector<PlanarSegment> detect_planes_of_few_points(const std::vector<Point3>
   const auto point_at = [&](std::size_t i) {
     return Eigen::Vector3d(local_points[i].x, local_points[i].y, local_points[i].z);
   };
+  // A normal's |z| between a wall's and this is a plane steeper than roofs are (few_points_max_slope).
+  const double min_roof_normal_z = std::cos(params.few_points_max_slope * kPi / 180.0);
+  const auto too_steep = [&](double normal_z) {
+    return std::abs(normal_z) >= params.wall_max_normal_z && std::abs(normal_z) < min_roof_normal_z;
+  };
   std::vector<bool> taken(n, false);
   std::vector<PlanarSegment> segments;
   for (;;) {
@@ -418,6 +426,7 @@ std::vector<PlanarSegment> detect_planes_of_few_points(const std::vector<Point3>
           const double length = normal.norm();
           if (!(length > 1e-9)) continue;  // collinear
           normal /= length;
+          if (too_steep(normal.z())) continue;
           std::size_t count = 0;
           for (std::size_t i : free) count += std::abs(normal.dot(point_at(i) - pa)) <= params.max_distance;
           if (count <= best.size()) continue;
@@ -433,7 +442,9 @@ std::vector<PlanarSegment> detect_planes_of_few_points(const std::vector<Point3>
       if (std::abs(refit.plane.signed_distance(local_points[i])) <= params.max_distance) inliers.push_back(i);
     if (inliers.size() < min_inliers) inliers = best;
     for (std::size_t i : inliers) taken[i] = true;
-    segments.push_back(detail::segment_of(inliers, local_points, params, building_centroid));
+    PlanarSegment segment = detail::segment_of(inliers, local_points, params, building_centroid);
+    if (!too_steep(segment.plane.c))
+      segments.push_back(std::move(segment));  // a refit turned steep: left out
   }
   std::sort(segments.begin(), segments.end(), detail::largest_first);
   return segments;
