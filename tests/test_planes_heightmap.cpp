@@ -329,18 +329,25 @@ TEST(DetectPlanes, gable_roof_gives_two_planes_with_the_true_slope_and_ridge_dir
     EXPECT_NEAR(-(s.plane.a * 6.0 + s.plane.b * 4.0 + s.plane.d) / s.plane.c, ridge_z, 0.1);
 }
 
-// A gable house in a sparse survey: 26 points, 13 per slope in three staggered rows, with 3 cm noise. Region
-// growing finds no plane (the k-neighbour normals of so few points mix both slopes); every triple finds both.
-TEST(DetectPlanes, few_points_of_a_sparse_gable_give_its_two_planes_through_triples) {
-  std::mt19937 rng(5);
+// A gable 8 m wide in a sparse survey: `per_slope` points a slope, 0.9 m apart along the ridge in three
+// staggered rows, both slopes alternating in order (even: y > 4, odd: y < 4), with 3 cm noise.
+std::vector<Point3> sparse_gable(int per_slope, unsigned seed) {
+  std::mt19937 rng(seed);
   std::normal_distribution<double> noise(0.0, 0.03);
   std::vector<Point3> points;
   const double t = std::tan(kGableSlope * kPi / 180.0);
-  for (int i = 0; i < 13; ++i)
+  for (int i = 0; i < per_slope; ++i)
     for (int side = 0; side < 2; ++side) {
       const double x = 0.9 * i, y = side ? 0.5 + 1.3 * (i % 3) : 7.5 - 1.3 * ((i + 1) % 3);
       points.push_back({x, y, 5.0 + t * (4.0 - std::abs(y - 4.0)) + noise(rng)});
     }
+  return points;
+}
+
+// A gable house in a sparse survey: 26 points, 13 per slope in three staggered rows, with 3 cm noise. Region
+// growing finds no plane (the k-neighbour normals of so few points mix both slopes); every triple finds both.
+TEST(DetectPlanes, few_points_of_a_sparse_gable_give_its_two_planes_through_triples) {
+  const std::vector<Point3> points = sparse_gable(13, 5);
   EXPECT_TRUE(detect_planes(points, PlaneParams{}).empty());
   const auto segments = detect_planes_of_few_points(points, PlaneParams{}, (points.size() + 3) / 4);
   ASSERT_EQ(segments.size(), 2u);
@@ -358,6 +365,37 @@ TEST(DetectPlanes, few_points_of_a_sparse_gable_give_its_two_planes_through_trip
   EXPECT_EQ(detect_planes_of_few_points(shed, PlaneParams{}, 2)[0].points.size(), 7u);
   EXPECT_TRUE(detect_planes_of_few_points({shed[0], shed[1], shed[2]}, PlaneParams{}, 1).empty());
   EXPECT_TRUE(detect_planes_of_few_points(points, PlaneParams{}, 7, 20).empty());
+}
+
+// The same gable, 90 m long: 200 points, more than the 60 candidates. The triples are drawn from 60
+// of them, spread over the whole house; each slope's plane holds its 100 points. With 4 candidates
+// (points 0, 50, 100 and 150 of the 200, all on one slope) the one slope is still found, then the
+// other among the 100 left: the first 4 points in order would mix both slopes, none a plane.
+TEST(DetectPlanes, a_sparse_gable_of_more_points_than_the_candidates_gives_its_two_planes) {
+  const std::vector<Point3> points = sparse_gable(100, 7);
+  // More points than max_points (60 by default): none.
+  EXPECT_TRUE(detect_planes_of_few_points(points, PlaneParams{}, 50).empty());
+  PlaneParams four;
+  four.few_points_candidates = 4;
+  for (const PlaneParams& params : {PlaneParams{}, four}) {
+    const auto segments = detect_planes_of_few_points(points, params, 50, 2000);
+    ASSERT_EQ(segments.size(), 2u) << params.few_points_candidates;
+    std::vector<int> planes_of(points.size(), 0);
+    for (const auto& s : segments) {
+      EXPECT_EQ(s.kind, PlanarSegment::Kind::roof);
+      EXPECT_NEAR(tilt_degrees(s.plane), kGableSlope, 1.0);
+      EXPECT_EQ(s.points.size(), 100u);
+      for (std::uint32_t i : s.points) ++planes_of[i];
+    }
+    EXPECT_TRUE(std::all_of(planes_of.begin(), planes_of.end(), [](int n) { return n == 1; }));
+    EXPECT_LT(segments[0].plane.b * segments[1].plane.b, 0.0);
+  }
+  PlaneParams invalid;
+  invalid.few_points_candidates = 2;
+  EXPECT_THROW(invalid.validate(), city3d::ConfigError);
+  invalid = PlaneParams{};
+  invalid.few_points_max_points = 2;
+  EXPECT_THROW(invalid.validate(), city3d::ConfigError);
 }
 
 // A few returns at two heights, 3 m apart across a step 1 m wide: triples spanning both make planes

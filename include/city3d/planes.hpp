@@ -38,6 +38,14 @@ struct PlaneParams {
   /// an eave over a lower part), a triple spanning both makes a plane steeper than roofs are, a blade
   /// over the lower part. In (0, 90].
   double few_points_max_slope = 70.0;
+  /// The triples of detect_planes_of_few_points are drawn from at most this many of the points not
+  /// yet in a plane, evenly spread over them in order (every one of them when there are no more); a
+  /// triple's inliers are counted among all of them. The triples grow with the cube of this. >= 3.
+  int few_points_candidates = 60;
+  /// Most points of a building with no roof plane from region growing that still gets the planes
+  /// through triples (detect_planes_of_few_points): a house of tens or hundreds of returns in a survey of 1
+  /// point per m2, whose k-neighbour normals mix its slopes. >= 3.
+  int few_points_max_points = 2000;
 
   /// Throws ConfigError listing every invalid field ("planes: invalid parameters: ...; ...").
   void validate() const;
@@ -106,11 +114,12 @@ class PlaneDetector {
 
 /// The planes of a building too small or too sparse for region growing (a shed of a few points, a house
 /// in a survey of 2 points per m2, whose k-neighbour normals mix its roof's slopes): the plane through
-/// three of the points that holds the most of them within max_distance, every triple tried, refitted
-/// by least squares, its points taken; again on the rest while a plane holds at least `min_inliers`
-/// (at least 4: any three points make a plane) of them. Labelled and ordered as detect_planes() does.
-/// Returns nothing for fewer than min_inliers or more than `max_points` points (the triples grow with
-/// the cube of the count), or a non-finite coordinate. Planes steeper than `params.few_points_max_slope`
+/// three of the points that holds the most of them within max_distance, every triple of the
+/// candidates tried (`params.few_points_candidates` of the points not yet in a plane, evenly spread;
+/// all of them when there are no more), refitted by least squares, its points taken; again on the rest
+/// while a plane holds at least `min_inliers` (at least 4: any three points make a plane) of them.
+/// Labelled and ordered as detect_planes() does. Returns nothing for fewer than min_inliers or more
+/// than `max_points` points, or a non-finite coordinate. Planes steeper than `params.few_points_max_slope`
 /// but not walls are not taken (their points are left to the next plane). Deterministic.
 std::vector<PlanarSegment> detect_planes_of_few_points(const std::vector<Point3>& local_points,
                                                        const PlaneParams& params, std::size_t min_inliers,

@@ -52,11 +52,16 @@ BuildingPlanes building_planes(const std::vector<Point3>& points, const Reconstr
   if (!has_roof(segments)) {
     // Too few points, or too sparse, for region growing (k-neighbour normals then mix a roof's slopes:
     // every 4th point of the Delft tiles, about 2 per m2, left six houses of 7 to 28 points without a
-    // plane): planes through triples of the points, each holding at least a quarter of them.
-    const std::vector<PlanarSegment> few = detect_planes_of_few_points(points, params.planes, (points.size() + 3) / 4);
+    // plane; at every 8th, a house of 62 returns got none): planes through triples of the points (of
+    // few_points_candidates of them, evenly spread, where there are more), each holding at least a
+    // quarter of them.
+    const std::vector<PlanarSegment> few =
+        detect_planes_of_few_points(points, params.planes, (points.size() + 3) / 4,
+                                    static_cast<std::size_t>(params.planes.few_points_max_points));
     if (has_roof(few)) {
       segments = few;
-      add_note(report, "few points: planes fitted through every three of its " + std::to_string(points.size()) + " points");
+      add_note(report, "few points: planes fitted through triples of its " + std::to_string(points.size()) +
+                           " points");
     }
   }
   BuildingPlanes planes;

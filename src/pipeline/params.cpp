@@ -76,6 +76,8 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("planes.wall_max_normal_z", p.planes.wall_max_normal_z);
   put("planes.small_min_points", p.planes.small_min_points);
   put("planes.few_points_max_slope", p.planes.few_points_max_slope);
+  put("planes.few_points_candidates", p.planes.few_points_candidates);
+  put("planes.few_points_max_points", p.planes.few_points_max_points);
   put("heightmap.resolution", p.heightmap.resolution);
   put("heightmap.resolution_per_spacing", p.heightmap.resolution_per_spacing);
   put("heightmap.min_resolution", p.heightmap.min_resolution);

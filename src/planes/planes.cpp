@@ -46,6 +46,10 @@ void PlaneParams::validate() const {
   if (!(few_points_max_slope > 0.0 && few_points_max_slope <= 90.0))
     problems.push_back("few_points_max_slope = " + std::to_string(few_points_max_slope) +
                        " deg, need in (0, 90]");
+  if (few_points_candidates < 3)
+    problems.push_back("few_points_candidates = " + std::to_string(few_points_candidates) + ", need >= 3");
+  if (few_points_max_points < 3)
+    problems.push_back("few_points_max_points = " + std::to_string(few_points_max_points) + ", need >= 3");
   if (problems.empty()) return;
   std::string message = "planes: invalid parameters: ";
   for (std::size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];
@@ -414,15 +418,18 @@ std::vector<PlanarSegment> detect_planes_of_few_points(const std::vector<Point3>
     for (std::size_t i = 0; i < n; ++i)
       if (!taken[i]) free.push_back(i);
     if (free.size() < min_inliers) break;
-    // The plane through three free points that holds the most free points within max_distance (the
-    // first such triple in index order): every triple is tried, there are few.
+    // The plane through three candidates that holds the most free points within max_distance (the
+    // first such triple in index order): every triple of the candidates is tried. The candidates are
+    // the free points, or as many of them as few_points_candidates, evenly spread in order.
+    const std::size_t m = std::min(free.size(), static_cast<std::size_t>(params.few_points_candidates));
+    std::vector<std::size_t> candidates(m);
+    for (std::size_t k = 0; k < m; ++k) candidates[k] = free[k * free.size() / m];
     std::vector<std::size_t> best;
-    const std::size_t m = free.size();
     for (std::size_t a = 0; a < m; ++a)
       for (std::size_t b = a + 1; b < m; ++b)
         for (std::size_t c = b + 1; c < m; ++c) {
-          const Eigen::Vector3d pa = point_at(free[a]);
-          Eigen::Vector3d normal = (point_at(free[b]) - pa).cross(point_at(free[c]) - pa);
+          const Eigen::Vector3d pa = point_at(candidates[a]);
+          Eigen::Vector3d normal = (point_at(candidates[b]) - pa).cross(point_at(candidates[c]) - pa);
           const double length = normal.norm();
           if (!(length > 1e-9)) continue;  // collinear
           normal /= length;
