@@ -480,6 +480,25 @@ TEST(Smoke, a_sparse_house_of_more_points_than_the_candidates_gets_lod22_from_tr
   EXPECT_LT(r.report.rmse, r.report.rmse_lod12);
 }
 
+// At every 8th point record b31bc9c58's steep south-east slope is the only plane with points near a
+// cell along its north-east side (that side's returns made no plane), and over it the slope rose to
+// 25.3 m, 10.6 m above the building's highest point (68.6 m2 no point supports). The planes whose
+// points come nearest and are no blade there are now offered beside it, and one of them is chosen.
+TEST(Smoke, a_cell_whose_one_plane_is_a_blade_gets_the_nearest_plane_that_is_not) {
+  require_delft();
+  const std::vector<BuildingInput> inputs = thinned_delft_inputs({"b31bc9c58"}, 8);
+  ASSERT_EQ(inputs.size(), 1u);
+  const BuildingResult r = reconstruct_building(inputs[0], {});
+  EXPECT_EQ(r.report.level, ModelLevel::lod22) << r.report.reason;
+  ASSERT_TRUE(r.model.has_value());
+  EXPECT_TRUE(check_mesh(r.model->mesh).valid());
+  EXPECT_LT(r.report.unsupported_area, 5.0) << r.report.note;
+  double top_point = -std::numeric_limits<double>::infinity(), top_model = top_point;
+  for (const Point3& p : inputs[0].points) top_point = std::max(top_point, p.z);
+  for (const Point3& v : r.model->mesh.vertices) top_model = std::max(top_model, v.z);
+  EXPECT_LT(top_model, top_point + 1.0);
+}
+
 // A building the rebuilds cannot help says so in its report, with the share it leaves (AHN3 large/02574:
 // 10 of its 52 points farther than 1 m from its flat roof. AHN3 large/06023, this test's building before,
 // 40% of its 75 points left out, is now rebuilt to none).

@@ -26,25 +26,26 @@
 //     Nearly coincident lines otherwise leave strips whose faces are degenerate and inflate the
 //     problem.
 //     Edges shorter than min_edge_length are contracted (nearly concurrent lines otherwise make
-//     cells without area). Dangling edges (an end that reaches no other line) are removed, because a cell with an
-//     "antenna" is not a simple polygon. A cell with a hole is split by a horizontal line across
-//     the footprint at the hole's middle height, so every cell is a simple polygon. Dangling ends of
-//     roof lines and inner walls that lie inside the footprint, with no crossing within
-//     2 x line_support_margin, are first extended to the next line ahead.
-//     The outer VerticalPlanes are not used: the footprint rings are the outer walls.
-//     Contracting short edges can make a cell's loop visit a vertex twice (a sliver part collapsed
-//     onto a point): the loop is split there into simple loops; two-vertex pieces vanish, the others
-//     are cells (even when snapping turned them clockwise: dropping one would open a crack).
-//     Detached parts of the inside cells (connected across inner edges) smaller than min_part_area
-//     are dropped, never the largest part: a self-touching outline leaves lobes of a few cm2.
+//     cells without area). Dangling edges (an end that reaches no other line) are removed, because a cell
+//     with an "antenna" is not a simple polygon. A cell with a hole is split by a horizontal line across the
+//     footprint at the hole's middle height, so every cell is a simple polygon. Dangling ends of roof lines
+//     and inner walls that lie inside the footprint, with no crossing within 2 x line_support_margin, are
+//     first extended to the next line ahead. The outer VerticalPlanes are not used: the footprint rings are
+//     the outer walls. Contracting short edges can make a cell's loop visit a vertex twice (a sliver part
+//     collapsed onto a point): the loop is split there into simple loops; two-vertex pieces vanish, the
+//     others are cells (even when snapping turned them clockwise: dropping one would open a crack). Detached
+//     parts of the inside cells (connected across inner edges) smaller than min_part_area are dropped, never
+//     the largest part: a self-touching outline leaves lobes of a few cm2.
 //  2. Roof faces: every bounded cell inside the footprint, lifted onto the roof planes that have at
 //     least min_support_points of their points within cell_support_margin (xy) of the cell (when no
 //     plane qualifies, the plane(s) whose points come nearest), at most max_planes_per_cell of them
 //     (at most max_planes_per_large_cell when there are more than large_cell_count cells):
 //     the ones with most points inside the cell, then most points within the margin, then the lower
 //     plane index (planes whose face over the cell would have more than max_unsupported_area of surface
-//     no point supports come after the others). Vertically overlapping roof faces are exactly the faces
-//     over the same cell.
+//     no point supports come after the others). A cell whose one plane is such a blade over it also
+//     gets the planes whose points come nearest that are none there, nearest first, up to
+//     max_planes_per_cell: the part of a steep plane beyond its support cut (below) would otherwise
+//     keep only the blade. Vertically overlapping roof faces are exactly the faces over the same cell.
 //     Support cuts: a plane with at least min_support_points of its points inside a cell whose face
 //     there would rise more than support_cut_rise above its points' top plus support_cut_height, over
 //     no point (surface_support.hpp), is a blade: the plane's contour at that height, clipped to the

@@ -1,7 +1,8 @@
 // Face hypothesis, step 3: which roof planes are lifted onto each cell of the arrangement, and the
 // floor below them. A plane is a candidate over a cell when enough of its points lie in or near the
 // cell and its face over the cell rises over no point (surface_support.hpp); the best-supported few
-// are kept (the integer program grows with cells x planes).
+// are kept (the integer program grows with cells x planes). A cell whose one plane is a blade over it
+// is offered the nearest planes that are not.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -101,6 +102,28 @@ std::vector<std::vector<int>> cell_roof_planes(const std::vector<Point3>& points
       }
       for (std::size_t b = 0; b < blades.size() && kept.size() < max_planes; ++b) kept.push_back(blades[b]);
       list = std::move(kept);
+    }
+    if (list.size() == 1 && max_planes > 1 &&
+        unsupported_over(roofs[static_cast<std::size_t>(list[0].plane)], poly, local_top,
+                         params.surface_support) > params.max_unsupported_area) {
+      // The one plane near the cell is a blade over it (a steep plane beyond its points, often the part
+      // beyond a support cut's contour): the planes whose points come nearest that are no blade there
+      // are offered beside it, nearest first, so that the selection has another roof to choose.
+      std::vector<std::pair<double, int>> others;
+      for (std::size_t r = 0; r < R; ++r) {
+        if (static_cast<int>(r) == list[0].plane) continue;
+        double d = std::numeric_limits<double>::infinity();
+        for (std::uint32_t k : roofs[r].points)
+          d = std::min(d, distance_to_polygon(poly, points[k].x, points[k].y));
+        others.push_back({d, static_cast<int>(r)});
+      }
+      std::sort(others.begin(), others.end());
+      for (const auto& [d, r] : others) {
+        if (list.size() == max_planes) break;
+        if (unsupported_over(roofs[static_cast<std::size_t>(r)], poly, local_top, params.surface_support) <=
+            params.max_unsupported_area)
+          list.push_back({0, 0, r});
+      }
     }
     for (const auto& pr : list) cell_planes[c].push_back(pr.plane);
     std::sort(cell_planes[c].begin(), cell_planes[c].end());
