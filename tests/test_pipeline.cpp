@@ -696,6 +696,18 @@ TEST(LeftOut, the_left_out_slope_of_a_sparse_gable_is_a_plane_of_its_own) {
   EXPECT_TRUE(std::is_sorted(planes[0].points.begin(), planes[0].points.end()));
   EXPECT_GT(planes[0].plane.b, 0.0);  // it faces the other way (+y) from the slope found
   EXPECT_NEAR(std::acos(planes[0].plane.c) * 180.0 / kPi, 40.0, 1.0);
+  // A plane needs half its group, not the group's least count (min_points, the points of a level): with
+  // 8 returns of clutter 3 m over the slope the group holds 40 points, and the slope's 32 are a plane
+  // when a group needs 36.
+  for (int k = 0; k < 8; ++k) {
+    const double x = 0.9 * k + 0.3, y = 5.0 + 0.3 * (k % 3);
+    points.push_back({x, y, 8.0 + t * (8.0 - y) + 0.1 * k});
+    unexplained.push_back(true);
+  }
+  const auto with_clutter =
+      detail::left_out_planes(points, {found}, unexplained, 1.0, 36, PlaneParams{}, params);
+  ASSERT_EQ(with_clutter.size(), 1u);
+  EXPECT_EQ(with_clutter[0].points, planes[0].points);
   // More points than the triples are searched for: no plane.
   params.max_left_out_plane_points = 31;
   EXPECT_TRUE(detail::left_out_planes(points, {found}, unexplained, 1.0, 4, PlaneParams{}, params).empty());

@@ -114,8 +114,9 @@ std::vector<PlanarSegment> left_out_planes(const std::vector<Point3>& points,
     std::vector<Point3> group;
     group.reserve(members.size());
     for (std::uint32_t i : members) group.push_back(points[i]);
-    // A plane of at least half the group: the group is mostly that plane, or it is left to its level.
-    const std::size_t least = std::max(min_points, (members.size() + 1) / 2);
+    // A plane of at least half the group (and 4 points): the group is mostly that plane, or it is left
+    // to its level.
+    const std::size_t least = std::max<std::size_t>(4, (members.size() + 1) / 2);
     for (PlanarSegment& s :
          detect_planes_of_few_points(group, plane_params, least, params.max_left_out_plane_points)) {
       if (s.kind != PlanarSegment::Kind::roof) continue;

@@ -37,9 +37,12 @@ std::vector<PlanarSegment> left_out_levels(const std::vector<Point3>& points, co
 /// The roof planes of the left-out points that are in no segment: points linked in plan as for the
 /// levels (at any height) form a group, and a group of `min_points` (at least 4) to
 /// `params.max_left_out_plane_points` points gets the planes through triples of its points that hold
-/// at least half of it, and `min_points` (detect_planes_of_few_points with `plane_params`; roof planes
-/// only; a group that is mostly no plane is left to its level): the other slope of a gable roof, or a
-/// sloped annex, whose few returns region growing did not make a plane of. Ordered by group, then as detect_planes_of_few_points orders them. Deterministic.
+/// at least half of it, and at least 4 (detect_planes_of_few_points with `plane_params`; roof planes
+/// only; a group that is mostly no plane is left to its level; `min_points` is a level's count, and a
+/// slope left out beside a plane extended over it is often fewer: its points near the extension are
+/// not left out): the other slope of a gable roof, or a
+/// sloped annex, whose few returns region growing did not make a plane of. Ordered by group, then as
+/// detect_planes_of_few_points orders them. Deterministic.
 std::vector<PlanarSegment> left_out_planes(const std::vector<Point3>& points,
                                            const std::vector<PlanarSegment>& segments,
                                            const std::vector<bool>& unexplained, double spacing,
