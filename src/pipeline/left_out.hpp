@@ -40,9 +40,9 @@ std::vector<PlanarSegment> left_out_levels(const std::vector<Point3>& points, co
 /// at least half of it, and at least 4 (detect_planes_of_few_points with `plane_params`; roof planes
 /// only; a group that is mostly no plane is left to its level; `min_points` is a level's count, and a
 /// slope left out beside a plane extended over it is often fewer: its points near the extension are
-/// not left out): the other slope of a gable roof, or a
-/// sloped annex, whose few returns region growing did not make a plane of. Ordered by group, then as
-/// detect_planes_of_few_points orders them. Deterministic.
+/// not left out): the other slope of a gable roof, or a sloped annex, whose few returns region growing
+/// did not make a plane of. Ordered by group, then as detect_planes_of_few_points orders them.
+/// Deterministic.
 std::vector<PlanarSegment> left_out_planes(const std::vector<Point3>& points,
                                            const std::vector<PlanarSegment>& segments,
                                            const std::vector<bool>& unexplained, double spacing,
