@@ -256,6 +256,7 @@ TEST(HeightmapParams, defaults_are_pinned) {
   EXPECT_EQ(p.closing_size, 3);
   EXPECT_DOUBLE_EQ(p.canny_low, 0.6);
   EXPECT_DOUBLE_EQ(p.canny_high, 1.5);
+  EXPECT_EQ(p.rim_pixels, 1);
   EXPECT_NO_THROW(p.validate());
 }
 
@@ -996,6 +997,38 @@ TEST(DetectEdges, flat_box_gives_edges_on_its_whole_outline_and_nowhere_else) {
       EXPECT_TRUE(std::any_of(edges.begin(), edges.end(), [&](const Point2& p) {
         return std::hypot(p.x - x_side, p.y - t) <= 0.5;
       })) << "gap at " << x_side << ", " << t;
+}
+
+// The edges off the rim of the data: the step between two roofs stays, the outline goes (footprint
+// mode, where the footprint gives the outline).
+TEST(DetectEdges, off_the_rim_the_step_between_roofs_stays_and_the_outline_goes) {
+  HeightmapParams params;
+  const Heightmap map = rasterise_tin(two_flat_roofs(13), params);
+  const auto edges = detect_edges(map, params);
+  const auto kept = edges_off_the_rim(map, edges, params);
+  ASSERT_FALSE(kept.empty());
+  EXPECT_LT(kept.size(), edges.size() / 2);  // the outline is most of the edge pixels
+  for (const Point2& p : kept) {
+    EXPECT_LE(std::abs(p.x - kStepX), 0.5) << "an edge pixel off the step at " << p.x << ", " << p.y;
+    EXPECT_GT(distance_to_box_outline(p, 10, 8), 0.3) << "an outline pixel kept at " << p.x << ", " << p.y;
+  }
+  // Every 0.5 m of the step away from the outline still has its edge pixel.
+  for (double y = 1.0; y < 7.0; y += 0.5)
+    EXPECT_TRUE(std::any_of(
+        kept.begin(), kept.end(),
+        [y](const Point2& p) { return std::abs(p.x - kStepX) <= 0.3 && p.y >= y && p.y < y + 0.5; }))
+        << "no edge pixel near the step at y in [" << y << ", " << y + 0.5 << ")";
+  // The kept pixels are edges, in their order; 0 keeps what is not itself beside a pixel without data
+  // (more), a wide rim keeps nothing.
+  EXPECT_TRUE(
+      std::includes(edges.begin(), edges.end(), kept.begin(), kept.end(),
+                    [](const Point2& a, const Point2& b) { return a.y != b.y ? a.y < b.y : a.x < b.x; }));
+  params.rim_pixels = 0;
+  EXPECT_GT(edges_off_the_rim(map, edges, params).size(), kept.size());
+  params.rim_pixels = 1000;
+  EXPECT_TRUE(edges_off_the_rim(map, edges, params).empty());
+  params.rim_pixels = -1;
+  EXPECT_THROW(edges_off_the_rim(map, edges, params), city3d::ConfigError);
 }
 
 TEST(DetectEdges, gable_ridge_and_slopes_give_no_edges) {

@@ -37,6 +37,12 @@ struct HeightmapParams {
   /// r = 0.2). Pixels above canny_high start an edge; pixels above canny_low extend it.
   double canny_low = 0.6;
   double canny_high = 1.5;
+  /// With a footprint, the edge pixels within this many pixels (rows and columns) of a pixel without
+  /// data are left out of the polylines (edges_off_the_rim); >= 0. They are the drop from the roof
+  /// to no data, the outline of the points, which the footprint's walls already give: 85% of the
+  /// Delft block's edge pixels (docs/BENCHMARKS.md). 1: Canny puts the edge of that drop on the pixel
+  /// either side of it.
+  int rim_pixels = 1;
 
   /// Throws ConfigError listing every invalid field ("heightmap: invalid parameters: ...; ...").
   void validate() const;
@@ -85,6 +91,13 @@ Heightmap rasterise_tin(const std::vector<Point3>& local_points, const Heightmap
 /// edge pixels in the heightmap's metric frame, row by row (south to north), west to east.
 /// Throws ConfigError (invalid params).
 std::vector<Point2> detect_edges(const Heightmap& heightmap, const HeightmapParams& params);
+
+/// `edges` (pixel centres, as detect_edges() gives them) without those within params.rim_pixels
+/// pixels (rows and columns) of a pixel without data: the edges inside the data, away from its rim.
+/// The raster's empty margin counts as without data. Order is kept. Throws ConfigError (invalid
+/// params).
+std::vector<Point2> edges_off_the_rim(const Heightmap& heightmap, const std::vector<Point2>& edges,
+                                      const HeightmapParams& params);
 
 /// The outline of the building for a cloud without footprint. The points are binned into the
 /// heightmap's pixel grid and the occupancy closed morphologically over about `gap_spacings` point

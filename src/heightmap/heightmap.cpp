@@ -120,6 +120,7 @@ void HeightmapParams::validate() const {
     problems.push_back("canny_low = " + detail::format_number(canny_low) + " m, need > 0");
   if (!(canny_high >= canny_low) || !std::isfinite(canny_high))
     problems.push_back("canny_high = " + detail::format_number(canny_high) + " m, need >= canny_low");
+  if (rim_pixels < 0) problems.push_back("rim_pixels = " + std::to_string(rim_pixels) + ", need >= 0");
   if (problems.empty()) return;
   std::string message = "heightmap: invalid parameters: ";
   for (std::size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];
@@ -324,6 +325,40 @@ std::vector<Point2> detect_edges(const Heightmap& heightmap, const HeightmapPara
   if (log_level() >= LogLevel::debug)
     log_debug("heightmap: " + std::to_string(edges.size()) + " edge pixels");
   return edges;
+}
+
+std::vector<Point2> edges_off_the_rim(const Heightmap& heightmap, const std::vector<Point2>& edges,
+                                      const HeightmapParams& params) {
+  params.validate();
+  const int w = heightmap.width, h = heightmap.height, k = params.rim_pixels;
+  // Each pixel's distance along its row from the nearest pixel without data (beyond the raster
+  // counts as such), capped at k + 1: a sweep to the east, then one to the west.
+  std::vector<int> row_reach(static_cast<std::size_t>(w) * h, k + 1);
+  for (int row = 0; row < h; ++row) {
+    for (int col = 0, last = -1; col < w; ++col) {  // the nearest empty pixel to the west
+      if (std::isnan(heightmap.at(col, row))) last = col;
+      row_reach[static_cast<std::size_t>(row) * w + col] = std::min(k + 1, col - last);
+    }
+    for (int col = w - 1, next = w; col >= 0; --col) {  // and to the east
+      if (std::isnan(heightmap.at(col, row))) next = col;
+      int& d = row_reach[static_cast<std::size_t>(row) * w + col];
+      d = std::min(d, next - col);
+    }
+  }
+  const auto off_the_rim = [&](int col, int row) {
+    if (col < 0 || col >= w || row - k < 0 || row + k >= h) return false;
+    for (int r = row - k; r <= row + k; ++r)
+      if (row_reach[static_cast<std::size_t>(r) * w + col] <= k) return false;
+    return true;
+  };
+  std::vector<Point2> kept;
+  kept.reserve(edges.size());
+  for (const Point2& e : edges) {
+    const auto col = static_cast<int>(std::lround((e.x - heightmap.origin.x) / heightmap.resolution - 0.5));
+    const auto row = static_cast<int>(std::lround((e.y - heightmap.origin.y) / heightmap.resolution - 0.5));
+    if (off_the_rim(col, row)) kept.push_back(e);
+  }
+  return kept;
 }
 
 std::vector<Polygon2> infer_outline(const Heightmap& heightmap, const std::vector<Point3>& local_points,

@@ -90,7 +90,13 @@ RegularisationResult vertical_lines(const BuildingInput& input, const std::vecto
   const std::vector<Point3>& points = input.points;
   const Heightmap& heightmap = *raster.heightmap;
   std::optional<StageTimer> stage(Stage::edges);
-  if (!raster.edges) raster.edges = std::make_shared<const std::vector<Point2>>(detect_edges(heightmap, params.heightmap));
+  // With a footprint its walls are the outline: the edges of the data's rim, which only repeat it, are
+  // not made into polylines.
+  if (!raster.edges)
+    raster.edges = std::make_shared<const std::vector<Point2>>(
+        input.footprint_given
+            ? edges_off_the_rim(heightmap, detect_edges(heightmap, params.heightmap), params.heightmap)
+            : detect_edges(heightmap, params.heightmap));
   const std::vector<Point2>& edges = *raster.edges;
   stage.emplace(Stage::polylines);
   if (!raster.polylines)

@@ -86,6 +86,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("heightmap.closing_size", p.heightmap.closing_size);
   put("heightmap.canny_low", p.heightmap.canny_low);
   put("heightmap.canny_high", p.heightmap.canny_high);
+  put("heightmap.rim_pixels", p.heightmap.rim_pixels);
   put("polylines.max_hausdorff", p.polylines.max_hausdorff);
   put("polylines.max_cost", p.polylines.max_cost);
   put("polylines.resolution", p.polylines.resolution);
