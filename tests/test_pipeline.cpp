@@ -840,36 +840,47 @@ TEST(EndToEnd, synthetic_box_gable_l_and_step_buildings_reconstruct_to_their_sha
 }
 
 // With a footprint, its walls are the outline: the heightmap's edges along the rim of the data (the drop
-// from the roof to no data) are not made into polylines, only the step between the two roofs is.
+// from the roof to no data) are not made into polylines, only the step between the two roofs is. Walls
+// inferred from the lines (--walls inferred) still get the outline's.
 TEST(EndToEnd, with_a_footprint_the_polylines_follow_the_step_and_not_the_outline) {
   const fs::path debug = fs::temp_directory_path() / "city3d_test_rim_edges";
-  fs::remove_all(debug);
-  ReconstructionParams params;
-  params.debug_dir = debug.string();
-  const BuildingResult r = reconstruct_building(
-      synthetic_input(
-          {{0, 0}, {12, 0}, {12, 6}, {0, 6}}, [](double x, double) { return x < 6 ? 7.0 : 4.0; }, 4),
-      params);
-  ASSERT_EQ(r.report.level, ModelLevel::lod22) << r.report.reason;
-  std::ifstream obj(debug / "synthetic" / "polylines.obj");
-  ASSERT_TRUE(obj) << "no polylines.obj in " << debug;
-  Box2 box;
-  std::size_t vertices = 0;
-  for (std::string line; std::getline(obj, line);) {
-    std::istringstream in(line);
-    std::string tag;
-    double x = 0, y = 0;
-    if (in >> tag >> x >> y && tag == "v") {
-      box.add({x, y});
-      ++vertices;
+  const BuildingInput input = synthetic_input(
+      {{0, 0}, {12, 0}, {12, 6}, {0, 6}}, [](double x, double) { return x < 6 ? 7.0 : 4.0; }, 4);
+  const auto polylines_box = [&](WallMode mode, std::size_t& vertices) {
+    fs::remove_all(debug);
+    ReconstructionParams params;
+    params.debug_dir = debug.string();
+    params.walls.mode = mode;
+    const BuildingResult r = reconstruct_building(input, params);
+    EXPECT_EQ(r.report.level, ModelLevel::lod22) << r.report.reason;
+    EXPECT_TRUE(r.model && r.model->mesh.faces.size() == 8u);
+    std::ifstream obj(debug / "synthetic" / "polylines.obj");
+    EXPECT_TRUE(obj) << "no polylines.obj in " << debug;
+    Box2 box;
+    vertices = 0;
+    for (std::string line; std::getline(obj, line);) {
+      std::istringstream in(line);
+      std::string tag;
+      double x = 0, y = 0;
+      if (in >> tag >> x >> y && tag == "v") {
+        box.add({x, y});
+        ++vertices;
+      }
     }
+    fs::remove_all(debug);
+    return box;
+  };
+  // The step runs across the 6 m width at one x; the outline spans the 12 m length too.
+  std::size_t vertices = 0;
+  for (WallMode mode : {WallMode::automatic, WallMode::footprint}) {
+    const Box2 box = polylines_box(mode, vertices);
+    ASSERT_GE(vertices, 2u);
+    EXPECT_LT(box.max.x - box.min.x, 1.0);
+    EXPECT_GT(box.max.y - box.min.y, 4.0);
   }
-  // The step runs across the 6 m width at one x; the outline would span the 12 m length too.
+  const Box2 inferred = polylines_box(WallMode::inferred, vertices);
   ASSERT_GE(vertices, 2u);
-  EXPECT_LT(box.max.x - box.min.x, 1.0);
-  EXPECT_GT(box.max.y - box.min.y, 4.0);
-  EXPECT_EQ(r.model->mesh.faces.size(), 8u);
-  fs::remove_all(debug);
+  EXPECT_GT(inferred.max.x - inferred.min.x, 11.0);
 }
 
 // The roof type (3DBAG's b3_dak_type) takes a roof within RoofTypeParams::flat_angle of horizontal as

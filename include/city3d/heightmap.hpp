@@ -37,11 +37,11 @@ struct HeightmapParams {
   /// r = 0.2). Pixels above canny_high start an edge; pixels above canny_low extend it.
   double canny_low = 0.6;
   double canny_high = 1.5;
-  /// With a footprint, the edge pixels within this many pixels (rows and columns) of a pixel without
-  /// data are left out of the polylines (edges_off_the_rim); >= 0. They are the drop from the roof
-  /// to no data, the outline of the points, which the footprint's walls already give: 85% of the
-  /// Delft block's edge pixels (docs/BENCHMARKS.md). 1: Canny puts the edge of that drop on the pixel
-  /// either side of it.
+  /// Where a footprint's walls are the outline, the edge pixels within this many pixels (rows and columns) of
+  /// a pixel without data are left out of the polylines (edges_off_the_rim); >= 0. They are the drop from the
+  /// roof to no data, the outline of the points, which the footprint's walls already give: 85% of the Delft
+  /// block's edge pixels (docs/BENCHMARKS.md). 1: Canny puts the edge of that drop on the pixel either side
+  /// of it.
   int rim_pixels = 1;
 
   /// Throws ConfigError listing every invalid field ("heightmap: invalid parameters: ...; ...").

@@ -90,11 +90,13 @@ RegularisationResult vertical_lines(const BuildingInput& input, const std::vecto
   const std::vector<Point3>& points = input.points;
   const Heightmap& heightmap = *raster.heightmap;
   std::optional<StageTimer> stage(Stage::edges);
-  // With a footprint its walls are the outline: the edges of the data's rim, which only repeat it, are
-  // not made into polylines.
+  // Where the footprint's walls are the outline, the edges of the data's rim, which only repeat it, are
+  // not made into polylines. (Walls inferred from the lines need them: they are the outer walls.)
+  const bool footprint_walls = input.footprint_given && (params.walls.mode == WallMode::automatic ||
+                                                         params.walls.mode == WallMode::footprint);
   if (!raster.edges)
     raster.edges = std::make_shared<const std::vector<Point2>>(
-        input.footprint_given
+        footprint_walls
             ? edges_off_the_rim(heightmap, detect_edges(heightmap, params.heightmap), params.heightmap)
             : detect_edges(heightmap, params.heightmap));
   const std::vector<Point2>& edges = *raster.edges;
