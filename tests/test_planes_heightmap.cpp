@@ -21,6 +21,7 @@
 #include "city3d/debug_output.hpp"
 #include "city3d/error.hpp"
 #include "city3d/heightmap.hpp"
+#include "city3d/pipeline.hpp"
 #include "city3d/planes.hpp"
 #include "city3d/point_cloud_io.hpp"
 #include "city3d/polylines.hpp"
@@ -908,7 +909,7 @@ TEST(FitOutline, a_stray_point_does_not_pull_a_wall_out_and_an_empty_edge_stays)
   points.erase(std::remove_if(points.begin(), points.end(), [](const Point3& p) { return p.y > 5.0; }),
                points.end());
   const city3d::Polygon2 loose{{{-0.4, -0.4}, {10.4, -0.4}, {10.4, 6.4}, {-0.4, 6.4}}, {}};
-  const city3d::Polygon2 fitted = city3d::fit_outline_to_points(loose, points, 1.0);
+  const city3d::Polygon2 fitted = city3d::fit_outline_to_points(loose, points, {/*band=*/1.0});
   double east = -1e9, north = -1e9;
   for (const auto& c : fitted.outer) {
     east = std::max(east, c.x);
@@ -918,10 +919,36 @@ TEST(FitOutline, a_stray_point_does_not_pull_a_wall_out_and_an_empty_edge_stays)
   EXPECT_DOUBLE_EQ(north, 6.4) << "no point within the band: the edge keeps its place";
 }
 
+// The fit's numbers are parameters (OutlineParams::fit), checked like every other: each wrong one named.
+TEST(FitOutline, invalid_parameters_are_refused_naming_each) {
+  city3d::OutlineFitParams bad;
+  bad.band = 0.0;
+  bad.min_points = 0;
+  const city3d::Polygon2 square{{{0, 0}, {4, 0}, {4, 4}, {0, 4}}, {}};
+  try {
+    city3d::fit_outline_to_points(square, house_with_east_facade(), bad);
+    FAIL() << "expected ConfigError";
+  } catch (const city3d::ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("band must be > 0"), std::string::npos) << what;
+    EXPECT_NE(what.find("min_points must be >= 1"), std::string::npos) << what;
+    EXPECT_EQ(what.find("max_shift"), std::string::npos) << what;
+  }
+  city3d::ReconstructionParams params;
+  params.outline.fit.max_shift = -1.0;
+  try {
+    params.validate();
+    FAIL() << "expected ConfigError";
+  } catch (const city3d::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("max_shift must be > 0"), std::string::npos) << e.what();
+  }
+}
+
 TEST(FitOutline, a_fit_that_would_move_a_corner_too_far_returns_the_input) {
   const std::vector<Point3> points = house_with_east_facade();
   const city3d::Polygon2 loose{{{-0.4, -0.4}, {10.4, -0.4}, {10.4, 6.4}, {-0.4, 6.4}}, {}};
-  const city3d::Polygon2 same = city3d::fit_outline_to_points(loose, points, 1.0, 0.5, 5, /*max_shift=*/0.1);
+  const city3d::Polygon2 same =
+      city3d::fit_outline_to_points(loose, points, {1.0, 0.5, 5, /*max_shift=*/0.1});
   ASSERT_EQ(same.outer.size(), loose.outer.size());
   for (std::size_t i = 0; i < same.outer.size(); ++i) {
     EXPECT_DOUBLE_EQ(same.outer[i].x, loose.outer[i].x);

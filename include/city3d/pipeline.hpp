@@ -59,6 +59,8 @@ struct OutlineParams {
   double min_extra_part_area = 4.0;
   /// Parts nearer to each other than this are taken to touch, metres (a part is kept apart or left out).
   double part_gap = 0.1;
+  /// How an inferred outline, once regularised, is moved onto its outermost points.
+  OutlineFitParams fit;
 };
 
 /// The rebuilds of a LoD2 model that leaves points unexplained or carries surface no point supports

@@ -73,6 +73,22 @@ RegularisationResult regularise(const std::vector<Polyline2>& polylines,
 /// corner by more than `max_shift` metres, change the area by more than 10%, or self-intersect.
 Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold = 20.0, double max_shift = 1.5);
 
+/// How fit_outline_to_points() moves an inferred outline onto its outermost points.
+struct OutlineFitParams {
+  /// Points within this of an edge's line count for it, metres (> 0)...
+  double band = 1.0;
+  /// ...when their projection lies this far in from each end of the edge (at most a quarter of its
+  /// length), metres (>= 0).
+  double end_margin = 0.5;
+  /// An edge with fewer such points stays where it is (>= 1).
+  int min_points = 5;
+  /// The fit is refused when it would move a corner further than this, metres (> 0).
+  double max_shift = 1.5;
+
+  /// Throws ConfigError listing every invalid field ("outline fit: invalid parameters: ...").
+  void validate() const;
+};
+
 /// Moves each edge of an inferred outline, along its normal (its direction is kept), onto the
 /// outermost points beside it, so that walls pass through the facade points a cloud has and roofs
 /// end at their last points otherwise. For each edge, the points whose projection lies on the edge
@@ -82,8 +98,9 @@ Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold = 20
 /// than `min_points` such points stay. The corners become the intersections of consecutive lines;
 /// returns the input unchanged when that would move a corner by more than `max_shift`, make the ring
 /// non-simple, or change its area by more than 25%. `points` in the outline's (local) frame; the
-/// outline counter-clockwise (as infer_outline() and regularise_outline() give it).
-Polygon2 fit_outline_to_points(const Polygon2& outline, const std::vector<Point3>& points, double band = 1.0,
-                               double end_margin = 0.5, int min_points = 5, double max_shift = 1.5);
+/// outline counter-clockwise (as infer_outline() and regularise_outline() give it). Throws
+/// ConfigError (invalid params).
+Polygon2 fit_outline_to_points(const Polygon2& outline, const std::vector<Point3>& points,
+                               const OutlineFitParams& params = {});
 
 }  // namespace city3d

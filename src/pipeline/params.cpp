@@ -29,6 +29,7 @@ void ReconstructionParams::validate() const {
   check([&] { assemble.validate(); });
   check([&] { lod1.validate(); });
   check([&] { validity.validate(); });
+  check([&] { outline.fit.validate(); });
   // The pipeline's own numbers, each named as parameters_text names it (NaN fails every comparison).
   const auto need = [&](bool ok, const char* what) {
     if (!ok) problems += (problems.empty() ? "" : "; ") + std::string(what);
@@ -162,6 +163,10 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("outline.wide_gap_spacings", p.outline.wide_gap_spacings);
   put("outline.min_extra_part_area", p.outline.min_extra_part_area);
   put("outline.part_gap", p.outline.part_gap);
+  put("outline.fit.band", p.outline.fit.band);
+  put("outline.fit.end_margin", p.outline.fit.end_margin);
+  put("outline.fit.min_points", p.outline.fit.min_points);
+  put("outline.fit.max_shift", p.outline.fit.max_shift);
   put("rebuild.max_candidate_faces", p.rebuild.max_candidate_faces);
   put("rebuild.level_link_spacings", p.rebuild.level_link_spacings);
   put("rebuild.level_link_height", p.rebuild.level_link_height);

@@ -399,8 +399,22 @@ Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold, dou
   return result;
 }
 
-Polygon2 fit_outline_to_points(const Polygon2& outline, const std::vector<Point3>& points, double band,
-                               double end_margin, int min_points, double max_shift) {
+void OutlineFitParams::validate() const {
+  std::ostringstream problems;
+  if (!(band > 0.0) || !std::isfinite(band)) problems << " band must be > 0 (got " << band << ");";
+  if (!(end_margin >= 0.0) || !std::isfinite(end_margin))
+    problems << " end_margin must be >= 0 (got " << end_margin << ");";
+  if (min_points < 1) problems << " min_points must be >= 1 (got " << min_points << ");";
+  if (!(max_shift > 0.0) || !std::isfinite(max_shift))
+    problems << " max_shift must be > 0 (got " << max_shift << ");";
+  if (!problems.str().empty()) throw ConfigError("outline fit: invalid parameters:" + problems.str());
+}
+
+Polygon2 fit_outline_to_points(const Polygon2& outline, const std::vector<Point3>& points,
+                               const OutlineFitParams& params) {
+  params.validate();
+  const double band = params.band, end_margin = params.end_margin, max_shift = params.max_shift;
+  const int min_points = params.min_points;
   const Ring2& ring = outline.outer;
   const std::size_t n = ring.size();
   if (n < 3 || points.empty()) return outline;
