@@ -13,6 +13,7 @@
 #include <functional>
 #include <iostream>
 #include <iterator>
+#include <limits>
 #include <random>
 #include <string>
 #include <utility>
@@ -1052,8 +1053,10 @@ TEST(DetectEdges, off_the_rim_the_step_between_roofs_stays_and_the_outline_goes)
                     [](const Point2& a, const Point2& b) { return a.y != b.y ? a.y < b.y : a.x < b.x; }));
   params.rim_pixels = 0;
   EXPECT_GT(edges_off_the_rim(map, edges, params).size(), kept.size());
-  params.rim_pixels = 1000;
-  EXPECT_TRUE(edges_off_the_rim(map, edges, params).empty());
+  for (int wide : {1000, std::numeric_limits<int>::max()}) {
+    params.rim_pixels = wide;
+    EXPECT_TRUE(edges_off_the_rim(map, edges, params).empty());
+  }
   params.rim_pixels = -1;
   EXPECT_THROW(edges_off_the_rim(map, edges, params), city3d::ConfigError);
 }

@@ -330,7 +330,8 @@ std::vector<Point2> detect_edges(const Heightmap& heightmap, const HeightmapPara
 std::vector<Point2> edges_off_the_rim(const Heightmap& heightmap, const std::vector<Point2>& edges,
                                       const HeightmapParams& params) {
   params.validate();
-  const int w = heightmap.width, h = heightmap.height, k = params.rim_pixels;
+  const int w = heightmap.width, h = heightmap.height;
+  const int k = std::min(params.rim_pixels, std::max(w, h) + 1);  // any wider rim takes every pixel
   // Each pixel's distance along its row from the nearest pixel without data (beyond the raster
   // counts as such), capped at k + 1: a sweep to the east, then one to the west.
   std::vector<int> row_reach(static_cast<std::size_t>(w) * h, k + 1);
