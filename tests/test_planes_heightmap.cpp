@@ -925,6 +925,7 @@ TEST(FitOutline, invalid_parameters_are_refused_naming_each) {
   city3d::OutlineFitParams bad;
   bad.band = 0.0;
   bad.min_points = 0;
+  bad.outermost_share = 1.5;
   const city3d::Polygon2 square{{{0, 0}, {4, 0}, {4, 4}, {0, 4}}, {}};
   try {
     city3d::fit_outline_to_points(square, house_with_east_facade(), bad);
@@ -933,6 +934,7 @@ TEST(FitOutline, invalid_parameters_are_refused_naming_each) {
     const std::string what = e.what();
     EXPECT_NE(what.find("band must be > 0"), std::string::npos) << what;
     EXPECT_NE(what.find("min_points must be >= 1"), std::string::npos) << what;
+    EXPECT_NE(what.find("outermost_share must be in (0, 1]"), std::string::npos) << what;
     EXPECT_EQ(what.find("max_shift"), std::string::npos) << what;
   }
   city3d::ReconstructionParams params;
@@ -949,7 +951,7 @@ TEST(FitOutline, a_fit_that_would_move_a_corner_too_far_returns_the_input) {
   const std::vector<Point3> points = house_with_east_facade();
   const city3d::Polygon2 loose{{{-0.4, -0.4}, {10.4, -0.4}, {10.4, 6.4}, {-0.4, 6.4}}, {}};
   const city3d::Polygon2 same =
-      city3d::fit_outline_to_points(loose, points, {1.0, 0.5, 5, /*max_shift=*/0.1});
+      city3d::fit_outline_to_points(loose, points, {1.0, 0.5, 5, 0.02, /*max_shift=*/0.1});
   ASSERT_EQ(same.outer.size(), loose.outer.size());
   for (std::size_t i = 0; i < same.outer.size(); ++i) {
     EXPECT_DOUBLE_EQ(same.outer[i].x, loose.outer[i].x);

@@ -82,8 +82,13 @@ struct OutlineFitParams {
   double end_margin = 0.5;
   /// An edge with fewer such points stays where it is (>= 1).
   int min_points = 5;
-  /// The fit is refused when it would move a corner further than this, metres (> 0).
+  /// The edge goes to the k-th outermost of its points, k the larger of 2 and this share of them, in
+  /// (0, 1]: a robust maximum, which a stray point does not pull out.
+  double outermost_share = 0.02;
+  /// The fit is refused when it would move a corner further than this, metres (> 0)...
   double max_shift = 1.5;
+  /// ...or change the outline's area by more than this share of it (> 0).
+  double max_area_change = 0.25;
 
   /// Throws ConfigError listing every invalid field ("outline fit: invalid parameters: ...").
   void validate() const;
@@ -94,12 +99,12 @@ struct OutlineFitParams {
 /// end at their last points otherwise. For each edge, the points whose projection lies on the edge
 /// (`end_margin` metres in from each end, at most a quarter of its length) and within `band` metres
 /// of its line count; the line goes to the k-th largest of their outward offsets, k = the larger of
-/// 2 and 2% of them (a robust maximum: a stray point does not pull the wall out). Edges with fewer
-/// than `min_points` such points stay. The corners become the intersections of consecutive lines;
-/// returns the input unchanged when that would move a corner by more than `max_shift`, make the ring
-/// non-simple, or change its area by more than 25%. `points` in the outline's (local) frame; the
-/// outline counter-clockwise (as infer_outline() and regularise_outline() give it). Throws
-/// ConfigError (invalid params).
+/// 2 and `outermost_share` (2%) of them (a robust maximum: a stray point does not pull the wall out).
+/// Edges with fewer than `min_points` such points stay. The corners become the intersections of
+/// consecutive lines; returns the input unchanged when that would move a corner by more than
+/// `max_shift`, make the ring non-simple, or change its area by more than `max_area_change` (25%). `points`
+/// in the outline's (local) frame; the outline counter-clockwise (as infer_outline() and regularise_outline()
+/// give it). Throws ConfigError (invalid params).
 Polygon2 fit_outline_to_points(const Polygon2& outline, const std::vector<Point3>& points,
                                const OutlineFitParams& params = {});
 

@@ -166,7 +166,9 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("outline.fit.band", p.outline.fit.band);
   put("outline.fit.end_margin", p.outline.fit.end_margin);
   put("outline.fit.min_points", p.outline.fit.min_points);
+  put("outline.fit.outermost_share", p.outline.fit.outermost_share);
   put("outline.fit.max_shift", p.outline.fit.max_shift);
+  put("outline.fit.max_area_change", p.outline.fit.max_area_change);
   put("rebuild.max_candidate_faces", p.rebuild.max_candidate_faces);
   put("rebuild.level_link_spacings", p.rebuild.level_link_spacings);
   put("rebuild.level_link_height", p.rebuild.level_link_height);

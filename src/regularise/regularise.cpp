@@ -405,8 +405,12 @@ void OutlineFitParams::validate() const {
   if (!(end_margin >= 0.0) || !std::isfinite(end_margin))
     problems << " end_margin must be >= 0 (got " << end_margin << ");";
   if (min_points < 1) problems << " min_points must be >= 1 (got " << min_points << ");";
+  if (!(outermost_share > 0.0 && outermost_share <= 1.0))
+    problems << " outermost_share must be in (0, 1] (got " << outermost_share << ");";
   if (!(max_shift > 0.0) || !std::isfinite(max_shift))
     problems << " max_shift must be > 0 (got " << max_shift << ");";
+  if (!(max_area_change > 0.0) || !std::isfinite(max_area_change))
+    problems << " max_area_change must be > 0 (got " << max_area_change << ");";
   if (!problems.str().empty()) throw ConfigError("outline fit: invalid parameters:" + problems.str());
 }
 
@@ -444,7 +448,9 @@ Polygon2 fit_outline_to_points(const Polygon2& outline, const std::vector<Point3
       if (std::abs(o) <= band) offsets.push_back(o);
     }
     if (static_cast<int>(offsets.size()) < std::max(min_points, 1)) continue;
-    const std::size_t k = std::max<std::size_t>(2, offsets.size() / 50);
+    const auto k = std::max<std::size_t>(
+        2,
+        static_cast<std::size_t>(std::floor(params.outermost_share * static_cast<double>(offsets.size()))));
     const std::size_t index = offsets.size() - std::min(k, offsets.size());
     std::nth_element(offsets.begin(), offsets.begin() + static_cast<std::ptrdiff_t>(index), offsets.end());
     l.offset += offsets[index];
@@ -468,7 +474,8 @@ Polygon2 fit_outline_to_points(const Polygon2& outline, const std::vector<Point3
   for (std::size_t i = 0; i < n; ++i)
     if (std::hypot(result.outer[i].x - ring[i].x, result.outer[i].y - ring[i].y) > max_shift) return outline;
   const double before = signed_area(ring), after = signed_area(result.outer);
-  if (!(after > 0) || std::abs(after - before) > 0.25 * std::abs(before) || !ring_is_simple(result.outer))
+  if (!(after > 0) || std::abs(after - before) > params.max_area_change * std::abs(before) ||
+      !ring_is_simple(result.outer))
     return outline;
   result.holes = outline.holes;
   return result;
