@@ -94,11 +94,11 @@ RegularisationResult vertical_lines(const BuildingInput& input, const std::vecto
   // not made into polylines. (Walls inferred from the lines need them: they are the outer walls.)
   const bool footprint_walls = input.footprint_given && (params.walls.mode == WallMode::automatic ||
                                                          params.walls.mode == WallMode::footprint);
-  if (!raster.edges)
-    raster.edges = std::make_shared<const std::vector<Point2>>(
-        footprint_walls
-            ? edges_off_the_rim(heightmap, detect_edges(heightmap, params.heightmap), params.heightmap)
-            : detect_edges(heightmap, params.heightmap));
+  if (!raster.edges) {
+    std::vector<Point2> found = detect_edges(heightmap, params.heightmap);
+    if (footprint_walls) found = edges_off_the_rim(heightmap, found, params.heightmap);
+    raster.edges = std::make_shared<const std::vector<Point2>>(std::move(found));
+  }
   const std::vector<Point2>& edges = *raster.edges;
   stage.emplace(Stage::polylines);
   if (!raster.polylines)
