@@ -17,6 +17,7 @@ packages=(
   libopencv-core-dev libopencv-imgproc-dev
   libglpk-dev coinor-libcbc-dev
   libtomlplusplus-dev nlohmann-json3-dev libproj-dev
+  libjemalloc-dev
   libgtest-dev
 )
 
