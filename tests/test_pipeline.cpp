@@ -448,6 +448,7 @@ TEST(Smoke, sparse_small_houses_get_lod22_from_planes_through_triples_of_their_p
                                            "b31bdd43a", "b31e1d770", "b31e1feb7"};
   const std::vector<BuildingInput> inputs = thinned_delft_inputs(houses, 4);
   ASSERT_EQ(inputs.size(), houses.size());
+  int several = 0;
   for (const BuildingInput& input : inputs) {
     SCOPED_TRACE(input.id);
     EXPECT_LE(input.points.size(), 30u);
@@ -459,7 +460,15 @@ TEST(Smoke, sparse_small_houses_get_lod22_from_planes_through_triples_of_their_p
     EXPECT_TRUE(check_mesh(r.model->mesh).valid());
     EXPECT_LT(r.report.rmse, r.report.rmse_lod12);
     EXPECT_LT(r.report.unsupported_area, 1.5);
+    // planes.few_points_divisor: planes through triples that must each hold every point, not a quarter
+    // of them, are one plane at most.
+    ReconstructionParams whole;
+    whole.planes.few_points_divisor = 1;
+    const BuildingResult one = reconstruct_building(input, whole);
+    EXPECT_LE(one.report.planes, 1u) << one.report.note;
+    several += r.report.planes > 1;
   }
+  EXPECT_GE(several, 1) << "a house of more than one plane at the default quarter";
 }
 
 // At every 8th point record a house of 62 points has no plane from region growing, and more points
@@ -708,6 +717,11 @@ TEST(LeftOut, the_left_out_slope_of_a_sparse_gable_is_a_plane_of_its_own) {
       detail::left_out_planes(points, {found}, unexplained, 1.0, 36, PlaneParams{}, params);
   ASSERT_EQ(with_clutter.size(), 1u);
   EXPECT_EQ(with_clutter[0].points, planes[0].points);
+  // rebuild.left_out_plane_divisor: a plane that must hold the whole group (1), not half (2), is not the
+  // slope's 32 of 40.
+  RebuildParams whole = params;
+  whole.left_out_plane_divisor = 1;
+  EXPECT_TRUE(detail::left_out_planes(points, {found}, unexplained, 1.0, 4, PlaneParams{}, whole).empty());
   // More points than the triples are searched for: no plane.
   params.max_left_out_plane_points = 31;
   EXPECT_TRUE(detail::left_out_planes(points, {found}, unexplained, 1.0, 4, PlaneParams{}, params).empty());
@@ -1044,7 +1058,14 @@ TEST(Parameters, the_pipelines_own_numbers_are_checked_and_written) {
         "planes.small_min_points = 10\n", "max_point_density = 400\n",
         "full_rung_time_share = 0.59999999999999998\n", "walls.min_escaping_rays = 3\n",
         "heightmap.resolution_per_spacing = 0.775", "hypothesis.support_cut_mixed = 0.050000000000000003\n",
-        "hypothesis.surface_support.refine = 5\n"})
+        "hypothesis.surface_support.refine = 5\n", "planes.small_divisor = 2\n", "planes.small_points_divisor = 3\n",
+        "planes.few_points_divisor = 4\n", "outline.snap.dominant_window = 10\n", "outline.snap.min_corner_angle = 5\n",
+        "outline.snap.max_shift = 1.5\n", "outline.snap.max_area_change = 0.10000000000000001\n",
+        "selection.gomory_min_columns = 1500\n", "hypothesis.support_cut_min_edge = 0.050000000000000003\n",
+        "hypothesis.support_cut_same_direction = 0.017000000000000001\n", "hypothesis.start_descent_passes = 50\n",
+        "polylines.relocate_pull = 0.001\n", "polylines.corner_min_sine = 0.17000000000000001\n",
+        "polylines.relocate_rounds = 4\n", "rebuild.left_out_plane_divisor = 2\n",
+        "rebuild.left_out_plane_min_points = 4\n"})
     EXPECT_NE(text.find(line), std::string::npos) << line;
   const std::vector<std::pair<std::string, std::function<void(ReconstructionParams&)>>> wrong = {
       {"outline.min_region_area", [](ReconstructionParams& p) { p.outline.min_region_area = 0; }},
@@ -1057,6 +1078,17 @@ TEST(Parameters, the_pipelines_own_numbers_are_checked_and_written) {
       {"min_escaping_rays", [](ReconstructionParams& p) { p.walls.min_escaping_rays = 16; }},
       {"support_cut_mixed", [](ReconstructionParams& p) { p.hypothesis.support_cut_mixed = 1; }},
       {"refine must be odd", [](ReconstructionParams& p) { p.hypothesis.surface_support.refine = 4; }},
+      {"small_divisor = 0", [](ReconstructionParams& p) { p.planes.small_divisor = 0; }},
+      {"small_points_divisor = -1", [](ReconstructionParams& p) { p.planes.small_points_divisor = -1; }},
+      {"few_points_divisor = 0", [](ReconstructionParams& p) { p.planes.few_points_divisor = 0; }},
+      {"dominant_window must be in (0, 45]", [](ReconstructionParams& p) { p.outline.snap.dominant_window = 50; }},
+      {"support_cut_min_edge must be >= 0", [](ReconstructionParams& p) { p.hypothesis.support_cut_min_edge = -1; }},
+      {"support_cut_same_direction must be in [0, 1)",
+       [](ReconstructionParams& p) { p.hypothesis.support_cut_same_direction = 1; }},
+      {"start_descent_passes must be >= 1", [](ReconstructionParams& p) { p.hypothesis.start_descent_passes = 0; }},
+      {"rebuild.left_out_plane_divisor must be >= 1", [](ReconstructionParams& p) { p.rebuild.left_out_plane_divisor = 0; }},
+      {"rebuild.left_out_plane_min_points must be >= 3",
+       [](ReconstructionParams& p) { p.rebuild.left_out_plane_min_points = 2; }},
   };
   for (const auto& [name, spoil] : wrong) {
     ReconstructionParams p;

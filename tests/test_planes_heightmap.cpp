@@ -959,6 +959,64 @@ TEST(FitOutline, a_fit_that_would_move_a_corner_too_far_returns_the_input) {
   }
 }
 
+// A skewed quadrilateral (corners up to 0.3 m off a rectangle): snapped, it becomes a rectangle whose
+// corners move by about 0.15 m and whose area changes by under 1%; each limit, set below that, keeps
+// the input.
+TEST(RegulariseOutline, each_limit_keeps_the_input_when_the_snap_goes_past_it) {
+  const city3d::Polygon2 skewed{{{0, 0}, {10, 0.3}, {10.2, 6}, {0, 6}}, {}};
+  const auto same = [&](const city3d::Polygon2& p) {
+    if (p.outer.size() != skewed.outer.size()) return false;
+    for (std::size_t i = 0; i < p.outer.size(); ++i)
+      if (p.outer[i].x != skewed.outer[i].x || p.outer[i].y != skewed.outer[i].y) return false;
+    return true;
+  };
+  const city3d::Polygon2 snapped = city3d::regularise_outline(skewed);
+  ASSERT_EQ(snapped.outer.size(), 4u);
+  EXPECT_FALSE(same(snapped)) << "the defaults snap it";
+  for (std::size_t i = 0; i < 4; ++i) {
+    const city3d::Point2 &a = snapped.outer[i], &b = snapped.outer[(i + 1) % 4], &c = snapped.outer[(i + 2) % 4];
+    EXPECT_NEAR((b.x - a.x) * (c.x - b.x) + (b.y - a.y) * (c.y - b.y), 0.0, 1e-9) << "corner " << i;
+  }
+  city3d::OutlineSnapParams tight;
+  tight.max_shift = 0.05;
+  EXPECT_TRUE(same(city3d::regularise_outline(skewed, 20.0, tight))) << "a corner moves more than 0.05 m";
+  tight = {};
+  tight.max_area_change = 1e-6;
+  EXPECT_TRUE(same(city3d::regularise_outline(skewed, 20.0, tight))) << "the area changes";
+  tight = {};
+  tight.max_shift = 0.5;
+  tight.max_area_change = 0.02;
+  EXPECT_FALSE(same(city3d::regularise_outline(skewed, 20.0, tight))) << "within both limits";
+}
+
+TEST(RegulariseOutline, invalid_parameters_are_refused_naming_each) {
+  city3d::OutlineSnapParams bad;
+  bad.dominant_window = 0.0;
+  bad.min_corner_angle = 90.0;
+  bad.max_area_change = std::numeric_limits<double>::quiet_NaN();
+  const city3d::Polygon2 square{{{0, 0}, {4, 0}, {4, 4}, {0, 4}}, {}};
+  try {
+    city3d::regularise_outline(square, 20.0, bad);
+    FAIL() << "expected ConfigError";
+  } catch (const city3d::ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("outline snap: invalid parameters"), std::string::npos) << what;
+    EXPECT_NE(what.find("dominant_window must be in (0, 45]"), std::string::npos) << what;
+    EXPECT_NE(what.find("min_corner_angle must be in (0, 90)"), std::string::npos) << what;
+    EXPECT_NE(what.find("max_area_change must be > 0"), std::string::npos) << what;
+    EXPECT_EQ(what.find("max_shift"), std::string::npos) << what;
+  }
+  city3d::ReconstructionParams params;
+  params.outline.snap.max_shift = -1.0;
+  try {
+    params.validate();
+    FAIL() << "expected ConfigError";
+  } catch (const city3d::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("outline snap: invalid parameters: max_shift must be > 0"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Heightmap, rejects_fewer_than_three_distinct_positions) {
   const std::vector<Point3> points{{0, 0, 1}, {0, 0, 2}, {1, 1, 1}};
   EXPECT_THROW(rasterise_tin(points, HeightmapParams{}), city3d::ReconstructionError);

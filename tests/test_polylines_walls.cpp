@@ -194,6 +194,35 @@ TEST(Polylines, result_does_not_depend_on_pixel_order) {
   }
 }
 
+// Relocation's numbers are the ones it uses: without the corner placement (a corner angle no corner
+// reaches) or held in place (a pull a million times the pixels' weight), the staircase rectangle's
+// polyline is another.
+TEST(Polylines, relocations_numbers_change_the_polyline) {
+  Ring2 rotated;
+  const double c = std::cos(kPi / 6), s = std::sin(kPi / 6);
+  for (const auto& p : kRectangle) rotated.push_back({20 + c * p.x - s * p.y, 3 + s * p.x + c * p.y});
+  const auto pixels = rasterise(ring_lines(rotated), 0.02, 4);
+  const auto same = [](const std::vector<Polyline2>& a, const std::vector<Polyline2>& b) {
+    if (a.size() != b.size()) return false;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      if (a[i].size() != b[i].size()) return false;
+      for (std::size_t k = 0; k < a[i].size(); ++k)
+        if (a[i][k].x != b[i][k].x || a[i][k].y != b[i][k].y) return false;
+    }
+    return true;
+  };
+  const auto defaults = extract_polylines(pixels, PolylineParams{});
+  PolylineParams changed;
+  changed.corner_min_sine = 0.999;
+  EXPECT_FALSE(same(defaults, extract_polylines(pixels, changed))) << "corner_min_sine";
+  changed = {};
+  changed.relocate_pull = 1e6;
+  EXPECT_FALSE(same(defaults, extract_polylines(pixels, changed))) << "relocate_pull";
+  changed = {};
+  changed.relocate_rounds = 100;
+  EXPECT_TRUE(same(defaults, extract_polylines(pixels, changed))) << "the rounds stop when nothing collapses";
+}
+
 TEST(Polylines, rejects_invalid_parameters_listing_every_problem) {
   PolylineParams params;
   params.max_hausdorff = 0;
@@ -205,6 +234,19 @@ TEST(Polylines, rejects_invalid_parameters_listing_every_problem) {
     const std::string what = e.what();
     EXPECT_NE(what.find("max_hausdorff"), std::string::npos) << what;
     EXPECT_NE(what.find("link_pixels"), std::string::npos) << what;
+  }
+  params = {};
+  params.relocate_pull = 0;
+  params.corner_min_sine = 1;
+  params.relocate_rounds = 0;
+  try {
+    extract_polylines({}, params);
+    FAIL() << "no exception";
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    for (const char* name : {"relocate_pull must be > 0", "corner_min_sine must be in [0, 1)", "relocate_rounds must be >= 1"})
+      EXPECT_NE(what.find(name), std::string::npos) << what;
+    EXPECT_EQ(what.find("max_hausdorff"), std::string::npos) << what;
   }
 }
 

@@ -154,6 +154,15 @@ struct HypothesisParams {
   /// That line is drawn only when it leaves at most this share of either set on the wrong side (the
   /// two are otherwise interleaved: no line ends the face where its points end), in [0, 1)
   double support_cut_mixed = 0.05;
+  /// The directions it tries are those of the cell's edges longer than support_cut_min_edge (metres,
+  /// >= 0), one of each set whose directions' cross product is below support_cut_same_direction (the
+  /// sine of the angle between them, about 1 degree; in [0, 1)).
+  double support_cut_min_edge = 0.05;
+  double support_cut_same_direction = 0.017;
+  /// The solvers' start (one roof per cell, then a descent of the selection energy) stops after this
+  /// many passes over the cells even when the last one still lowered the energy (a work limit: it
+  /// rarely takes more than a handful), >= 1
+  std::size_t start_descent_passes = 50;
   /// The measure of surface no point supports: each candidate face's unsupported area (E_u of
   /// selection.hpp) and the ranking above.
   SurfaceSupportParams surface_support;

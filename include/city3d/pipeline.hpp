@@ -59,7 +59,9 @@ struct OutlineParams {
   double min_extra_part_area = 4.0;
   /// Parts nearer to each other than this are taken to touch, metres (a part is kept apart or left out).
   double part_gap = 0.1;
-  /// How an inferred outline, once regularised, is moved onto its outermost points.
+  /// How an inferred outline is regularised (with regularise.angle_threshold)...
+  OutlineSnapParams snap;
+  /// ...and then moved onto its outermost points.
   OutlineFitParams fit;
 };
 
@@ -84,6 +86,11 @@ struct RebuildParams {
   /// many points (the triples grow with the cube of the count; a larger group makes planes by region
   /// growing).
   std::size_t max_left_out_plane_points = 60;
+  /// A left-out plane holds at least the group's points / left_out_plane_divisor (rounded up: half of
+  /// them; the group is mostly that plane, or it is left to its level) and at least
+  /// left_out_plane_min_points (>= 3). The divisor >= 1.
+  std::size_t left_out_plane_divisor = 2;
+  std::size_t left_out_plane_min_points = 4;
   /// A left-out plane's rectangle thinner than this is no cell of its own (a row of returns), metres.
   double min_left_out_width = 0.1;
 };

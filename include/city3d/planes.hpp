@@ -33,6 +33,14 @@ struct PlaneParams {
   /// Fewest points of a plane when a building is retried with smaller planes (a shed or a garage of
   /// fewer than min_points in all) and in explain_more's rebuilds, >= 3.
   int small_min_points = 10;
+  /// A building without a roof plane is retried with planes of min_points / small_divisor points, or
+  /// of its points / small_points_divisor when that is fewer (at least small_min_points); explain_more's
+  /// left-out levels and planes take the first too. Each >= 1.
+  int small_divisor = 2;
+  int small_points_divisor = 3;
+  /// A plane through triples of few points (detect_planes_of_few_points) holds at least its points /
+  /// few_points_divisor of them (rounded up). >= 1.
+  int few_points_divisor = 4;
   /// A plane through triples of few points (detect_planes_of_few_points) that is neither a wall nor
   /// a roof of at most this slope, degrees, is not taken: among a few returns at two heights (a step,
   /// an eave over a lower part), a triple spanning both makes a plane steeper than roofs are, a blade

@@ -36,6 +36,16 @@ struct PolylineParams {
   /// Move vertices onto the intersection of the lines fitted to their edges' pixels (after each
   /// collapse and at the end), where the Hausdorff bound still holds: sharper corners, fewer vertices.
   bool relocate = true;
+  /// Relocation's pull towards a vertex's old position, as a share of its pixels' weight (keeps
+  /// near-collinear cases stable). > 0.
+  double relocate_pull = 1e-3;
+  /// A collapse that breaks the Hausdorff bound with its kept vertex in place tries it at the
+  /// intersection of the two remaining edges' lines (a corner a staircase bevelled) only when the sine
+  /// of their angle exceeds this (0.17: about 10 degrees). In [0, 1).
+  double corner_min_sine = 0.17;
+  /// Collapsing and the final relocation repeat at most this many rounds (relocation can unblock
+  /// collapses; they stop early when a round collapses nothing). >= 1.
+  std::size_t relocate_rounds = 4;
 
   /// Throws ConfigError listing every invalid field.
   void validate() const;

@@ -66,12 +66,33 @@ struct RegularisationResult {
 RegularisationResult regularise(const std::vector<Polyline2>& polylines,
                                 const std::vector<Polygon2>* footprint_local, const RegulariseParams& params);
 
+/// The numbers of regularise_outline() besides its angle threshold.
+struct OutlineSnapParams {
+  /// The dominant direction is the one with the most edge length within this many degrees of it
+  /// (modulo 90), in (0, 45].
+  double dominant_window = 10.0;
+  /// Consecutive lines closer than this many degrees to parallel have no corner worth taking: the
+  /// outline is returned as it was, in (0, 90).
+  double min_corner_angle = 5.0;
+  /// The result is refused when it would move a corner further than this from every corner of the
+  /// input, metres (> 0)...
+  double max_shift = 1.5;
+  /// ...or change the outline's area by more than this share of it (> 0).
+  double max_area_change = 0.1;
+
+  /// Throws ConfigError listing every invalid field ("outline snap: invalid parameters: ...").
+  void validate() const;
+};
+
 /// Regularises a closed outline (an inferred footprint): edge directions within `angle_threshold`
 /// degrees of the dominant direction (or its orthogonal) are snapped to it exactly, consecutive edges
 /// that end up parallel are merged into one line (length-weighted offset), and the vertices become
-/// the intersections of consecutive lines. Returns the input unchanged when the result would move a
-/// corner by more than `max_shift` metres, change the area by more than 10%, or self-intersect.
-Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold = 20.0, double max_shift = 1.5);
+/// the intersections of consecutive lines. Returns the input unchanged when two consecutive lines are
+/// within `min_corner_angle` of parallel, or when the result would move a corner by more than
+/// `max_shift` metres, change the area by more than `max_area_change` (10%), or self-intersect.
+/// Throws ConfigError (invalid params).
+Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold = 20.0,
+                            const OutlineSnapParams& params = {});
 
 /// How fit_outline_to_points() moves an inferred outline onto its outermost points.
 struct OutlineFitParams {

@@ -98,6 +98,10 @@ struct SelectionParams {
   std::size_t max_exact_variables = 1500;
   std::size_t window_variables = 600;
   std::size_t window_rounds = 4;
+  /// GLPK's search uses Gomory's mixed-integer cuts (beside the MIR cuts it always uses) on programs
+  /// of more columns than this: below, they cost more than they save (docs/BENCHMARKS.md, "CPU: issue
+  /// 27, fourteenth step"). Work, not outcome: the solutions were the same either way there.
+  std::size_t gomory_min_columns = 1500;
   bool use_face_prior = true;
   bool use_single_layer = true;
   /// Throws ConfigError listing every invalid field.

@@ -206,19 +206,20 @@ void add_chords(const std::vector<Point2>& poly, const Point2& n, double t, std:
 // A line that separates a plane's own points in a cell from the part of its face there that rises over
 // no point: among the directions of the cell's edges (a building's lines are few, and mostly parallel or
 // orthogonal), the one along which the two sets overlap least, projected on its normal; the threshold
-// midway across the gap. Returns false when every direction leaves more than `max_mixed` of either set
+// midway across the gap. Returns false when every direction leaves more than support_cut_mixed of either set
 // on the wrong side (the two are interleaved: no line ends the face where its points end).
 bool separating_line(const std::vector<Point2>& poly, const std::vector<Point2>& own, const std::vector<Point2>& bare,
-                     double max_mixed, Point2& normal, double& threshold) {
+                     const HypothesisParams& params, Point2& normal, double& threshold) {
+  const double max_mixed = params.support_cut_mixed;
   std::vector<Point2> normals;
   for (std::size_t i = 0; i < poly.size(); ++i) {
     const Point2 &p = poly[i], &q = poly[(i + 1) % poly.size()];
     const double length = std::hypot(q.x - p.x, q.y - p.y);
-    if (!(length > 0.05)) continue;
+    if (!(length > params.support_cut_min_edge)) continue;
     Point2 n{-(q.y - p.y) / length, (q.x - p.x) / length};
     if (n.x < 0.0 || (n.x == 0.0 && n.y < 0.0)) n = {-n.x, -n.y};  // one of +-n
     const bool seen = std::any_of(normals.begin(), normals.end(),
-                                  [&](const Point2& m) { return std::abs(m.x * n.y - m.y * n.x) < 0.017; });
+                                  [&](const Point2& m) { return std::abs(m.x * n.y - m.y * n.x) < params.support_cut_same_direction; });
     if (!seen) normals.push_back(n);
   }
   double best_mixed = std::numeric_limits<double>::infinity(), best_gap = 0.0;
@@ -314,7 +315,7 @@ std::vector<InputCurve> support_cuts(const std::vector<Point3>& points, const st
       Point2 n;
       double t = 0.0;
       if (own.size() >= static_cast<std::size_t>(params.min_support_points) &&
-          separating_line(poly, own, bare, params.support_cut_mixed, n, t))
+          separating_line(poly, own, bare, params, n, t))
         add_chords(poly, n, t, cuts);
     }
   }

@@ -45,6 +45,8 @@ void HypothesisParams::validate() const {
       {"support_cut_area", support_cut_area, 0, false},
       {"large_cell_count", static_cast<double>(large_cell_count), 0, false},
       {"max_planes_per_large_cell", static_cast<double>(max_planes_per_large_cell), 1, false},
+      {"support_cut_min_edge", support_cut_min_edge, 0, false},
+      {"start_descent_passes", static_cast<double>(start_descent_passes), 1, false},
   };
   std::vector<std::string> problems;
   for (const LowerBound& b : bounds)
@@ -57,6 +59,8 @@ void HypothesisParams::validate() const {
     problems.push_back(e.what());
   }
   if (!(support_cut_mixed >= 0 && support_cut_mixed < 1)) problems.push_back("support_cut_mixed must be in [0, 1)");
+  if (!(support_cut_same_direction >= 0 && support_cut_same_direction < 1))
+    problems.push_back("support_cut_same_direction must be in [0, 1)");
   if (problems.empty()) return;
   std::string message = "hypothesis: invalid parameters: ";
   for (std::size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];
@@ -132,7 +136,7 @@ CandidateFaces generate_candidates(const std::vector<Point3>& points,
   build_selection_problem(points, roofs, arr, floor_z, edge_faces, local_top, params, energy, out);
   check();
   SelectionProblem& prob = out.problem;
-  prob.start = start_assignment(out, arr, lv, cell_count, energy);
+  prob.start = start_assignment(out, arr, lv, cell_count, energy, params.start_descent_passes);
 
   out.cell_count = cell_count;
   out.edge_count = arr.edges.size();

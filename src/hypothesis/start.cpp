@@ -12,9 +12,6 @@
 namespace city3d::detail {
 namespace {
 
-// The descent stops after this many passes over the cells even if the last one still improved (it
-// rarely takes more than a handful).
-constexpr std::size_t kMaxDescentPasses = 50;
 // A change must lower the energy by more than this to count (rounding in the running sums).
 constexpr double kEnergyTolerance = 1e-12;
 
@@ -33,10 +30,10 @@ constexpr double kEnergyTolerance = 1e-12;
 // is on): each pass visits the cells in order and gives each the roof face that lowers the energy
 // most among those that keep every edge at 0 or 2 faces; cells holding a face prior keep it, so the
 // start still satisfies the prior when it did. Passes repeat until none improves, at most
-// kMaxDescentPasses: every accepted change lowers the energy, so the search ends, and it visits the
+// max_passes (hypothesis.start_descent_passes): every accepted change lowers the energy, so the search ends, and it visits the
 // same cells in the same order on every machine.
 std::vector<bool> start_assignment(const CandidateFaces& out, const PlainArrangement& arr, const Levels& lv,
-                                   std::size_t cell_count, const SelectionParams& energy) {
+                                   std::size_t cell_count, const SelectionParams& energy, std::size_t max_passes) {
   const SelectionProblem& prob = out.problem;
   const std::size_t nf = out.faces.size();
   const int floor_level = lv.floor();
@@ -180,7 +177,7 @@ std::vector<bool> start_assignment(const CandidateFaces& out, const PlainArrange
   const double initial = current_energy();
   double e_now = initial;
   std::size_t passes = 0, changes = 0;
-  for (bool improved = true; improved && passes < kMaxDescentPasses; ++passes) {
+  for (bool improved = true; improved && passes < max_passes; ++passes) {
     improved = false;
     for (std::size_t c = 0; c < cell_count; ++c) {
       const std::uint32_t current = roof_of_cell[c];

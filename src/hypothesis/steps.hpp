@@ -138,9 +138,9 @@ void build_selection_problem(const std::vector<Point3>& points, const std::vecto
                              const std::vector<std::vector<std::uint32_t>>& edge_faces, const LocalTopRaster& local_top,
                              const HypothesisParams& params, const SelectionParams& energy, CandidateFaces& out);
 
-// 6. A closed start assignment for the solvers (start.cpp), descended under the weights of `energy`,
-// or an empty vector when none was found.
+// 6. A closed start assignment for the solvers (start.cpp), descended under the weights of `energy`
+// for at most `max_passes` passes, or an empty vector when none was found.
 std::vector<bool> start_assignment(const CandidateFaces& out, const PlainArrangement& arr, const Levels& lv,
-                                   std::size_t cell_count, const SelectionParams& energy);
+                                   std::size_t cell_count, const SelectionParams& energy, std::size_t max_passes);
 
 }  // namespace city3d::detail

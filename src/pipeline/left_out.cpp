@@ -106,7 +106,7 @@ std::vector<PlanarSegment> left_out_planes(const std::vector<Point3>& points,
   std::vector<PlanarSegment> planes;
   const std::vector<std::uint32_t> loose = loose_points(points.size(), segments, unexplained);
   const double radius = params.level_link_spacings * spacing;
-  min_points = std::max<std::size_t>(min_points, 4);
+  min_points = std::max<std::size_t>(min_points, params.left_out_plane_min_points);
   if (loose.size() < min_points || !(radius > 0)) return planes;
   const double any_height = std::numeric_limits<double>::infinity();
   for (const std::vector<std::uint32_t>& members : linked_groups(points, loose, radius, any_height)) {
@@ -115,8 +115,10 @@ std::vector<PlanarSegment> left_out_planes(const std::vector<Point3>& points,
     group.reserve(members.size());
     for (std::uint32_t i : members) group.push_back(points[i]);
     // A plane of at least half the group (and 4 points): the group is mostly that plane, or it is left
-    // to its level.
-    const std::size_t least = std::max<std::size_t>(4, (members.size() + 1) / 2);
+    // to its level (rebuild.left_out_plane_divisor, left_out_plane_min_points).
+    const std::size_t divisor = params.left_out_plane_divisor;
+    const std::size_t least =
+        std::max<std::size_t>(params.left_out_plane_min_points, (members.size() + divisor - 1) / divisor);
     for (PlanarSegment& s :
          detect_planes_of_few_points(group, plane_params, least, params.max_left_out_plane_points)) {
       if (s.kind != PlanarSegment::Kind::roof) continue;

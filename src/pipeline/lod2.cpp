@@ -39,10 +39,11 @@ BuildingPlanes building_planes(const std::vector<Point3>& points, const Reconstr
   if (!has_roof(segments) && points.size() >= static_cast<std::size_t>(fewest)) {
     // A shed or a garage can hold fewer points than min_points in all: rather than a block, try
     // one more time with planes of half min_points, or a third of its points when that is fewer
-    // (at least small_min_points).
+    // (at least small_min_points; planes.small_divisor and small_points_divisor).
     PlaneParams small = params.planes;
-    small.min_points =
-        std::max<int>(fewest, std::min<int>(params.planes.min_points / 2, static_cast<int>(points.size() / 3)));
+    small.min_points = std::max<int>(
+        fewest, std::min<int>(params.planes.min_points / params.planes.small_divisor,
+                              static_cast<int>(points.size() / static_cast<std::size_t>(params.planes.small_points_divisor))));
     if (small.min_points < params.planes.min_points) {
       segments = detector.detect(small);
       const std::string note = "small building: planes of at least " + std::to_string(small.min_points) + " points";
@@ -54,9 +55,10 @@ BuildingPlanes building_planes(const std::vector<Point3>& points, const Reconstr
     // every 4th point of the Delft tiles, about 2 per m2, left six houses of 7 to 28 points without a
     // plane; at every 8th, a house of 62 returns got none): planes through triples of the points (of
     // few_points_candidates of them, evenly spread, where there are more), each holding at least a
-    // quarter of them.
+    // quarter of them (planes.few_points_divisor).
+    const auto divisor = static_cast<std::size_t>(params.planes.few_points_divisor);
     const std::vector<PlanarSegment> few =
-        detect_planes_of_few_points(points, params.planes, (points.size() + 3) / 4,
+        detect_planes_of_few_points(points, params.planes, (points.size() + divisor - 1) / divisor,
                                     static_cast<std::size_t>(params.planes.few_points_max_points));
     if (has_roof(few)) {
       segments = few;
@@ -213,7 +215,8 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
     // density where that is fewer (at least 3): at 1 point per m2 a low annex holds a few returns.
     const double spacing = point_spacing(outline, points.size());
     std::size_t min_points =
-        static_cast<std::size_t>(std::max<int>(params.planes.small_min_points, params.planes.min_points / 2));
+        static_cast<std::size_t>(std::max<int>(params.planes.small_min_points,
+                                               params.planes.min_points / params.planes.small_divisor));
     const double cover = spacing > 0 ? std::ceil(params.rebuild.min_level_area / (spacing * spacing)) : 0.0;
     if (cover > 0 && cover < static_cast<double>(min_points))
       min_points = std::max<std::size_t>(3, static_cast<std::size_t>(cover));

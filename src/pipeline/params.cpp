@@ -29,6 +29,7 @@ void ReconstructionParams::validate() const {
   check([&] { assemble.validate(); });
   check([&] { lod1.validate(); });
   check([&] { validity.validate(); });
+  check([&] { outline.snap.validate(); });
   check([&] { outline.fit.validate(); });
   // The pipeline's own numbers, each named as parameters_text names it (NaN fails every comparison).
   const auto need = [&](bool ok, const char* what) {
@@ -47,6 +48,8 @@ void ReconstructionParams::validate() const {
        "rebuild.level_link_height must be >= 0 (metres)");
   need(rebuild.min_left_out_width >= 0 && finite(rebuild.min_left_out_width),
        "rebuild.min_left_out_width must be >= 0 (metres)");
+  need(rebuild.left_out_plane_divisor >= 1, "rebuild.left_out_plane_divisor must be >= 1");
+  need(rebuild.left_out_plane_min_points >= 3, "rebuild.left_out_plane_min_points must be >= 3");
   need(rebuild.min_level_area >= 0 && finite(rebuild.min_level_area),
        "rebuild.min_level_area must be >= 0 (m2)");
   need(roof_type.flat_angle >= 0 && roof_type.flat_angle <= 90, "roof_type.flat_angle must be in [0, 90] (degrees)");
@@ -76,6 +79,9 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("planes.absorb_rounds", p.planes.absorb_rounds);
   put("planes.wall_max_normal_z", p.planes.wall_max_normal_z);
   put("planes.small_min_points", p.planes.small_min_points);
+  put("planes.small_divisor", p.planes.small_divisor);
+  put("planes.small_points_divisor", p.planes.small_points_divisor);
+  put("planes.few_points_divisor", p.planes.few_points_divisor);
   put("planes.few_points_max_slope", p.planes.few_points_max_slope);
   put("planes.few_points_candidates", p.planes.few_points_candidates);
   put("planes.few_points_max_points", p.planes.few_points_max_points);
@@ -94,6 +100,9 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("polylines.link_pixels", p.polylines.link_pixels);
   put("polylines.min_polyline_length", p.polylines.min_polyline_length);
   put("polylines.relocate", p.polylines.relocate);
+  put("polylines.relocate_pull", p.polylines.relocate_pull);
+  put("polylines.corner_min_sine", p.polylines.corner_min_sine);
+  put("polylines.relocate_rounds", p.polylines.relocate_rounds);
   put("regularise.angle_threshold", p.regularise.angle_threshold);
   put("regularise.cluster_distance", p.regularise.cluster_distance);
   put("regularise.cluster_angle", p.regularise.cluster_angle);
@@ -137,6 +146,9 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("hypothesis.support_cut_rise", p.hypothesis.support_cut_rise);
   put("hypothesis.support_cut_area", p.hypothesis.support_cut_area);
   put("hypothesis.support_cut_mixed", p.hypothesis.support_cut_mixed);
+  put("hypothesis.support_cut_min_edge", p.hypothesis.support_cut_min_edge);
+  put("hypothesis.support_cut_same_direction", p.hypothesis.support_cut_same_direction);
+  put("hypothesis.start_descent_passes", p.hypothesis.start_descent_passes);
   put("hypothesis.surface_support.sample_spacing", p.hypothesis.surface_support.sample_spacing);
   put("hypothesis.surface_support.radius", p.hypothesis.surface_support.radius);
   put("hypothesis.surface_support.tolerance", p.hypothesis.surface_support.tolerance);
@@ -151,6 +163,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("selection.max_exact_variables", p.selection.max_exact_variables);
   put("selection.window_variables", p.selection.window_variables);
   put("selection.window_rounds", p.selection.window_rounds);
+  put("selection.gomory_min_columns", p.selection.gomory_min_columns);
   put("selection.use_face_prior", p.selection.use_face_prior);
   put("selection.use_single_layer", p.selection.use_single_layer);
   put("assemble.collinear_tolerance", p.assemble.collinear_tolerance);
@@ -163,6 +176,10 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("outline.wide_gap_spacings", p.outline.wide_gap_spacings);
   put("outline.min_extra_part_area", p.outline.min_extra_part_area);
   put("outline.part_gap", p.outline.part_gap);
+  put("outline.snap.dominant_window", p.outline.snap.dominant_window);
+  put("outline.snap.min_corner_angle", p.outline.snap.min_corner_angle);
+  put("outline.snap.max_shift", p.outline.snap.max_shift);
+  put("outline.snap.max_area_change", p.outline.snap.max_area_change);
   put("outline.fit.band", p.outline.fit.band);
   put("outline.fit.end_margin", p.outline.fit.end_margin);
   put("outline.fit.min_points", p.outline.fit.min_points);
@@ -175,6 +192,8 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("rebuild.min_left_out_width", p.rebuild.min_left_out_width);
   put("rebuild.min_level_area", p.rebuild.min_level_area);
   put("rebuild.max_left_out_plane_points", p.rebuild.max_left_out_plane_points);
+  put("rebuild.left_out_plane_divisor", p.rebuild.left_out_plane_divisor);
+  put("rebuild.left_out_plane_min_points", p.rebuild.left_out_plane_min_points);
   put("roof_type.flat_angle", p.roof_type.flat_angle);
   put("roof_type.level_gap", p.roof_type.level_gap);
   put("output_grid", p.output_grid);

@@ -86,6 +86,11 @@ void PolylineParams::validate() const {
   if (!(link_pixels >= 1.0)) problems << " link_pixels must be >= 1 (got " << link_pixels << ");";
   if (!(min_polyline_length >= 0.0))
     problems << " min_polyline_length must be >= 0 (got " << min_polyline_length << ");";
+  if (!(relocate_pull > 0.0) || !std::isfinite(relocate_pull))
+    problems << " relocate_pull must be > 0 (got " << relocate_pull << ");";
+  if (!(corner_min_sine >= 0.0 && corner_min_sine < 1.0))
+    problems << " corner_min_sine must be in [0, 1) (got " << corner_min_sine << ");";
+  if (relocate_rounds < 1) problems << " relocate_rounds must be >= 1 (got " << relocate_rounds << ");";
   throw_if_invalid("polylines", problems.str());
 }
 
@@ -233,9 +238,10 @@ struct QueueEntry {
 
 class Simplifier {
  public:
-  // `grid` (may be null: no relocation) must outlive the simplifier.
+  // `grid` (may be null: no relocation) must outlive the simplifier; `params` gives relocation's pull
+  // and corner angle.
   Simplifier(const std::vector<Point2>& pixels, const std::vector<double>& mass, double eps_d, double cover,
-             double cost_budget, const PixelGrid* grid)
+             double cost_budget, const PixelGrid* grid, const PolylineParams& params)
       : px_(pixels),
         mass_(mass),
         grid_(grid),
@@ -243,7 +249,9 @@ class Simplifier {
         eps_d_(eps_d),
         eps2_(eps_d * eps_d),
         cover_(cover),
-        budget_(cost_budget) {
+        budget_(cost_budget),
+        pull_(params.relocate_pull),
+        corner_sine_(params.corner_min_sine) {
     star_.resize(pixels.size());
     vertex_pixels_.resize(pixels.size());
     alive_.assign(pixels.size(), true);
@@ -349,7 +357,7 @@ class Simplifier {
       wsum += m;
     }
     if (wsum <= 0) return false;
-    const double lambda = 1e-3 * wsum;
+    const double lambda = pull_ * wsum;
     a11 += lambda;
     a22 += lambda;
     b1 += lambda * pos_[v].x;
@@ -478,7 +486,7 @@ class Simplifier {
     const double d1x = pu.x - pa.x, d1y = pu.y - pa.y, d2x = pv.x - pb.x, d2y = pv.y - pb.y;
     const double denom = d1x * d2y - d1y * d2x;
     const double norms = std::sqrt((d1x * d1x + d1y * d1y) * (d2x * d2x + d2y * d2y));
-    if (!(std::abs(denom) > 0.17 * norms)) return plan;  // lines within ~10 degrees of parallel
+    if (!(std::abs(denom) > corner_sine_ * norms)) return plan;  // lines within ~10 degrees of parallel
     const double s = ((pb.x - pa.x) * d2y - (pb.y - pa.y) * d2x) / denom;
     const Point2 x{pa.x + s * d1x, pa.y + s * d1y};
     if (!grid_ || grid_->nearest_dist2(x, eps_d_) > eps2_) return plan;
@@ -627,6 +635,7 @@ class Simplifier {
   const PixelGrid* grid_;
   std::vector<Point2> pos_;
   double eps_d_, eps2_, cover_, budget_;
+  double pull_, corner_sine_;  // PolylineParams::relocate_pull, corner_min_sine
   std::vector<std::vector<std::pair<int, int>>> star_;  // (neighbour, edge id)
   std::vector<Edge> edges_;
   std::vector<std::vector<int>> vertex_pixels_;  // pixels of vertices without edges
@@ -749,11 +758,11 @@ std::vector<Polyline2> extract_polylines(const std::vector<Point2>& edge_pixels,
   const double budget = sq(params.max_cost * r) * total_mass;  // RMS transport distance <= eps_c pixels
   const double cover = std::max(params.max_hausdorff, 0.5 * link);
   const PixelGrid grid(pixels, params.max_hausdorff);
-  Simplifier simplifier(pixels, mass, params.max_hausdorff, cover, budget, params.relocate ? &grid : nullptr);
+  Simplifier simplifier(pixels, mass, params.max_hausdorff, cover, budget, params.relocate ? &grid : nullptr, params);
   simplifier.build(links);
   // Relocation can unblock collapses (a corner bevel whose vertices moved onto the fitted lines), so
-  // collapse and relocate again until nothing changes (a few rounds at most).
-  for (int round = 0; round < 4; ++round) {
+  // collapse and relocate again until nothing changes (a few rounds at most: relocate_rounds).
+  for (std::size_t round = 0; round < params.relocate_rounds; ++round) {
     const std::size_t done = simplifier.run();
     st.collapses += done;
     if (!params.relocate || (round > 0 && done == 0)) break;

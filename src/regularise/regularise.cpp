@@ -309,7 +309,21 @@ bool ring_is_simple(const Ring2& r) {
 
 }  // namespace
 
-Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold, double max_shift) {
+void OutlineSnapParams::validate() const {
+  std::ostringstream problems;
+  if (!(dominant_window > 0.0 && dominant_window <= 45.0))
+    problems << " dominant_window must be in (0, 45] degrees (got " << dominant_window << ");";
+  if (!(min_corner_angle > 0.0 && min_corner_angle < 90.0))
+    problems << " min_corner_angle must be in (0, 90) degrees (got " << min_corner_angle << ");";
+  if (!(max_shift > 0.0) || !std::isfinite(max_shift))
+    problems << " max_shift must be > 0 (got " << max_shift << ");";
+  if (!(max_area_change > 0.0) || !std::isfinite(max_area_change))
+    problems << " max_area_change must be > 0 (got " << max_area_change << ");";
+  if (!problems.str().empty()) throw ConfigError("outline snap: invalid parameters:" + problems.str());
+}
+
+Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold, const OutlineSnapParams& params) {
+  params.validate();
   const Ring2& ring = polygon.outer;
   const std::size_t n = ring.size();
   if (n < 4) return polygon;
@@ -322,7 +336,7 @@ Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold, dou
     length[i] = std::hypot(b.x - a.x, b.y - a.y);
   }
   // Angles modulo 90 degrees, folded to [0, pi/2): the dominant direction is the one with the most
-  // edge length within 10 degrees, refined by the length-weighted circular mean (on 4x the angle).
+  // edge length within dominant_window, refined by the length-weighted circular mean (on 4x the angle).
   auto fold = [&](double t) {
     const double q = kPi / 2;
     return t - std::floor(t / q) * q;
@@ -333,7 +347,7 @@ Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold, dou
     for (std::size_t j = 0; j < n; ++j) {
       double d = std::abs(fold(angle[j]) - fold(angle[i]));
       d = std::min(d, kPi / 2 - d);
-      if (d < 10.0 * kPi / 180.0) {
+      if (d < params.dominant_window * kPi / 180.0) {
         score += length[j];
         sx += length[j] * std::cos(4 * fold(angle[j]));
         sy += length[j] * std::sin(4 * fold(angle[j]));
@@ -382,7 +396,7 @@ Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold, dou
     // Intersection of p and q: -sin(t) x + cos(t) y = offset for both.
     const double a1 = -std::sin(p.angle), b1 = std::cos(p.angle), a2 = -std::sin(q.angle), b2 = std::cos(q.angle);
     const double det = a1 * b2 - a2 * b1;
-    if (std::abs(det) < std::sin(5.0 * kPi / 180.0)) return polygon;  // nearly parallel neighbours: keep input
+    if (std::abs(det) < std::sin(params.min_corner_angle * kPi / 180.0)) return polygon;  // nearly parallel neighbours: keep input
     result.outer.push_back({(p.offset * b2 - q.offset * b1) / det, (a1 * q.offset - a2 * p.offset) / det});
   }
   // Every new corner must stay near the input outline's corners, the area must hold, and the ring
@@ -390,10 +404,10 @@ Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold, dou
   for (const Point2& c : result.outer) {
     double best = 1e300;
     for (const Point2& v : ring) best = std::min(best, std::hypot(c.x - v.x, c.y - v.y));
-    if (best > max_shift) return polygon;
+    if (best > params.max_shift) return polygon;
   }
   const double before = signed_area(ring), after = signed_area(result.outer);
-  if (!(after > 0) || std::abs(after - before) > 0.1 * std::abs(before) || !ring_is_simple(result.outer))
+  if (!(after > 0) || std::abs(after - before) > params.max_area_change * std::abs(before) || !ring_is_simple(result.outer))
     return polygon;
   result.holes = polygon.holes;
   return result;

@@ -17,9 +17,6 @@ namespace {
 // tolerance, tol_int, is 1e-5).
 constexpr double kIntegral = 1e-9;
 
-// Programs of more columns than this get Gomory's mixed-integer cuts in the search (run_glpk).
-constexpr int kGomoryMinColumns = 1500;
-
 struct NodeBudget {
   long limit = 0;
   bool hit = false;
@@ -56,6 +53,7 @@ struct GlpkRun {
   const std::vector<double>* ar = nullptr;
   int tm_lim = INT_MAX;
   bool presolve_relaxation = false;
+  std::size_t gomory_min_columns = 0;
   NodeBudget budget;
   int ret = 0, mip_status = 0;
   double objective = 0.0;
@@ -143,11 +141,11 @@ void run_glpk(GlpkRun& run) {
     // makes it 10-100x slower (building the conflict graph); cover cuts change nothing or slow it.
     // With Gomory + MIR it solves ~2,000 variables in 0.1-0.2 s and ~5,500 in 1.5-2.2 s.
     // On the hypotheses' own programs that reach the search, the Gomory cuts pay only on large ones:
-    // up to kGomoryMinColumns columns MIR alone takes 7-36% less time per size class, with the same
+    // up to gomory_min_columns columns (1,500) MIR alone takes 7-36% less time per size class, with the same
     // solutions (the Delft block, city3d_dev and city3d_dev_large byte-identical); above it,
     // Gomory cuts save up to 7x (city3d_dev's programs of 3,239 columns: 0.18 s each against 0.53 and 1.23
     // s). docs/BENCHMARKS.md, "CPU: issue 27, fourteenth step".
-    parm.gmi_cuts = n > kGomoryMinColumns ? GLP_ON : GLP_OFF;
+    parm.gmi_cuts = static_cast<std::size_t>(n) > run.gomory_min_columns ? GLP_ON : GLP_OFF;
     parm.mir_cuts = GLP_ON;
     parm.tm_lim = run.tm_lim;
     parm.cb_func = count_nodes;
@@ -211,6 +209,7 @@ MipSolution solve_with_glpk(const MipModel& model, const MipLimits& limits) {
   run.values = values.data();
   run.budget = NodeBudget{limits.node_limit, false};
   run.presolve_relaxation = limits.presolve_relaxation;
+  run.gomory_min_columns = limits.gomory_min_columns;
   const double ms = std::ceil(limits.time_limit * 1000.0);
   run.tm_lim = ms >= static_cast<double>(INT_MAX) ? INT_MAX : static_cast<int>(std::max(1.0, ms));
 

@@ -549,6 +549,7 @@ MipSolution solve_program(const MipModel& model, const SelectionParams& params,
   MipLimits limits;
   limits.node_limit = params.node_limit;
   limits.presolve_relaxation = window;
+  limits.gomory_min_columns = params.gomory_min_columns;
   limits.time_limit = time_left();
   MipSolution part;
   bool from_cbc = false;  // which backend gave `part`

@@ -39,6 +39,8 @@ struct MipLimits {
   /// what fixing the rest of the program left behind, which the presolver takes out; on the whole
   /// programs it costs more than it saves (docs/BENCHMARKS.md, "CPU: issue 27, fifth step").
   bool presolve_relaxation = false;
+  /// GLPK: Gomory's cuts in the search on programs of more columns than this (SelectionParams).
+  std::size_t gomory_min_columns = 1500;
 };
 
 /// failed: the backend itself broke (CBC's process crashed or was killed); the message says how.
