@@ -974,7 +974,8 @@ TEST(RegulariseOutline, each_limit_keeps_the_input_when_the_snap_goes_past_it) {
   ASSERT_EQ(snapped.outer.size(), 4u);
   EXPECT_FALSE(same(snapped)) << "the defaults snap it";
   for (std::size_t i = 0; i < 4; ++i) {
-    const city3d::Point2 &a = snapped.outer[i], &b = snapped.outer[(i + 1) % 4], &c = snapped.outer[(i + 2) % 4];
+    const city3d::Point2 &a = snapped.outer[i], &b = snapped.outer[(i + 1) % 4],
+                         &c = snapped.outer[(i + 2) % 4];
     EXPECT_NEAR((b.x - a.x) * (c.x - b.x) + (b.y - a.y) * (c.y - b.y), 0.0, 1e-9) << "corner " << i;
   }
   city3d::OutlineSnapParams tight;
@@ -1012,7 +1013,8 @@ TEST(RegulariseOutline, invalid_parameters_are_refused_naming_each) {
     params.validate();
     FAIL() << "expected ConfigError";
   } catch (const city3d::ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("outline snap: invalid parameters: max_shift must be > 0"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("outline snap: invalid parameters: max_shift must be > 0"),
+              std::string::npos)
         << e.what();
   }
 }

@@ -244,7 +244,8 @@ TEST(Polylines, rejects_invalid_parameters_listing_every_problem) {
     FAIL() << "no exception";
   } catch (const ConfigError& e) {
     const std::string what = e.what();
-    for (const char* name : {"relocate_pull must be > 0", "corner_min_sine must be in [0, 1)", "relocate_rounds must be >= 1"})
+    for (const char* name :
+         {"relocate_pull must be > 0", "corner_min_sine must be in [0, 1)", "relocate_rounds must be >= 1"})
       EXPECT_NE(what.find(name), std::string::npos) << what;
     EXPECT_EQ(what.find("max_hausdorff"), std::string::npos) << what;
   }

@@ -208,8 +208,9 @@ void add_chords(const std::vector<Point2>& poly, const Point2& n, double t, std:
 // orthogonal), the one along which the two sets overlap least, projected on its normal; the threshold
 // midway across the gap. Returns false when every direction leaves more than support_cut_mixed of either set
 // on the wrong side (the two are interleaved: no line ends the face where its points end).
-bool separating_line(const std::vector<Point2>& poly, const std::vector<Point2>& own, const std::vector<Point2>& bare,
-                     const HypothesisParams& params, Point2& normal, double& threshold) {
+bool separating_line(const std::vector<Point2>& poly, const std::vector<Point2>& own,
+                     const std::vector<Point2>& bare, const HypothesisParams& params, Point2& normal,
+                     double& threshold) {
   const double max_mixed = params.support_cut_mixed;
   std::vector<Point2> normals;
   for (std::size_t i = 0; i < poly.size(); ++i) {
@@ -218,8 +219,9 @@ bool separating_line(const std::vector<Point2>& poly, const std::vector<Point2>&
     if (!(length > params.support_cut_min_edge)) continue;
     Point2 n{-(q.y - p.y) / length, (q.x - p.x) / length};
     if (n.x < 0.0 || (n.x == 0.0 && n.y < 0.0)) n = {-n.x, -n.y};  // one of +-n
-    const bool seen = std::any_of(normals.begin(), normals.end(),
-                                  [&](const Point2& m) { return std::abs(m.x * n.y - m.y * n.x) < params.support_cut_same_direction; });
+    const bool seen = std::any_of(normals.begin(), normals.end(), [&](const Point2& m) {
+      return std::abs(m.x * n.y - m.y * n.x) < params.support_cut_same_direction;
+    });
     if (!seen) normals.push_back(n);
   }
   double best_mixed = std::numeric_limits<double>::infinity(), best_gap = 0.0;

@@ -26,14 +26,15 @@ constexpr double kEnergyTolerance = 1e-12;
 // change helps), until none is left or no change helps. Returns an empty vector in that case.
 //
 // The closed start then descends the selection energy of selection.hpp under `energy`'s weights, kept
-// up to date as faces toggle (support, roof-preference and unsupported-area sums, and per edge whether a sharp pair
-// is on): each pass visits the cells in order and gives each the roof face that lowers the energy
+// up to date as faces toggle (support, roof-preference and unsupported-area sums, and per edge whether a
+// sharp pair is on): each pass visits the cells in order and gives each the roof face that lowers the energy
 // most among those that keep every edge at 0 or 2 faces; cells holding a face prior keep it, so the
 // start still satisfies the prior when it did. Passes repeat until none improves, at most
-// max_passes (hypothesis.start_descent_passes): every accepted change lowers the energy, so the search ends, and it visits the
-// same cells in the same order on every machine.
+// max_passes (hypothesis.start_descent_passes): every accepted change lowers the energy, so the search ends,
+// and it visits the same cells in the same order on every machine.
 std::vector<bool> start_assignment(const CandidateFaces& out, const PlainArrangement& arr, const Levels& lv,
-                                   std::size_t cell_count, const SelectionParams& energy, std::size_t max_passes) {
+                                   std::size_t cell_count, const SelectionParams& energy,
+                                   std::size_t max_passes) {
   const SelectionProblem& prob = out.problem;
   const std::size_t nf = out.faces.size();
   const int floor_level = lv.floor();

@@ -141,6 +141,7 @@ void build_selection_problem(const std::vector<Point3>& points, const std::vecto
 // 6. A closed start assignment for the solvers (start.cpp), descended under the weights of `energy`
 // for at most `max_passes` passes, or an empty vector when none was found.
 std::vector<bool> start_assignment(const CandidateFaces& out, const PlainArrangement& arr, const Levels& lv,
-                                   std::size_t cell_count, const SelectionParams& energy, std::size_t max_passes);
+                                   std::size_t cell_count, const SelectionParams& energy,
+                                   std::size_t max_passes);
 
 }  // namespace city3d::detail

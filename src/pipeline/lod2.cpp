@@ -42,8 +42,10 @@ BuildingPlanes building_planes(const std::vector<Point3>& points, const Reconstr
     // (at least small_min_points; planes.small_divisor and small_points_divisor).
     PlaneParams small = params.planes;
     small.min_points = std::max<int>(
-        fewest, std::min<int>(params.planes.min_points / params.planes.small_divisor,
-                              static_cast<int>(points.size() / static_cast<std::size_t>(params.planes.small_points_divisor))));
+        fewest,
+        std::min<int>(
+            params.planes.min_points / params.planes.small_divisor,
+            static_cast<int>(points.size() / static_cast<std::size_t>(params.planes.small_points_divisor))));
     if (small.min_points < params.planes.min_points) {
       segments = detector.detect(small);
       const std::string note = "small building: planes of at least " + std::to_string(small.min_points) + " points";
@@ -214,9 +216,8 @@ Lod2Hypothesis lod2_hypothesis(const BuildingInput& input, const ReconstructionP
     // of the smaller planes' count of points, or of as many as cover min_level_area at the building's
     // density where that is fewer (at least 3): at 1 point per m2 a low annex holds a few returns.
     const double spacing = point_spacing(outline, points.size());
-    std::size_t min_points =
-        static_cast<std::size_t>(std::max<int>(params.planes.small_min_points,
-                                               params.planes.min_points / params.planes.small_divisor));
+    std::size_t min_points = static_cast<std::size_t>(std::max<int>(
+        params.planes.small_min_points, params.planes.min_points / params.planes.small_divisor));
     const double cover = spacing > 0 ? std::ceil(params.rebuild.min_level_area / (spacing * spacing)) : 0.0;
     if (cover > 0 && cover < static_cast<double>(min_points))
       min_points = std::max<std::size_t>(3, static_cast<std::size_t>(cover));

@@ -72,8 +72,9 @@ std::vector<Polygon2> building_outline(const BuildingInput& input, const Heightm
       infer_outline(heightmap, points, params.polylines.max_hausdorff, params.outline.min_region_area,
                     wide_outline ? params.outline.wide_gap_spacings : params.outline.gap_spacings);
   for (const Polygon2& p : inferred)
-    outline.push_back(fit_outline_to_points(regularise_outline(p, params.regularise.angle_threshold, params.outline.snap), points,
-                                            params.outline.fit));
+    outline.push_back(
+        fit_outline_to_points(regularise_outline(p, params.regularise.angle_threshold, params.outline.snap),
+                              points, params.outline.fit));
   if (outline.empty() && !input.footprint.polygons.empty()) {
     // Too small for the heightmap to hold an outline (under min_region_area): the convex
     // hull of the points (building_from_cloud), regularised like an inferred outline.

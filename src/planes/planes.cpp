@@ -41,8 +41,8 @@ void PlaneParams::validate() const {
   if (small_min_points < 3)
     problems.push_back("small_min_points = " + std::to_string(small_min_points) + ", need >= 3");
   for (const auto& [name, value] : {std::pair<const char*, int>{"small_divisor", small_divisor},
-                                     {"small_points_divisor", small_points_divisor},
-                                     {"few_points_divisor", few_points_divisor}})
+                                    {"small_points_divisor", small_points_divisor},
+                                    {"few_points_divisor", few_points_divisor}})
     if (value < 1) problems.push_back(std::string(name) + " = " + std::to_string(value) + ", need >= 1");
   if (!(wall_max_normal_z >= 0.0 && wall_max_normal_z < 1.0))
     problems.push_back("wall_max_normal_z = " + std::to_string(wall_max_normal_z) +

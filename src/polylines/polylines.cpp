@@ -635,7 +635,7 @@ class Simplifier {
   const PixelGrid* grid_;
   std::vector<Point2> pos_;
   double eps_d_, eps2_, cover_, budget_;
-  double pull_, corner_sine_;  // PolylineParams::relocate_pull, corner_min_sine
+  double pull_, corner_sine_;                           // PolylineParams::relocate_pull, corner_min_sine
   std::vector<std::vector<std::pair<int, int>>> star_;  // (neighbour, edge id)
   std::vector<Edge> edges_;
   std::vector<std::vector<int>> vertex_pixels_;  // pixels of vertices without edges
@@ -758,7 +758,8 @@ std::vector<Polyline2> extract_polylines(const std::vector<Point2>& edge_pixels,
   const double budget = sq(params.max_cost * r) * total_mass;  // RMS transport distance <= eps_c pixels
   const double cover = std::max(params.max_hausdorff, 0.5 * link);
   const PixelGrid grid(pixels, params.max_hausdorff);
-  Simplifier simplifier(pixels, mass, params.max_hausdorff, cover, budget, params.relocate ? &grid : nullptr, params);
+  Simplifier simplifier(pixels, mass, params.max_hausdorff, cover, budget, params.relocate ? &grid : nullptr,
+                        params);
   simplifier.build(links);
   // Relocation can unblock collapses (a corner bevel whose vertices moved onto the fitted lines), so
   // collapse and relocate again until nothing changes (a few rounds at most: relocate_rounds).

@@ -322,7 +322,8 @@ void OutlineSnapParams::validate() const {
   if (!problems.str().empty()) throw ConfigError("outline snap: invalid parameters:" + problems.str());
 }
 
-Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold, const OutlineSnapParams& params) {
+Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold,
+                            const OutlineSnapParams& params) {
   params.validate();
   const Ring2& ring = polygon.outer;
   const std::size_t n = ring.size();
@@ -396,7 +397,8 @@ Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold, con
     // Intersection of p and q: -sin(t) x + cos(t) y = offset for both.
     const double a1 = -std::sin(p.angle), b1 = std::cos(p.angle), a2 = -std::sin(q.angle), b2 = std::cos(q.angle);
     const double det = a1 * b2 - a2 * b1;
-    if (std::abs(det) < std::sin(params.min_corner_angle * kPi / 180.0)) return polygon;  // nearly parallel neighbours: keep input
+    if (std::abs(det) < std::sin(params.min_corner_angle * kPi / 180.0))
+      return polygon;  // nearly parallel neighbours: keep input
     result.outer.push_back({(p.offset * b2 - q.offset * b1) / det, (a1 * q.offset - a2 * p.offset) / det});
   }
   // Every new corner must stay near the input outline's corners, the area must hold, and the ring
@@ -407,7 +409,8 @@ Polygon2 regularise_outline(const Polygon2& polygon, double angle_threshold, con
     if (best > params.max_shift) return polygon;
   }
   const double before = signed_area(ring), after = signed_area(result.outer);
-  if (!(after > 0) || std::abs(after - before) > params.max_area_change * std::abs(before) || !ring_is_simple(result.outer))
+  if (!(after > 0) || std::abs(after - before) > params.max_area_change * std::abs(before) ||
+      !ring_is_simple(result.outer))
     return polygon;
   result.holes = polygon.holes;
   return result;
