@@ -485,6 +485,45 @@ TEST(Walls, automatic_mode_uses_detected_lines_only_when_plentiful) {
   }
 }
 
+// A line screened on one side by a line 1 m off and 7 m long, with a long line below it: of the rays
+// at 0, +-30 and +-60 degrees from its three points only two escape past the screen's ends, fewer than
+// min_escaping_rays; at 0, +-40 and +-80 degrees four do, and it faces out.
+TEST(Walls, the_fan_of_rays_decides_whether_a_screened_line_faces_out) {
+  RegularisationResult lines;
+  lines.segments = {{{0.0, 0.0}, {10.0, 0.0}}, {{1.5, 1.0}, {8.5, 1.0}}, {{-100.0, -1.0}, {100.0, -1.0}}};
+  WallParams params;
+  params.mode = WallMode::inferred;
+  const auto the_line = [](const std::vector<VerticalPlane>& walls) {
+    for (const VerticalPlane& w : walls)
+      if (std::abs(w.a.y) < 1e-12 && std::abs(w.b.y) < 1e-12) return w;
+    ADD_FAILURE() << "no wall along y = 0";
+    return VerticalPlane{};
+  };
+  EXPECT_FALSE(the_line(infer_walls(lines, nullptr, {}, params)).outer);
+  params.ray_fan_step = 40.0;
+  const VerticalPlane wide = the_line(infer_walls(lines, nullptr, {}, params));
+  EXPECT_TRUE(wide.outer);
+  EXPECT_GT(wide.normal.y, 0.99);
+}
+
+// A detected wall along a footprint 0.5 m wide: its side is told at footprint_margin + side_probe off
+// its middle, inside the footprint at the default (so it faces away from it), beyond the far side at
+// 0.3 m (so it keeps the side it was drawn with).
+TEST(Walls, the_side_probe_tells_which_side_of_a_detected_wall_is_inside) {
+  const auto strip = footprint_of({{0, 0}, {12, 0}, {12, 0.5}, {0, 0.5}});
+  WallParams params;
+  params.mode = WallMode::detected;
+  const std::vector<Line> detected{{{1.0, 0.0}, {11.0, 0.0}}};
+  const auto near = infer_walls(RegularisationResult{}, &strip, detected, params);
+  ASSERT_EQ(near.size(), 1u);
+  EXPECT_TRUE(near[0].outer);
+  EXPECT_LT(near[0].normal.y, -0.99);
+  params.side_probe = 0.3;
+  const auto far = infer_walls(RegularisationResult{}, &strip, detected, params);
+  ASSERT_EQ(far.size(), 1u);
+  EXPECT_GT(far[0].normal.y, 0.99);
+}
+
 TEST(Walls, footprint_mode_without_footprint_is_a_config_error) {
   WallParams params;
   params.mode = WallMode::footprint;

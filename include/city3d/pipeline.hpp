@@ -143,11 +143,15 @@ struct ReconstructionParams {
   /// a footprint that touches itself has an edge of four faces, so no model of it was valid.
   double footprint_clearance = 0.01;
   /// A building of more points per m2 than this (of its footprint, or of a cloud's box in plan) is
-  /// thinned first to one point per cell of 1 / sqrt(max_point_density) (5 cm) in plan and ten cells
-  /// in height, the first in input order; the note says so. A work limit, and the scale the method's
-  /// neighbourhoods are made for: at 13,000 points per m2 the k nearest neighbours span 2 cm, region growing
-  /// split a two-plane roof into 6,786 planes, and the run ran out of memory. Airborne surveys hold 10 to 60.
+  /// thinned first to one point per cell of 1 / sqrt(max_point_density) (5 cm) in plan and
+  /// thinning_height_cells cells in height, the first in input order; the note says so. A work limit, and the
+  /// scale the method's neighbourhoods are made for: at 13,000 points per m2 the k nearest neighbours span 2
+  /// cm, region growing split a two-plane roof into 6,786 planes, and the run ran out of memory. Airborne
+  /// surveys hold 10 to 60.
   double max_point_density = 400.0;
+  /// A thinned cell is this many of its plan widths tall: a roof's noise stays within one cell, and a
+  /// wall keeps a point every half metre up its cells (at 5 cm). >= 1.
+  double thinning_height_cells = 10.0;
   /// A LoD2 model that leaves more than this share of the building's points unexplained (farther
   /// than kUnexplainedDistance) is rebuilt with the variants of explain_more(): smaller roof planes,
   /// a wider inferred outline, roofs for the points left out, and selections without the face prior

@@ -91,6 +91,11 @@ struct SelectionParams {
   /// Opt-in wall-clock safety limit for the whole call, seconds; 0 (the default): none. When it
   /// fires, the result depends on the machine's speed and load.
   double time_limit = 0.0;
+  /// With a time limit, "auto" gives GLPK this share of the time left, CBC the rest, in (0, 1].
+  double glpk_time_share = 0.5;
+  /// Under a building's time limit (ReconstructionParams::time_limit) each selection gets at least
+  /// this many seconds, however little of its rung's share is left, > 0.
+  double min_time_limit = 0.1;
   long node_limit = 1000;           ///< deterministic work limit: branch-and-bound nodes per program solved
   /// Components with more variables than this are solved by windows from the start (when there is
   /// one): sub-programs of about window_variables variables, the rest fixed, until a round of

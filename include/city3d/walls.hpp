@@ -50,6 +50,12 @@ struct WallParams {
   /// Without a footprint, a line is an outer wall when at least this many of the 15 rays cast from
   /// one of its sides escape past every other line (and more than from its other side), in [1, 15].
   int min_escaping_rays = 3;
+  /// The rays from each of the three points fan out at 0, +-ray_fan_step and +-2 ray_fan_step degrees
+  /// from the line's normal, in (0, 45].
+  double ray_fan_step = 30.0;
+  /// A detected wall along the footprint faces away from the footprint's inside as seen at a point
+  /// this far beyond footprint_margin off its middle, metres, > 0.
+  double side_probe = 0.05;
 
   /// Throws ConfigError listing every invalid field.
   void validate() const;

@@ -254,7 +254,7 @@ BuildingModel lod2_model(const BuildingInput& input, const Lod2Hypothesis& hypot
       if (deadline != Clock::time_point::max()) {
         const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
         const double own = selection_params.time_limit > 0 ? selection_params.time_limit : left;
-        selection_params.time_limit = std::max(0.1, std::min(own, left));
+        selection_params.time_limit = std::max(selection_params.min_time_limit, std::min(own, left));
       }
       std::optional<StageTimer> stage(Stage::selection);
       SelectionResult selection = solve_selection(candidates.problem, selection_params);

@@ -61,6 +61,7 @@ void ReconstructionParams::validate() const {
   need(max_footprint_vertices >= 3, "max_footprint_vertices must be >= 3");
   need(footprint_clearance > 0 && footprint_clearance <= 1, "footprint_clearance must be in (0, 1] (metres)");
   need(max_point_density > 0 && finite(max_point_density), "max_point_density must be > 0 (points per m2)");
+  need(thinning_height_cells >= 1 && finite(thinning_height_cells), "thinning_height_cells must be >= 1");
   need(retry_unexplained_share >= 0 && finite(retry_unexplained_share),
        "retry_unexplained_share must be a share >= 0 (1: never retry)");
   need(retry_unsupported_area >= 0, "retry_unsupported_area must be >= 0 (m2)");
@@ -117,6 +118,8 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("walls.detected_length_ratio", p.walls.detected_length_ratio);
   put("walls.sample_step", p.walls.sample_step);
   put("walls.min_escaping_rays", p.walls.min_escaping_rays);
+  put("walls.ray_fan_step", p.walls.ray_fan_step);
+  put("walls.side_probe", p.walls.side_probe);
   put("step_lines.enabled", p.step_lines.enabled);
   put("step_lines.min_step", p.step_lines.min_step);
   put("step_lines.search_spacings", p.step_lines.search_spacings);
@@ -159,6 +162,8 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("selection.lambda_unsupported", p.selection.lambda_unsupported);
   put("selection.solver", p.selection.solver);
   put("selection.time_limit", p.selection.time_limit);
+  put("selection.glpk_time_share", p.selection.glpk_time_share);
+  put("selection.min_time_limit", p.selection.min_time_limit);
   put("selection.node_limit", p.selection.node_limit);
   put("selection.max_exact_variables", p.selection.max_exact_variables);
   put("selection.window_variables", p.selection.window_variables);
@@ -206,6 +211,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("max_footprint_vertices", p.max_footprint_vertices);
   put("footprint_clearance", p.footprint_clearance);
   put("max_point_density", p.max_point_density);
+  put("thinning_height_cells", p.thinning_height_cells);
   put("retry_unexplained_share", p.retry_unexplained_share);
   put("retry_unsupported_area", p.retry_unsupported_area);
   put("time_limit", p.time_limit);

@@ -65,8 +65,9 @@ std::optional<BuildingInput> footprint_ready_input(const BuildingInput& given,
 }
 
 // The input with its points thinned to one per cell of 1 / sqrt(max_point_density) in plan (and per
-// ten cells in height) when they are denser than that over the footprint (of `footprint_area`; a cloud:
-// over its box in plan), and `note` says so; nothing otherwise (every airborne survey).
+// thinning_height_cells cells in height) when they are denser than that over the footprint (of
+// `footprint_area`; a cloud: over its box in plan), and `note` says so; nothing otherwise (every airborne
+// survey).
 std::optional<BuildingInput> thinned_input(const BuildingInput& input, const ReconstructionParams& params,
                                            double footprint_area, std::string& note) {
   if (input.points.empty()) return std::nullopt;
@@ -88,9 +89,8 @@ std::optional<BuildingInput> thinned_input(const BuildingInput& input, const Rec
     const auto bits = [cell](double v) {
       return static_cast<std::uint64_t>(std::llround(std::floor(v / cell))) & 0x1FFFFF;
     };
-    // One point per cell in plan and per ten cells in height: a roof's noise stays within a layer, a
-    // wall keeps a point every half metre up its cells.
-    if (taken.insert(bits(p.x) | bits(p.y) << 21 | bits(p.z / 10.0) << 42).second)
+    // One point per cell in plan and per thinning_height_cells cells in height.
+    if (taken.insert(bits(p.x) | bits(p.y) << 21 | bits(p.z / params.thinning_height_cells) << 42).second)
       thinned->points.push_back(p);
   }
   std::ostringstream text;

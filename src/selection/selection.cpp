@@ -43,7 +43,7 @@
 //
 // Limits: node_limit applies to each component's search; time_limit to the whole call (each
 // component gets the time left; backends can overshoot it by their root processing). solver = "auto"
-// uses GLPK (with half the time left, when there is a time limit), then CBC on the rest if GLPK
+// uses GLPK (with glpk_time_share of the time left, when there is a time limit), then CBC on the rest if GLPK
 // stopped on a limit. Components of more than max_exact_variables are solved by windows.
 #include "city3d/selection.hpp"
 
@@ -570,11 +570,11 @@ MipSolution solve_program(const MipModel& model, const SelectionParams& params,
   } else if (!automatic) {
     part = glpk();
   } else {
-    // GLPK first (with half the time left, when there is a time limit): with the tight corner rows
-    // it solves the real programs fastest (docs/BENCHMARKS.md), in this process, without CBC's
-    // per-call process. Where it stops on its node limit, CBC (preprocessing, cuts, heuristics)
-    // gets the program too and the better answer is kept.
-    if (std::isfinite(limits.time_limit)) limits.time_limit *= 0.5;
+    // GLPK first (with glpk_time_share of the time left, when there is a time limit): with the tight corner
+    // rows it solves the real programs fastest (docs/BENCHMARKS.md), in this process, without CBC's per-call
+    // process. Where it stops on its node limit, CBC (preprocessing, cuts, heuristics) gets the program too
+    // and the better answer is kept.
+    if (std::isfinite(limits.time_limit)) limits.time_limit *= params.glpk_time_share;
     part = glpk();
     limits.time_limit = time_left();
     if ((part.status == MipStatus::feasible || part.status == MipStatus::no_solution) && limits.time_limit > 0.0) {
@@ -639,6 +639,10 @@ void SelectionParams::validate() const {
     errors.push_back("solver = '" + solver + "' (need auto, glpk or cbc)");
   if (!std::isfinite(time_limit) || time_limit < 0.0)
     errors.push_back("time_limit = " + std::to_string(time_limit) + " s (need >= 0; 0: none)");
+  if (!(glpk_time_share > 0.0 && glpk_time_share <= 1.0))
+    errors.push_back("glpk_time_share = " + std::to_string(glpk_time_share) + " (need (0, 1])");
+  if (!(min_time_limit > 0.0) || !std::isfinite(min_time_limit))
+    errors.push_back("min_time_limit = " + std::to_string(min_time_limit) + " s (need > 0)");
   if (node_limit < 1) errors.push_back("node_limit = " + std::to_string(node_limit) + " (need >= 1)");
   if (window_variables < 2) errors.push_back("window_variables = " + std::to_string(window_variables) + " (need >= 2)");
   if (window_rounds < 1) errors.push_back("window_rounds = " + std::to_string(window_rounds) + " (need >= 1)");

@@ -23,6 +23,10 @@ void WallParams::validate() const {
     problems << " sample_step must be > 0 (got " << sample_step << ");";
   if (min_escaping_rays < 1 || min_escaping_rays > 15)
     problems << " min_escaping_rays must be in [1, 15] (got " << min_escaping_rays << ");";
+  if (!(ray_fan_step > 0.0 && ray_fan_step <= 45.0))
+    problems << " ray_fan_step must be in (0, 45] degrees (got " << ray_fan_step << ");";
+  if (!(side_probe > 0.0) || !std::isfinite(side_probe))
+    problems << " side_probe must be > 0 (got " << side_probe << ");";
   if (min_detected_lines < 0)
     problems << " min_detected_lines must be >= 0 (got " << min_detected_lines << ");";
   if (!(detected_length_ratio >= 0.0))
@@ -201,7 +205,8 @@ void outline_walls(const std::vector<std::pair<Point2, Point2>>& all_lines, cons
   std::vector<std::pair<Point2, Point2>> lines;
   for (const auto& [a, b] : all_lines)
     if (length(a, b) >= std::max(params.min_wall_length, 1e-9)) lines.push_back(canonical(a, b));
-  const double fan[] = {0.0, -kPi / 6, kPi / 6, -kPi / 3, kPi / 3};
+  const double step = params.ray_fan_step * kPi / 180.0;
+  const double fan[] = {0.0, -step, step, -2 * step, 2 * step};
   for (std::size_t i = 0; i < lines.size(); ++i) {
     const Point2 a = lines[i].first, b = lines[i].second;
     const Point2 n = left_normal(a, b);
@@ -299,7 +304,7 @@ std::vector<VerticalPlane> infer_walls(const RegularisationResult& lines,
                              shape.boundary_distance(b) <= params.footprint_margin;
           Point2 n = left_normal(a, b);
           if (along) {
-            const double probe = params.footprint_margin + 0.05;
+            const double probe = params.footprint_margin + params.side_probe;
             const Point2 q{m.x + probe * n.x, m.y + probe * n.y};
             if (shape.contains(q)) n = Point2{-n.x, -n.y};
           }
