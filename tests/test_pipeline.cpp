@@ -27,6 +27,7 @@
 #include "city3d/rings.hpp"
 #include "city3d/stage_profile.hpp"
 #include "pipeline/left_out.hpp"
+#include "pipeline/outline.hpp"
 
 namespace fs = std::filesystem;
 using namespace city3d;
@@ -776,6 +777,27 @@ TEST(LeftOut, a_plane_mostly_left_out_gets_a_rectangle_parallel_to_the_outline) 
   EXPECT_NEAR(u1, 5.8, 1e-9);
   EXPECT_NEAR(v0, 1.1, 1e-9);
   EXPECT_NEAR(v1, 1.3, 1e-9);
+  // Where 40% of a plane left out is enough (rebuild.left_out_cell_share), the roof gets its cell too.
+  RebuildParams smaller_share;
+  smaller_share.left_out_cell_share = 0.4;
+  EXPECT_EQ(
+      detail::left_out_plane_lines(points, {strip, roof, row}, unexplained, {square}, smaller_share).size(),
+      8u);
+}
+
+// An inferred part's roofs are the planes of which at least outline.part_roof_share of the points lie
+// inside it.
+TEST(Outline, a_part_holds_the_roof_planes_of_which_its_share_of_points_lie_inside_it) {
+  const Polygon2 part{{{0, 0}, {10, 0}, {10, 10}, {0, 10}}, {}};
+  std::vector<Point3> points;
+  PlanarSegment plane;
+  for (int i = 0; i < 10; ++i) {
+    plane.points.push_back(static_cast<std::uint32_t>(points.size()));
+    points.push_back({i < 3 ? 5.0 : 15.0 + i, 5.0, 4.0});  // 3 of its 10 points inside the part
+  }
+  EXPECT_EQ(detail::roofs_of_part({plane}, part, points, 0.25).size(), 1u);
+  EXPECT_EQ(detail::roofs_of_part({plane}, part, points, 0.3).size(), 1u);
+  EXPECT_TRUE(detail::roofs_of_part({plane}, part, points, 0.5).empty());
 }
 
 namespace {
@@ -1092,7 +1114,10 @@ TEST(Parameters, the_pipelines_own_numbers_are_checked_and_written) {
                            "walls.side_probe = 0.050000000000000003\n",
                            "thinning_height_cells = 10\n",
                            "selection.glpk_time_share = 0.5\n",
-                           "selection.min_time_limit = 0.10000000000000001\n"})
+                           "selection.min_time_limit = 0.10000000000000001\n",
+                           "outline.extra_part_plane_share = 0.5\n",
+                           "outline.part_roof_share = 0.25\n",
+                           "rebuild.left_out_cell_share = 0.5\n"})
     EXPECT_NE(text.find(line), std::string::npos) << line;
   const std::vector<std::pair<std::string, std::function<void(ReconstructionParams&)>>> wrong = {
       {"outline.min_region_area", [](ReconstructionParams& p) { p.outline.min_region_area = 0; }},
@@ -1125,6 +1150,12 @@ TEST(Parameters, the_pipelines_own_numbers_are_checked_and_written) {
       {"thinning_height_cells must be >= 1", [](ReconstructionParams& p) { p.thinning_height_cells = 0.5; }},
       {"glpk_time_share", [](ReconstructionParams& p) { p.selection.glpk_time_share = 0; }},
       {"min_time_limit", [](ReconstructionParams& p) { p.selection.min_time_limit = -1; }},
+      {"outline.extra_part_plane_share must be in [0, 1)",
+       [](ReconstructionParams& p) { p.outline.extra_part_plane_share = 1; }},
+      {"outline.part_roof_share must be in (0, 1]",
+       [](ReconstructionParams& p) { p.outline.part_roof_share = 0; }},
+      {"rebuild.left_out_cell_share must be in (0, 1]",
+       [](ReconstructionParams& p) { p.rebuild.left_out_cell_share = 1.5; }},
   };
   for (const auto& [name, spoil] : wrong) {
     ReconstructionParams p;

@@ -55,8 +55,13 @@ struct OutlineParams {
   /// as wide (about 3 m at AHN3's 8 points per m2) and keeps wider ones.
   double wide_gap_spacings = 4.0;
   /// Smallest area of a part other than the largest that is modelled, m2: a garden shed or a silo
-  /// (a part also needs most of the points of a roof plane).
+  /// (a part also needs more than extra_part_plane_share of the points of a roof plane, in [0, 1)).
   double min_extra_part_area = 4.0;
+  double extra_part_plane_share = 0.5;
+  /// A roof plane is a roof of an inferred part when at least this share of its points lies inside
+  /// the part, in (0, 1]: a plane of points elsewhere (another part, ground returns around a tree)
+  /// would put a roof where none of its points are.
+  double part_roof_share = 0.25;
   /// Parts nearer to each other than this are taken to touch, metres (a part is kept apart or left out).
   double part_gap = 0.1;
   /// How an inferred outline is regularised (with regularise.angle_threshold)...
@@ -91,6 +96,8 @@ struct RebuildParams {
   /// left_out_plane_min_points (>= 3). The divisor >= 1.
   std::size_t left_out_plane_divisor = 2;
   std::size_t left_out_plane_min_points = 4;
+  /// A roof plane gets a cell of its own when at least this share of its points is left out, in (0, 1].
+  double left_out_cell_share = 0.5;
   /// A left-out plane's rectangle thinner than this is no cell of its own (a row of returns), metres.
   double min_left_out_width = 0.1;
 };

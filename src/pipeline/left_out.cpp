@@ -150,7 +150,9 @@ std::vector<Segment2> left_out_plane_lines(const std::vector<Point3>& points, co
     std::vector<Point2> left;
     for (std::uint32_t i : roof.points)
       if (unexplained[i]) left.push_back({points[i].x, points[i].y});
-    if (left.size() < 3 || 2 * left.size() < roof.points.size()) continue;
+    if (left.size() < 3 || static_cast<double>(left.size()) <
+                               params.left_out_cell_share * static_cast<double>(roof.points.size()))
+      continue;
     double best = std::numeric_limits<double>::infinity();
     std::array<Point2, 4> corners{};
     for (const Point2& u : directions) {

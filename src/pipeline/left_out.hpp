@@ -49,9 +49,9 @@ std::vector<PlanarSegment> left_out_planes(const std::vector<Point3>& points,
                                            std::size_t min_points, const PlaneParams& plane_params,
                                            const RebuildParams& params);
 
-/// The lines of a cell of its own for every roof plane of which at least half the points are
-/// left out: the four sides of the rectangle around those points, in the direction of an outline edge
-/// (parallel or orthogonal to the walls) for which it is smallest. Planes with fewer than 3 such
+/// The lines of a cell of its own for every roof plane of which at least `params.left_out_cell_share`
+/// of the points are left out: the four sides of the rectangle around those points, in the direction of an
+/// outline edge (parallel or orthogonal to the walls) for which it is smallest. Planes with fewer than 3 such
 /// points, or whose rectangle is thinner than `params.min_left_out_width`, get none.
 std::vector<Segment2> left_out_plane_lines(const std::vector<Point3>& points, const std::vector<PlanarSegment>& roofs,
                                            const std::vector<bool>& unexplained, const std::vector<Polygon2>& outline,

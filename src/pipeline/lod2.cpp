@@ -167,7 +167,9 @@ Lod2Hypothesis part_hypotheses(const BuildingInput& input, const std::vector<Pol
       // An inferred part's roofs are the planes it holds a share of: a plane of points elsewhere
       // (another part, or ground returns around a tree, AHN3 large/06050) would put a roof where none
       // of its points are.
-      const std::vector<PlanarSegment> part_roofs = input.footprint_given ? roofs : roofs_of_part(roofs, part.front(), points);
+      const std::vector<PlanarSegment> part_roofs =
+          input.footprint_given ? roofs
+                                : roofs_of_part(roofs, part.front(), points, params.outline.part_roof_share);
       if (part_roofs.empty())
         throw ReconstructionError(ReconstructionStage::planes, "none of the " + std::to_string(roofs.size()) +
                                   " roof planes lies inside the inferred outline");

@@ -14,9 +14,10 @@ namespace city3d::detail {
 namespace {
 
 // The parts of an inferred outline to model (largest first): the largest, and every further part of
-// min_extra_part_area or more that holds most of the points of some roof plane and keeps clear (by
-// part_gap) of the parts already kept (fitting an outline to its points can push two parts into each other: then the
-// part as inferred, and if that touches too, it is left out rather than made to touch). Leaving a part out shows in unexplained_points.
+// min_extra_part_area or more that holds more than extra_part_plane_share of the points of some roof plane
+// and keeps clear (by part_gap) of the parts already kept (fitting an outline to its points can push two
+// parts into each other: then the part as inferred, and if that touches too, it is left out rather than made
+// to touch). Leaving a part out shows in unexplained_points.
 std::vector<Polygon2> separate_parts(const std::vector<Polygon2>& parts, const std::vector<Polygon2>& as_inferred,
                                      const std::vector<PlanarSegment>& roofs, const std::vector<Point3>& points,
                                      const OutlineParams& params) {
@@ -31,7 +32,8 @@ std::vector<Polygon2> separate_parts(const std::vector<Polygon2>& parts, const s
   for (std::size_t k = 1; k < parts.size(); ++k) {
     if (ring_area(parts[k].outer) < params.min_extra_part_area) continue;
     const bool has_plane = std::any_of(roofs.begin(), roofs.end(), [&](const PlanarSegment& s) {
-      return 2 * points_inside(parts[k].outer, s.points, points) > s.points.size();
+      return static_cast<double>(points_inside(parts[k].outer, s.points, points)) >
+             params.extra_part_plane_share * static_cast<double>(s.points.size());
     });
     if (!has_plane) continue;
     // The part as regularised and fitted to its points; else as inferred (the regions of the
@@ -107,10 +109,12 @@ std::pair<Point2, Point2> wall_line(const PlanarSegment& wall, const std::vector
 }
 
 std::vector<PlanarSegment> roofs_of_part(const std::vector<PlanarSegment>& roofs, const Polygon2& part,
-                                         const std::vector<Point3>& points) {
+                                         const std::vector<Point3>& points, double share) {
   std::vector<PlanarSegment> held;
   for (const PlanarSegment& s : roofs) {
-    if (4 * points_inside(part.outer, s.points, points) >= s.points.size()) held.push_back(s);
+    if (static_cast<double>(points_inside(part.outer, s.points, points)) >=
+        share * static_cast<double>(s.points.size()))
+      held.push_back(s);
   }
   return held;
 }

@@ -25,9 +25,10 @@ std::vector<Polygon2> building_outline(const BuildingInput& input, const Heightm
 /// direction, from the lowest to the highest projection.
 std::pair<Point2, Point2> wall_line(const PlanarSegment& wall, const std::vector<Point3>& points);
 
-/// The roof planes of an inferred outline part: those with at least a quarter of their points inside it.
+/// The roof planes of an inferred outline part: those with at least `share` of their points inside it
+/// (outline.part_roof_share).
 std::vector<PlanarSegment> roofs_of_part(const std::vector<PlanarSegment>& roofs, const Polygon2& part,
-                                         const std::vector<Point3>& points);
+                                         const std::vector<Point3>& points, double share);
 
 /// Mean point spacing, metres: sqrt(outline area / points).
 double point_spacing(const std::vector<Polygon2>& outline, std::size_t points);

@@ -42,6 +42,12 @@ void ReconstructionParams::validate() const {
   need(outline.min_extra_part_area >= 0 && finite(outline.min_extra_part_area),
        "outline.min_extra_part_area must be >= 0 (m2)");
   need(outline.part_gap >= 0 && finite(outline.part_gap), "outline.part_gap must be >= 0 (metres)");
+  need(outline.extra_part_plane_share >= 0 && outline.extra_part_plane_share < 1,
+       "outline.extra_part_plane_share must be in [0, 1)");
+  need(outline.part_roof_share > 0 && outline.part_roof_share <= 1,
+       "outline.part_roof_share must be in (0, 1]");
+  need(rebuild.left_out_cell_share > 0 && rebuild.left_out_cell_share <= 1,
+       "rebuild.left_out_cell_share must be in (0, 1]");
   need(rebuild.level_link_spacings > 0 && finite(rebuild.level_link_spacings),
        "rebuild.level_link_spacings must be > 0");
   need(rebuild.level_link_height >= 0 && finite(rebuild.level_link_height),
@@ -181,6 +187,8 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("outline.wide_gap_spacings", p.outline.wide_gap_spacings);
   put("outline.min_extra_part_area", p.outline.min_extra_part_area);
   put("outline.part_gap", p.outline.part_gap);
+  put("outline.extra_part_plane_share", p.outline.extra_part_plane_share);
+  put("outline.part_roof_share", p.outline.part_roof_share);
   put("outline.snap.dominant_window", p.outline.snap.dominant_window);
   put("outline.snap.min_corner_angle", p.outline.snap.min_corner_angle);
   put("outline.snap.max_shift", p.outline.snap.max_shift);
@@ -197,6 +205,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("rebuild.min_left_out_width", p.rebuild.min_left_out_width);
   put("rebuild.min_level_area", p.rebuild.min_level_area);
   put("rebuild.max_left_out_plane_points", p.rebuild.max_left_out_plane_points);
+  put("rebuild.left_out_cell_share", p.rebuild.left_out_cell_share);
   put("rebuild.left_out_plane_divisor", p.rebuild.left_out_plane_divisor);
   put("rebuild.left_out_plane_min_points", p.rebuild.left_out_plane_min_points);
   put("roof_type.flat_angle", p.roof_type.flat_angle);
