@@ -800,6 +800,36 @@ TEST(Outline, a_part_holds_the_roof_planes_of_which_its_share_of_points_lie_insi
   EXPECT_TRUE(detail::roofs_of_part({plane}, part, points, 0.5).empty());
 }
 
+// A cloud of a house and a 3 x 3 m shed 4 m from it: the shed is a part of the inferred outline when
+// more than outline.extra_part_plane_share of some roof plane's points lie in it. Its one plane here
+// holds 60% of its points in the shed (and 40% on the house).
+TEST(Outline, a_further_part_needs_its_share_of_a_roof_planes_points) {
+  std::vector<Point3> world;
+  PlanarSegment house, shed;
+  for (double x = 0.15; x < 10; x += 0.3)
+    for (double y = 0.15; y < 8; y += 0.3) {
+      house.points.push_back(static_cast<std::uint32_t>(world.size()));
+      world.push_back({85000 + x, 446000 + y, 6.0});
+    }
+  for (double x = 14.15; x < 17; x += 0.3)
+    for (double y = 0.15; y < 3; y += 0.3) {
+      shed.points.push_back(static_cast<std::uint32_t>(world.size()));
+      world.push_back({85000 + x, 446000 + y, 3.0});
+    }
+  const std::size_t in_shed = shed.points.size();
+  for (std::size_t k = 0; k < in_shed * 2 / 3; ++k) shed.points.push_back(house.points[k]);
+  ASSERT_NEAR(static_cast<double>(in_shed) / static_cast<double>(shed.points.size()), 0.6, 0.01);
+  const BuildingInput input = building_from_cloud("house_and_shed", world);
+  ReconstructionParams params;
+  const Heightmap heightmap = rasterise_tin(input.points, params.heightmap);
+  BuildingReport report;
+  EXPECT_EQ(detail::building_outline(input, heightmap, {house, shed}, params, false, report).size(), 2u)
+      << report.note;
+  params.outline.extra_part_plane_share = 0.7;
+  EXPECT_EQ(detail::building_outline(input, heightmap, {house, shed}, params, false, report).size(), 1u)
+      << report.note;
+}
+
 namespace {
 
 // A synthetic building for the whole per-building pipeline: roof points on a jittered 0.3 m grid
