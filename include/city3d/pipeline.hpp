@@ -54,9 +54,10 @@ struct OutlineParams {
   /// in point spacings: the closing with a disc of this radius fills gaps and concavities up to twice
   /// as wide (about 3 m at AHN3's 8 points per m2) and keeps wider ones.
   double wide_gap_spacings = 4.0;
-  /// Smallest area of a part other than the largest that is modelled, m2: a garden shed or a silo
-  /// (a part also needs more than extra_part_plane_share of the points of a roof plane, in [0, 1)).
+  /// Smallest area of a part other than the largest that is modelled, m2: a garden shed or a silo.
   double min_extra_part_area = 4.0;
+  /// A part other than the largest is modelled only when it holds more than this share of the points
+  /// of some roof plane, in [0, 1).
   double extra_part_plane_share = 0.5;
   /// A roof plane is a roof of an inferred part when at least this share of its points lies inside
   /// the part, in (0, 1]: a plane of points elsewhere (another part, ground returns around a tree)
@@ -151,10 +152,10 @@ struct ReconstructionParams {
   double footprint_clearance = 0.01;
   /// A building of more points per m2 than this (of its footprint, or of a cloud's box in plan) is
   /// thinned first to one point per cell of 1 / sqrt(max_point_density) (5 cm) in plan and
-  /// thinning_height_cells cells in height, the first in input order; the note says so. A work limit, and the
-  /// scale the method's neighbourhoods are made for: at 13,000 points per m2 the k nearest neighbours span 2
-  /// cm, region growing split a two-plane roof into 6,786 planes, and the run ran out of memory. Airborne
-  /// surveys hold 10 to 60.
+  /// thinning_height_cells cells in height, the first in input order; the note says so. A work limit,
+  /// and the scale the method's neighbourhoods are made for: at 13,000 points per m2 the k nearest
+  /// neighbours span 2 cm, region growing split a two-plane roof into 6,786 planes, and the run ran out
+  /// of memory. Airborne surveys hold 10 to 60.
   double max_point_density = 400.0;
   /// A thinned cell is this many of its plan widths tall: a roof's noise stays within one cell, and a
   /// wall keeps a point every half metre up its cells (at 5 cm). >= 1.
