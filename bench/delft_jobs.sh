@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Issue 11: the Delft block (both LAS tiles, 160 footprints) with -j 1 and -j 2, one run after the
 # other, RUNS times alternating: wall time, CPU time (user + sys of city3d and its solver processes)
-# and peak memory of each run, their medians, the -j 2 / -j 1 wall ratio, and whether the two
+# and peak memory of each run, their medians, the -j 2 / -j 1 wall ratio (of the medians, and the median
+# of each run's pair: the two runs of a pair are back to back, so a machine whose speed drifts between
+# pairs moves both alike), and whether the two
 # outputs are byte-identical. With SET=dev the same for the 200 single-building clouds of
 # ../shared/data/city3d_dev (without CityJSON; the models are compared).
 # Usage: bench/delft_jobs.sh [CITY3D_BINARY] [RUNS] [SET=delft|dev]
@@ -27,6 +29,7 @@ out="$(mktemp -d)"
 trap 'rm -rf "$out"' EXIT
 median() { sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
 declare -A wall cpu mem
+pairs=""
 for ((i = 1; i <= runs; i++)); do
   for j in 1 2; do
     rm -rf "$out/j$j"
@@ -36,8 +39,10 @@ for ((i = 1; i <= runs; i++)); do
     c=$(awk -v u="$u" -v s="$s" 'BEGIN { printf "%.2f", u + s }')
     echo "run $i -j $j: ${w} s wall, ${c} s CPU, $((kb / 1024)) MB peak"
     wall[$j]+="$w "; cpu[$j]+="$c "; mem[$j]+="$kb "
+    [[ $j == 1 ]] && w_one=$w
   done
   diff -rq "$out/j1/$compared" "$out/j2/$compared" > /dev/null || { echo "run $i: -j 1 and -j 2 differ" >&2; exit 1; }
+  pairs+="$(awk -v a="$w_one" -v b="$w" 'BEGIN { printf "%.4f", b / a }') "
 done
 for j in 1 2; do
   mw=$(tr ' ' '\n' <<< "${wall[$j]}" | grep . | median)
@@ -47,4 +52,5 @@ for j in 1 2; do
   eval "w$j=$mw"
 done
 awk -v a="$w1" -v b="$w2" 'BEGIN { printf "-j 2 wall / -j 1 wall: %.2f\n", b / a }'
+echo "-j 2 wall / -j 1 wall, median of the $runs pairs' ratios: $(tr ' ' '\n' <<< "$pairs" | grep . | median | awk '{ printf "%.2f", $1 }')"
 echo "outputs of -j 1 and -j 2: byte-identical in every run"
