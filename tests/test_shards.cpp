@@ -31,9 +31,7 @@
 #include "city3d/error.hpp"
 #include "city3d/model_io.hpp"
 #include "city3d/options.hpp"
-#include "batch/finalise.hpp"
 #include "batch/journal.hpp"
-#include "reports/report.hpp"
 
 extern char** environ;
 
@@ -687,106 +685,6 @@ TEST(JournalRecord, the_records_a_run_wrote_are_those_a_reader_of_its_journal_fi
     journal.append(record(0, "b0 recomputed", BuildingStatus::ok));
     same_records(journal, 5);
   }
-  fs::remove_all(dir);
-}
-
-// The workers keep the records they append parsed for the run's end (ParsedRecords): each must be the
-// record its journal line gives back, field for field (an id that is not valid UTF-8 as the line holds
-// it replaced, a footprint's NaN), with the overview record made from it; none past the budget.
-TEST(JournalRecord, a_record_kept_parsed_by_its_worker_is_the_one_its_journal_line_gives_back) {
-  using namespace city3d;
-  const fs::path dir = empty_folder("city3d_journal_parsed");
-  detail::JournalHeader header = journal_header(2);
-  header.layout.html = true;
-  header.layout.scale = 0.001;
-  header.layout.translate = {85000.0, 447000.0, 0.0};
-  BuildingModel box;
-  box.id = "b0";
-  box.origin = {85010.5, 447020.25, 1.5};
-  box.mesh.vertices = {{0, 0, 0}, {2, 0, 0}, {2, 1, 0}, {0, 1, 0}, {0, 0, 3}, {2, 0, 3}, {2, 1, 3}, {0, 1, 3}};
-  box.mesh.faces = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
-  const auto record = [&](std::uint64_t index, const std::string& id) {
-    BuildingReport report;
-    report.id = id;
-    report.status = BuildingStatus::ok;
-    report.rmse = 0.125;
-    detail::BuildingRecord r;
-    r.index = index;
-    r.id = id;
-    r.status = report.status;
-    r.report_csv = detail::report_csv_row(report);
-    r.report_json = detail::report_json_row(report);
-    CityObject object{id, {{"1.2", box}, {"2.2", box}}, {}};
-    r.feature = cityjson_feature(object, {"", header.layout.scale, "", ""}, header.layout.translate);
-    Footprint f;
-    f.id = id;
-    f.polygons = {Polygon2{{{85010.5, 447020.25}, {85012.5, 447020.25}, {85012.5, 447021.25}}, {}}};
-    f.attributes = {{"name", std::string("\xff naam")}, {"height", std::numeric_limits<double>::quiet_NaN()}};
-    r.footprint = f;
-    return r;
-  };
-  detail::ParsedRecords parsed(header.layout, detail::FinaliseScope::whole_run, 1u << 20);
-  detail::ParsedRecords none(header.layout, detail::FinaliseScope::whole_run, 100);  // less than a line
-  {
-    detail::Journal journal(dir.string(), header, false);
-    for (std::uint64_t k = 0; k < 2; ++k) {
-      const std::string text = journal.append(record(k, k == 0 ? "b0" : "b\xfe" "1"));
-      parsed.keep(k, text);
-      none.keep(k, text);
-    }
-  }
-  const detail::JournalReader reader((dir / "resume.journal").string());
-  ASSERT_EQ(reader.records().size(), 2u);
-  for (const detail::RecordRef& ref : reader.records()) {
-    SCOPED_TRACE(ref.index);
-    EXPECT_EQ(none.find(ref.index), nullptr);
-    const detail::ParsedRecord* kept = parsed.find(ref.index);
-    ASSERT_NE(kept, nullptr);
-    const detail::BuildingRecord back = reader.read(ref);
-    const detail::BuildingRecord& a = kept->record;
-    EXPECT_EQ(a.index, back.index);
-    EXPECT_EQ(a.id, back.id);
-    EXPECT_EQ(a.status, back.status);
-    EXPECT_EQ(a.report_csv, back.report_csv);
-    EXPECT_EQ(a.report_json, back.report_json);
-    EXPECT_EQ(a.feature, back.feature);
-    EXPECT_EQ(a.model_file, back.model_file);
-    EXPECT_EQ(a.model_hash, back.model_hash);
-    ASSERT_TRUE(a.footprint && back.footprint);
-    EXPECT_EQ(a.footprint->polygons.front().outer.size(), back.footprint->polygons.front().outer.size());
-    ASSERT_EQ(a.footprint->attributes.size(), 2u);
-    EXPECT_EQ(std::get<std::string>(a.footprint->attributes[0].second),
-              std::get<std::string>(back.footprint->attributes[0].second));
-    EXPECT_TRUE(std::isnan(std::get<double>(a.footprint->attributes[1].second)));
-    // The overview record, as report.html would make it from the line read back.
-    ASSERT_TRUE(kept->overview.has_value());
-    const OverviewRecord o = overview_record(back.report_json, back.feature, *back.footprint, header.layout.scale,
-                                             header.layout.translate, ref.index, true);
-    EXPECT_EQ(kept->overview->report.id, o.report.id);
-    EXPECT_EQ(kept->overview->report.rmse, o.report.rmse);
-    ASSERT_EQ(kept->overview->lods.size(), 2u);
-    ASSERT_EQ(o.lods.size(), 2u);
-    for (std::size_t l = 0; l < 2; ++l) {
-      const BuildingModel &m = kept->overview->lods[l].model, &n = o.lods[l].model;
-      EXPECT_EQ(kept->overview->lods[l].lod, o.lods[l].lod);
-      EXPECT_EQ(m.origin.x, n.origin.x);
-      EXPECT_EQ(m.origin.y, n.origin.y);
-      ASSERT_EQ(m.mesh.vertices.size(), n.mesh.vertices.size());
-      for (std::size_t v = 0; v < m.mesh.vertices.size(); ++v) {
-        EXPECT_EQ(m.mesh.vertices[v].x, n.mesh.vertices[v].x);
-        EXPECT_EQ(m.mesh.vertices[v].z, n.mesh.vertices[v].z);
-      }
-      EXPECT_EQ(m.mesh.faces, n.mesh.faces);
-    }
-  }
-  EXPECT_EQ(parsed.find(2), nullptr);
-  // Without overview outputs (a shard, or a run without report.html, buildings.gpkg and the tileset) only
-  // the record is kept.
-  detail::ParsedRecords shard(header.layout, detail::FinaliseScope::shard, 1u << 20);
-  shard.keep(0, reader.line(reader.records().front()).substr(17));
-  ASSERT_NE(shard.find(0), nullptr);
-  EXPECT_FALSE(shard.find(0)->overview.has_value());
-  EXPECT_EQ(shard.find(0)->record.feature, parsed.find(0)->record.feature);
   fs::remove_all(dir);
 }
 

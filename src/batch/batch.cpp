@@ -54,11 +54,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// The journal text of the records the workers keep parsed for the run's end (finalise_run() reads
-// the others back): the whole of a city block (the Delft block's 160 records are 1 MB), the first
-// finished of a larger run.
-constexpr std::size_t kParsedRecordText = 8u << 20;
-
 // Adds a note to a report row (after the pipeline's own, "; "-separated), even when the row has it
 // already (add_note, of the pipeline, adds a note only once).
 void append_note(BuildingReport& report, const std::string& note) {
@@ -583,9 +578,6 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
     for (std::size_t j = 0; j < plan.skipped.size(); ++j)
       if (!journal.find(plan.buildings + j)) journal.append(skipped_record(plan.buildings + j, plan.skipped[j]));
 
-  const detail::FinaliseScope scope = sharded ? detail::FinaliseScope::shard : detail::FinaliseScope::whole_run;
-  detail::ParsedRecords parsed(plan.layout, scope, kParsedRecordText);
-
   // Reconstructs buildings `indices` (global, output order) in parallel; id_of(k) and make_input(k)
   // give the id and input of indices[k], the input made by the worker that reconstructs it.
   const std::size_t total = header.expected;
@@ -627,8 +619,8 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
           const BuildingInput input = make_input(k);
           BuildingResult result = reconstruct_building(input, options.reconstruction);
           amend(k, result);
-          parsed.keep(indices[k], journal.append(make_record(indices[k], std::move(result), options, plan.layout,
-                                                              input.footprint.attributes, outline_of(k))));
+          journal.append(make_record(indices[k], std::move(result), options, plan.layout, input.footprint.attributes,
+                                     outline_of(k)));
         } catch (...) {
           // Only input and output errors reach here (reconstruct_building never throws for a bad
           // building): the run cannot go on.
@@ -784,7 +776,7 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   // The run-level files, from the journal's records (as this run wrote them: not parsed again).
   const detail::JournalReader reader(journal.path(), header, journal.take_written());
   std::vector<detail::RecordInJournal> sources;
-  for (const detail::RecordRef& ref : reader.records()) sources.push_back({&reader, &ref, parsed.find(ref.index)});
+  for (const detail::RecordRef& ref : reader.records()) sources.push_back({&reader, &ref});
   std::sort(sources.begin(), sources.end(),
             [](const detail::RecordInJournal& a, const detail::RecordInJournal& b) {
               return a.ref->index < b.ref->index;
@@ -797,7 +789,8 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
   manifest.records = sources.size();
   BatchSummary summary =
       detail::finalise_run(options.output_dir, plan.layout, sources, seconds_since(start), journal.restored(),
-                           scope, manifest.outputs, static_cast<unsigned>(options.threads));
+                           sharded ? detail::FinaliseScope::shard : detail::FinaliseScope::whole_run,
+                           manifest.outputs, static_cast<unsigned>(options.threads));
   manifest.seconds = seconds_since(start);
   folder.write_manifest(manifest);
   std::string building_classes;  // empty when classes are not used

@@ -79,11 +79,6 @@ class JournalOverview : public OverviewSource {
       : records_(records), layout_(layout) {}
   std::size_t size() const override { return records_.size(); }
   OverviewRecord at(std::size_t k, bool levels) const override {
-    if (const ParsedRecord* parsed = records_[k].parsed; parsed && parsed->overview) {
-      OverviewRecord r = *parsed->overview;
-      if (!levels) r.lods.clear();  // as overview_record() makes it without them
-      return r;
-    }
     BuildingRecord r = records_[k].journal->read(*records_[k].ref);
     return overview_record(r.report_json, r.feature, r.footprint ? std::move(*r.footprint) : Footprint{},
                            layout_.scale, layout_.translate, k, levels);
@@ -283,38 +278,6 @@ void OutputFolder::write_manifest(const RunManifest& m) {
   file.commit();
 }
 
-ParsedRecords::ParsedRecords(const RunLayout& layout, FinaliseScope scope, std::size_t budget)
-    : scale_(layout.scale),
-      translate_(layout.translate),
-      overview_(scope == FinaliseScope::whole_run && (layout.gpkg || layout.html || layout.tiles3d)),
-      budget_(budget) {}
-
-void ParsedRecords::keep(std::uint64_t index, const std::string& text) {
-  if (used_.fetch_add(text.size()) + text.size() > budget_) return;
-  auto parsed = std::make_unique<ParsedRecord>();
-  try {
-    parsed->record = record_from_text(text);
-  } catch (const std::exception&) {
-    return;
-  }
-  if (overview_) {
-    try {
-      const BuildingRecord& r = parsed->record;
-      parsed->overview = overview_record(r.report_json, r.feature, r.footprint ? *r.footprint : Footprint{}, scale_,
-                                         translate_, index, true);
-    } catch (const std::exception&) {
-      // Read again at the end, where the problem is reported.
-    }
-  }
-  const std::lock_guard<std::mutex> lock(mutex_);
-  kept_[index] = std::move(parsed);
-}
-
-const ParsedRecord* ParsedRecords::find(std::uint64_t index) const {
-  const auto it = kept_.find(index);
-  return it == kept_.end() ? nullptr : it->second.get();
-}
-
 BatchSummary finalise_run(const std::string& dir, const RunLayout& layout,
                           const std::vector<RecordInJournal>& records, double seconds, std::size_t resumed,
                           FinaliseScope scope, std::map<std::string, std::string>& outputs,
@@ -357,9 +320,7 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout,
 
   std::map<std::string, std::pair<std::size_t, std::size_t>> problems;  // key -> rows, rows outside every tile
   // The records are read (parsed) a batch at a time on the run's threads, and taken in order.
-  const auto read = [&records](std::size_t k) {
-    return records[k].parsed ? records[k].parsed->record : records[k].journal->read(*records[k].ref);
-  };
+  const auto read = [&records](std::size_t k) { return records[k].journal->read(*records[k].ref); };
   for_each_in_order(records.size(), threads, kRecordBatch, read, [&](std::size_t, BuildingRecord r) {
     report.add(r.report_csv, r.report_json);
     // A fallback has its model (a lower rung): not a problem of the run.
@@ -418,7 +379,7 @@ BatchSummary finalise_run(const std::string& dir, const RunLayout& layout,
   written.push_back("report.csv");
   written.push_back("report.json");
   // The overview outputs, reading the records again one at a time (a run's records are never all in
-  // memory at once) unless their workers kept them parsed.
+  // memory at once).
   if (whole && (layout.gpkg || layout.html || layout.tiles3d)) {
     const JournalOverview overview(records, layout);
     if (layout.tiles3d) {

@@ -5,35 +5,21 @@
 // presence means the run or shard finished).
 #pragma once
 
-#include <atomic>
 #include <cstdint>
 #include <map>
-#include <memory>
-#include <mutex>
-#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "city3d/batch.hpp"
-#include "city3d/run_outputs.hpp"
 #include "batch/journal.hpp"
 
 namespace city3d::detail {
 
-/// A record as finalise_run() reads it, parsed already by the worker that wrote it: the record its
-/// line holds and, when the run-level files need it, its overview record (with its levels of detail).
-struct ParsedRecord {
-  BuildingRecord record;
-  std::optional<OverviewRecord> overview;
-};
-
-/// One record to finalise: where it is, and the record parsed when its worker kept it (the files
-/// are the same either way: the run's end then need not read it back and parse it on one thread).
+/// One record to finalise: where it is.
 struct RecordInJournal {
   const JournalReader* journal = nullptr;
   const RecordRef* ref = nullptr;
-  const ParsedRecord* parsed = nullptr;
 };
 
 /// What a finished run (or shard) leaves in run.json.
@@ -50,28 +36,6 @@ struct RunManifest {
 enum class FinaliseScope {
   whole_run,  ///< every run-level file of the layout
   shard,      ///< only report.csv and report.json of the shard's records
-};
-
-/// The records a run's workers append to the journal, parsed by them for finalise_run() while the
-/// budget of line text lasts (a city block's records are all kept; of a larger run, those finished
-/// first). keep() may be called from several threads; find() once they are done.
-class ParsedRecords {
- public:
-  /// The overview records are made when the run-level files of `layout` and `scope` need them.
-  ParsedRecords(const RunLayout& layout, FinaliseScope scope, std::size_t budget);
-  /// Keeps record `index` parsed from the JSON text of its line (Journal::append()), unless the
-  /// budget is spent or the text does not parse (finalise_run() then reads it, and says why).
-  void keep(std::uint64_t index, const std::string& text);
-  const ParsedRecord* find(std::uint64_t index) const;
-
- private:
-  double scale_;
-  Point3 translate_;
-  bool overview_;
-  std::size_t budget_;
-  std::atomic<std::size_t> used_{0};
-  std::mutex mutex_;
-  std::map<std::uint64_t, std::unique_ptr<ParsedRecord>> kept_;
 };
 
 /// The names of the run-level files finalise_run() writes for a layout.

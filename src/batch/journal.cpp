@@ -384,7 +384,7 @@ BuildingRecord JournalReader::read(const RecordRef& ref) const {
   if (!text) throw IoError("resume: record " + std::to_string(ref.index) + " (" + ref.id + ") of " + path_ +
                            " changed while the run used it");
   try {
-    return record_from_text(*text);
+    return parse_record(json::parse(*text));
   } catch (const std::exception& e) {
     throw IoError("resume: record " + std::to_string(ref.index) + " of " + path_ + " is unreadable: " + e.what());
   }
@@ -460,9 +460,7 @@ const RecordRef* Journal::find(std::uint64_t index) const {
   return it == done_.end() ? nullptr : &it->second;
 }
 
-BuildingRecord record_from_text(const std::string& text) { return parse_record(json::parse(text)); }
-
-std::string Journal::append(const BuildingRecord& record) {
+void Journal::append(const BuildingRecord& record) {
   const std::string line = make_line(record_json(record)) + "\n";
   // Its summary as a reader parses it back from the line: the strings as the line holds them (invalid
   // UTF-8 replaced), the status by its name.
@@ -481,7 +479,6 @@ std::string Journal::append(const BuildingRecord& record) {
   a.model_hash_end = appended_text_.size();
   appended_.push_back(a);
   size_ += line.size();
-  return line.substr(kHashDigits + 1, line.size() - kHashDigits - 2);
 }
 
 std::vector<RecordRef> Journal::take_written() {

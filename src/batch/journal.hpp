@@ -117,10 +117,6 @@ class JournalReader {
   mutable std::mutex in_mutex_;  ///< one reader of in_ at a time (the parsing is outside it)
 };
 
-/// The record of a line's JSON text (the line without its checksum): what JournalReader::read()
-/// returns once the checksum is good. Throws std::exception (nlohmann's, or a malformed field).
-BuildingRecord record_from_text(const std::string& text);
-
 /// The journal a run writes into its output folder.
 class Journal {
  public:
@@ -138,9 +134,8 @@ class Journal {
   /// The finished record of this index, or nullptr.
   const RecordRef* find(std::uint64_t index) const;
   std::size_t restored() const { return done_.size(); }
-  /// Appends one record and flushes it to the operating system. Thread-safe. Returns the JSON text
-  /// of its line (record_from_text() gives the record back from it as read() would).
-  std::string append(const BuildingRecord& record);
+  /// Appends one record and flushes it to the operating system. Thread-safe.
+  void append(const BuildingRecord& record);
   /// Flushes and closes the file (the destructor does too).
   void close();
   /// Every record line of the file, in file order, as JournalReader would read it back: the kept
