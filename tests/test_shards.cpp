@@ -304,10 +304,10 @@ TEST_F(Shards, merge_writes_buildings_gpkg_the_tileset_and_report_html_only_when
 
 // A country is merged region by region, each of about half a million buildings (docs/COST_MODEL.md):
 // merge must not hold every record's journal line (about 6 KB each) to copy the journal, nor every
-// record's models to write buildings.gpkg and report.html. The peak is what the merge holds: jemalloc (the
-// executable's allocator) returns freed pages at once (it keeps them for up to 10 s by default, so the peak
-// would depend on timing: 1.0-1.7 KB per record from run to run), on one thread (each thread's arena keeps
-// its own).
+// record's models to write buildings.gpkg and report.html. The peak is made what the merge holds: jemalloc
+// (the executable's allocator) is told to return freed pages at once (by default it keeps them for up to
+// 10 s, and the peak then depended on timing: 1.0-1.7 KB per record from run to run), and the merge runs on
+// one thread (each thread's arena keeps its own).
 TEST_F(Shards, merge_memory_grows_by_little_more_than_a_reference_per_record) {
   ASSERT_EQ(reconstruct(dir_ / "one", "--shard 1/1").exit_code, 0);  // 15 buildings, with --gpkg and report.html
   const char* const malloc_conf = std::getenv("MALLOC_CONF");
