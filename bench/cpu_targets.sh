@@ -2,7 +2,8 @@
 # Issue 27's figures in one run, each as a median (run it on a quiet machine; the figures and the
 # commands behind them are in docs/BENCHMARKS.md, "CPU: issue 27"):
 #  1. the Delft block (both LAS tiles, 160 footprints, every default output), -j 1 and -j 2 in
-#     alternation: wall, CPU and peak memory, and the -j 2 / -j 1 wall ratio (bench/delft_jobs.sh);
+#     alternation: wall, CPU and peak memory, and the -j 2 / -j 1 wall and CPU ratios
+#     (bench/delft_jobs.sh);
 #  2. city3d_dev and city3d_dev_large (-j 1): the per-building CPU, total, median, p99 and maximum,
 #     with the stage profile (bench/stage_profile.py), and city3d_dev's -j 2 / -j 1 wall ratio;
 #  3. LAZ decoding through the LAS reader on 1 and 2 threads (bench_laz_decode): both AHN3 tiles (13
@@ -24,11 +25,11 @@ data="$here/../../shared/data"
 [[ -x "$bin" ]] || { echo "cpu_targets.sh: no city3d binary at $bin" >&2; exit 2; }
 
 echo "== 1. Delft block, -j 1 and -j 2, $runs runs each"
-bash "$here/delft_jobs.sh" "$bin" "$runs" | grep -E '^median|wall /|byte-identical'
+bash "$here/delft_jobs.sh" "$bin" "$runs" | grep -E '^median|wall /|CPU /|byte-identical'
 
 echo "== 2. city3d_dev and city3d_dev_large, -j 1: per-building CPU; city3d_dev -j 1 and -j 2"
 python3 "$here/stage_profile.py" --city3d "$bin" --sets dev,dev_large --runs 1 | grep -E '^#|^per-building|^\| (all|selection|planes|polylines|measure) '
-bash "$here/delft_jobs.sh" "$bin" 1 dev | grep -E '^median|wall /|byte-identical'
+bash "$here/delft_jobs.sh" "$bin" 1 dev | grep -E '^median|wall /|CPU /|byte-identical'
 
 echo "== 3. LAZ decoding through the LAS reader, 1 and 2 threads, median of 11"
 cmake --build "$build" --target bench_laz_decode -j2 > /dev/null

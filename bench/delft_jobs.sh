@@ -3,8 +3,8 @@
 # other, RUNS times alternating: wall time, CPU time (user + sys of city3d and its solver processes)
 # and peak memory of each run, their medians, the -j 2 / -j 1 wall ratio (of the medians, and the median
 # of each run's pair: the two runs of a pair are back to back, so a machine whose speed drifts between
-# pairs moves both alike), and whether the two
-# outputs are byte-identical. With SET=dev the same for the 200 single-building clouds of
+# pairs moves both alike), the -j 2 / -j 1 CPU ratio (near 1 when the second core was free), and whether
+# the two outputs are byte-identical. With SET=dev the same for the 200 single-building clouds of
 # ../shared/data/city3d_dev (without CityJSON; the models are compared).
 # Usage: bench/delft_jobs.sh [CITY3D_BINARY] [RUNS] [SET=delft|dev]
 set -euo pipefail
@@ -49,8 +49,11 @@ for j in 1 2; do
   mc=$(tr ' ' '\n' <<< "${cpu[$j]}" | grep . | median)
   mm=$(tr ' ' '\n' <<< "${mem[$j]}" | grep . | median | cut -d. -f1)
   echo "median of $runs runs, -j $j: $mw s wall, $mc s CPU, $((mm / 1024)) MB peak"
-  eval "w$j=$mw"
+  eval "w$j=$mw c$j=$mc"
 done
 awk -v a="$w1" -v b="$w2" 'BEGIN { printf "-j 2 wall / -j 1 wall: %.2f\n", b / a }'
+# The same work on two threads should cost the same CPU: well above 1, the two threads slowed each other
+# down (or a neighbour on the host took part of the cores), which a serial stage of city3d does not do.
+awk -v a="$c1" -v b="$c2" 'BEGIN { printf "-j 2 CPU / -j 1 CPU: %.2f\n", b / a }'
 echo "-j 2 wall / -j 1 wall, median of the $runs pairs' ratios: $(tr ' ' '\n' <<< "$pairs" | grep . | median | awk '{ printf "%.2f", $1 }')"
 echo "outputs of -j 1 and -j 2: byte-identical in every run"
