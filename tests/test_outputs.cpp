@@ -784,6 +784,47 @@ TEST(ReportRows, a_json_row_has_the_csv_columns_in_order_and_the_values_csv_prin
   EXPECT_EQ(row["cpu_seconds"].get<double>(), 0.0123);
 }
 
+// The GeoPackage and the 3D Tiles take a building's attributes from its overview record, read back from
+// the report.json row the journal keeps: every attribute a building has in the CityJSON must come back
+// from that row with its value (building_coverage once came back null in both).
+TEST(ReportRows, the_overview_record_read_from_a_json_row_has_every_output_attribute_of_the_report) {
+  city3d::BuildingReport r;
+  r.id = "b7";
+  r.status = city3d::BuildingStatus::fallback;
+  r.level = city3d::ModelLevel::lod22_footprint_walls;
+  r.reason = "a reason";
+  r.note = "a note";
+  r.lods = "1.2,1.3,2.2";
+  r.lods_reconstructed = "1.3,2.2";
+  r.ground_z = 1.25;
+  r.ground_method = "footprint ring";
+  r.h_roof_50p = 6.5, r.h_roof_70p = 7.25, r.h_roof_min = 2.5, r.h_roof_max = 9.75, r.h_ridge = 9.5;
+  r.roof_type = "slanted";
+  r.volume_lod12 = 101.5, r.volume_lod13 = 102.5, r.volume_lod22 = 103.5;
+  r.rmse_lod12 = 0.5, r.rmse_lod13 = 0.25, r.rmse_lod22 = 0.125;
+  r.unexplained_points = 17;
+  r.unexplained_share = 0.0625;
+  r.unsupported_area = 1.5;
+  r.height_excess = 0.75;
+  r.validity_found = "lod22: 203 NON_PLANAR_POLYGON_DISTANCE_PLANE";
+  r.repairs = "snapped";
+  r.footprint_area = 68.5;
+  r.point_density = 9.5;
+  r.coverage = 0.875, r.point_coverage = 0.625, r.building_coverage = 0.75;
+  r.points = 650, r.planes = 3, r.faces = 21;
+  const city3d::Attributes written = city3d::detail::output_attributes(r, {}, false);
+  const city3d::OverviewRecord read = city3d::overview_record(city3d::detail::report_json_row(r), "", {}, 0.001,
+                                                              {0, 0, 0}, 0, false);
+  const city3d::Attributes back = city3d::detail::output_attributes(read.report, {}, false);
+  ASSERT_EQ(back.size(), written.size());
+  for (std::size_t k = 0; k < written.size(); ++k) {
+    EXPECT_EQ(back[k].first, written[k].first);
+    EXPECT_TRUE(back[k].second == written[k].second) << written[k].first << " did not come back";
+  }
+  for (const auto& [name, value] : written)  // the row above gives every attribute a value
+    EXPECT_FALSE(std::holds_alternative<std::monostate>(value)) << name;
+}
+
 namespace {
 
 // The records of a run held in memory.

@@ -70,6 +70,7 @@ BuildingReport parse_report(const std::string& text, std::size_t position) {
   r.point_density = number_or_nan(o, "point_density");
   r.coverage = number_or_nan(o, "coverage");
   r.point_coverage = number_or_nan(o, "point_coverage");
+  r.building_coverage = number_or_nan(o, "building_coverage");
   r.h_roof_50p = number_or_nan(o, "h_roof_50p");
   r.h_roof_70p = number_or_nan(o, "h_roof_70p");
   r.h_roof_min = number_or_nan(o, "h_roof_min");
