@@ -1,6 +1,6 @@
 // What several modules ask of a mesh's faces (rings of indices into its vertex list): whether the
 // indices are in range, Newell's normal, the edge-connected parts (each written as one Solid), and
-// whether the faces around a vertex form one fan. Private to the library.
+// whether the faces around a vertex form one fan (union-find: core/union_find.hpp). Private to the library.
 #pragma once
 
 #include <algorithm>
@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "city3d/types.hpp"
+#include "core/union_find.hpp"
 #include "core/vec.hpp"
 
 namespace city3d::detail {
@@ -33,24 +34,6 @@ inline Vec newell_normal(const std::vector<Point3>& vertices, const std::vector<
   }
   return n;
 }
-
-/// Union-find over 0 .. n-1 (with path halving): faces or corners joined into parts.
-class UnionFind {
- public:
-  explicit UnionFind(std::size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), std::size_t{0}); }
-  /// The root of i's part: i itself for the one root of each part.
-  std::size_t find(std::size_t i) {
-    while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
-    return i;
-  }
-  void join(std::size_t a, std::size_t b) {
-    const std::size_t root = find(b);
-    parent_[find(a)] = root;
-  }
-
- private:
-  std::vector<std::size_t> parent_;
-};
 
 /// The edge-connected part of each face: faces that share an edge (either direction) are in one part.
 /// Parts are numbered 0, 1, ... in order of their first face. Indices need not be in range.

@@ -309,25 +309,20 @@ bool triangles_form_a_surface(const std::vector<std::array<std::uint32_t, 3>>& t
   for (const Triangle& t : triangles)
     for (std::size_t k = 0; k < 3; ++k) corners.push_back({t[k], t[(k + 2) % 3], t[(k + 1) % 3]});
   std::sort(corners.begin(), corners.end());  // by vertex, then by previous: unique (previous, vertex) edges
-  std::vector<std::size_t> parent;
+  UnionFind fans;
   for (std::size_t i = 0; i < corners.size();) {
     std::size_t j = i;
     while (j < corners.size() && corners[j][0] == corners[i][0]) ++j;
-    parent.resize(j - i);
-    std::iota(parent.begin(), parent.end(), std::size_t{0});
-    const auto find = [&](std::size_t c) {
-      while (parent[c] != c) c = parent[c] = parent[parent[c]];
-      return c;
-    };
+    fans.reset(j - i);
     for (std::size_t c = i; c < j; ++c) {
       const auto after = std::lower_bound(corners.begin() + static_cast<std::ptrdiff_t>(i),
                                           corners.begin() + static_cast<std::ptrdiff_t>(j),
                                           std::array<std::uint32_t, 3>{corners[c][0], corners[c][2], 0});
       if (after != corners.begin() + static_cast<std::ptrdiff_t>(j) && (*after)[1] == corners[c][2])
-        parent[find(c - i)] = find(static_cast<std::size_t>(after - corners.begin()) - i);
+        fans.join(c - i, static_cast<std::size_t>(after - corners.begin()) - i);
     }
     std::size_t parts = 0;
-    for (std::size_t c = 0; c < parent.size(); ++c) parts += find(c) == c;
+    for (std::size_t c = 0; c < j - i; ++c) parts += fans.find(c) == c;
     if (parts > 1) return false;
     i = j;
   }

@@ -8,7 +8,6 @@
 #include <cstdint>
 #include <limits>
 #include <map>
-#include <numeric>
 #include <set>
 #include <sstream>
 #include <string>
@@ -44,6 +43,7 @@ using detail::dot;
 using detail::newell_normal;
 using detail::norm;
 using detail::sub;
+using detail::UnionFind;
 using detail::Vec;
 
 // Largest distance of a loop's vertices from the plane through their mean with Newell's normal.
@@ -58,11 +58,6 @@ double planarity_error(const std::vector<Point3>& vs, const Loop& loop) {
   double worst = 0.0;
   for (auto v : loop) worst = std::max(worst, std::abs(dot(sub(vs[v], c), n)) / length);
   return worst;
-}
-
-std::size_t find_root(std::vector<std::size_t>& parent, std::size_t i) {
-  while (parent[i] != i) i = parent[i] = parent[parent[i]];
-  return i;
 }
 
 // Signed volume of the closed loops (divergence theorem over fan triangles, about `ref`).
@@ -213,16 +208,14 @@ PolygonMesh assemble_model(const CandidateFaces& candidates, const std::vector<b
 
   // 3. Merge adjacent coplanar faces.
   if (params.merge_coplanar) {
-    std::vector<std::size_t> parent(model.size());
-    std::iota(parent.begin(), parent.end(), 0);
+    UnionFind coplanar(model.size());
     for (const auto& [edge, list] : uses) {
       if (model[list[0].face].plane_id != model[list[1].face].plane_id) continue;
-      const std::size_t a = find_root(parent, list[0].face), b = find_root(parent, list[1].face);
-      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+      coplanar.join_to_smaller(list[0].face, list[1].face);
     }
     std::vector<Face> merged;
     std::vector<std::vector<std::size_t>> groups(model.size());
-    for (std::size_t f = 0; f < model.size(); ++f) groups[find_root(parent, f)].push_back(f);
+    for (std::size_t f = 0; f < model.size(); ++f) groups[coplanar.find(f)].push_back(f);
     for (const auto& group : groups) {
       if (group.empty()) continue;
       if (group.size() == 1) {

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <numeric>
 #include <tuple>
 #include <vector>
 
@@ -19,6 +18,7 @@ using detail::cross;
 using detail::dot;
 using detail::indices_in_range;
 using detail::sub;
+using detail::UnionFind;
 using detail::Vec;
 
 std::uint64_t key(std::uint32_t a, std::uint32_t b) { return (std::uint64_t{a} << 32) | b; }
@@ -39,11 +39,6 @@ void add_fan_volume(const std::vector<Point3>& vertices, const std::vector<std::
     const Vec c = sub(vertices[face[k + 1]], centre);
     volume += dot(a, cross(b, c)) / 6.0;
   }
-}
-
-std::size_t find_root(std::vector<std::size_t>& parent, std::size_t i) {
-  while (parent[i] != i) i = parent[i] = parent[parent[i]];
-  return i;
 }
 
 }  // namespace
@@ -92,8 +87,7 @@ MeshCheck check_mesh(const PolygonMesh& mesh) {
   };
 
   // Edge pairing, manifold edges and shells in one pass over the distinct directed edges.
-  std::vector<std::size_t> parent(mesh.faces.size());
-  std::iota(parent.begin(), parent.end(), std::size_t{0});
+  UnionFind shells(mesh.faces.size());
   bool every_edge_paired_once = true;
   for (std::size_t i = 0; i < directed.size();) {
     std::size_t j = i;
@@ -109,15 +103,15 @@ MeshCheck check_mesh(const PolygonMesh& mesh) {
       if (here + opposite > 2 || here > 1 || opposite > 1) ++check.non_manifold_edges;
     }
     for (std::size_t k = i + 1; k < j; ++k)
-      parent[find_root(parent, directed[k].second)] = find_root(parent, directed[i].second);
+      shells.join(directed[k].second, directed[i].second);
     if (opposite > 0) {
       auto it = std::lower_bound(directed.begin(), directed.end(), std::make_pair(key(b, a), std::size_t{0}));
-      parent[find_root(parent, it->second)] = find_root(parent, directed[i].second);
+      shells.join(it->second, directed[i].second);
     }
     i = j;
   }
-  for (std::size_t f = 0; f < parent.size(); ++f)
-    if (find_root(parent, f) == f) ++check.shell_count;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f)
+    if (shells.find(f) == f) ++check.shell_count;
 
   // Vertex manifoldness: the face corners around a vertex (previous, next) must chain into a single
   // fan; corner (p, v, n) is followed by the corner whose previous vertex is n.

@@ -7,8 +7,9 @@
 #include <cstdint>
 #include <limits>
 #include <map>
-#include <numeric>
 #include <utility>
+
+#include "core/union_find.hpp"
 
 namespace city3d::detail {
 
@@ -32,12 +33,7 @@ std::vector<std::vector<std::uint32_t>> linked_groups(const std::vector<Point3>&
                                                       const std::vector<std::uint32_t>& loose, double radius,
                                                       double height) {
   // Union-find over the loose points; neighbours from a grid of radius-sized cells.
-  std::vector<std::uint32_t> parent(loose.size());
-  std::iota(parent.begin(), parent.end(), 0u);
-  const auto root = [&parent](std::uint32_t k) {
-    while (parent[k] != k) k = parent[k] = parent[parent[k]];
-    return k;
-  };
+  UnionFind linked(loose.size());
   std::map<std::pair<long long, long long>, std::vector<std::uint32_t>> grid;
   const auto cell = [radius](const Point3& p) {
     return std::pair{static_cast<long long>(std::floor(p.x / radius)), static_cast<long long>(std::floor(p.y / radius))};
@@ -53,16 +49,14 @@ std::vector<std::vector<std::uint32_t>> linked_groups(const std::vector<Point3>&
         for (std::uint32_t j : it->second) {
           if (j <= k) continue;
           const Point3& q = points[loose[j]];
-          if (std::hypot(p.x - q.x, p.y - q.y) <= radius && std::fabs(p.z - q.z) <= height) {
-            const std::uint32_t a = root(k), b = root(j);
-            if (a != b) parent[std::max(a, b)] = std::min(a, b);
-          }
+          if (std::hypot(p.x - q.x, p.y - q.y) <= radius && std::fabs(p.z - q.z) <= height)
+            linked.join_to_smaller(k, j);
         }
       }
   }
   // Each root is its group's smallest member.
-  std::map<std::uint32_t, std::vector<std::uint32_t>> groups;
-  for (std::uint32_t k = 0; k < loose.size(); ++k) groups[root(k)].push_back(loose[k]);
+  std::map<std::size_t, std::vector<std::uint32_t>> groups;
+  for (std::uint32_t k = 0; k < loose.size(); ++k) groups[linked.find(k)].push_back(loose[k]);
   std::vector<std::vector<std::uint32_t>> out;
   out.reserve(groups.size());
   for (auto& [first, members] : groups) out.push_back(std::move(members));

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <optional>
 #include <sstream>
@@ -15,6 +16,7 @@
 #include "city3d/repair.hpp"
 #include "city3d/stage_profile.hpp"
 #include "city3d/surface_support.hpp"
+#include "core/mesh_faces.hpp"
 
 namespace city3d::detail {
 namespace {
@@ -29,18 +31,12 @@ std::string roof_type_of(const BuildingModel& model, const RoofTypeParams& param
   for (std::size_t f = 0; f < model.mesh.faces.size(); ++f) {
     if (types[f] != SurfaceType::roof) continue;
     const auto& face = model.mesh.faces[f];
-    double nx = 0, ny = 0, nz = 0, zsum = 0;
-    for (std::size_t k = 0; k < face.size(); ++k) {
-      const Point3& a = model.mesh.vertices[face[k]];
-      const Point3& b = model.mesh.vertices[face[(k + 1) % face.size()]];
-      nx += (a.y - b.y) * (a.z + b.z);
-      ny += (a.z - b.z) * (a.x + b.x);
-      nz += (a.x - b.x) * (a.y + b.y);
-      zsum += a.z;
-    }
-    const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+    const Vec n = newell_normal(model.mesh.vertices, face);
+    double zsum = 0;
+    for (std::uint32_t v : face) zsum += model.mesh.vertices[v].z;
+    const double len = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
     if (!(len > 0)) continue;
-    if (nz / len < std::cos(params.flat_angle * kPi / 180.0)) slanted = true;
+    if (n.z / len < std::cos(params.flat_angle * kPi / 180.0)) slanted = true;
     heights.push_back(zsum / face.size());
   }
   if (heights.empty()) return "could not be detected";

@@ -63,7 +63,6 @@
 #include <cstdint>
 #include <fstream>
 #include <limits>
-#include <numeric>
 #include <queue>
 #include <sstream>
 #include <unordered_map>
@@ -71,6 +70,7 @@
 
 #include "city3d/error.hpp"
 #include "city3d/log.hpp"
+#include "core/union_find.hpp"
 
 namespace city3d {
 
@@ -778,18 +778,13 @@ std::vector<Polyline2> extract_polylines(const std::vector<Point2>& edge_pixels,
   for (const auto& e : simplifier.edges())
     if (e.alive && e.solid) solid.push_back({e.a, e.b});
   std::sort(solid.begin(), solid.end());
-  std::vector<int> parent(pos.size());
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  for (const auto& [a, b] : solid) parent[find(a)] = find(b);
-  std::unordered_map<int, double> group_length;
-  for (const auto& [a, b] : solid) group_length[find(a)] += std::sqrt(dist2(pos[a], pos[b]));
+  detail::UnionFind groups(pos.size());
+  for (const auto& [a, b] : solid) groups.join(a, b);
+  std::unordered_map<std::size_t, double> group_length;
+  for (const auto& [a, b] : solid) group_length[groups.find(a)] += std::sqrt(dist2(pos[a], pos[b]));
   std::vector<std::pair<int, int>> kept;
   for (const auto& [a, b] : solid)
-    if (group_length[find(a)] >= params.min_polyline_length) kept.push_back({a, b});
+    if (group_length[groups.find(a)] >= params.min_polyline_length) kept.push_back({a, b});
   st.filtered_edges = solid.size() - kept.size();
 
   std::vector<Polyline2> polylines = trace_polylines(pos, kept);
