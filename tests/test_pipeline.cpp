@@ -1147,7 +1147,8 @@ TEST(Parameters, the_pipelines_own_numbers_are_checked_and_written) {
                            "selection.min_time_limit = 0.10000000000000001\n",
                            "outline.extra_part_plane_share = 0.5\n",
                            "outline.part_roof_share = 0.25\n",
-                           "rebuild.left_out_cell_share = 0.5\n"})
+                           "rebuild.left_out_cell_share = 0.5\n",
+                           "assemble.planarity_tolerance = 0.002\n"})
     EXPECT_NE(text.find(line), std::string::npos) << line;
   const std::vector<std::pair<std::string, std::function<void(ReconstructionParams&)>>> wrong = {
       {"outline.min_region_area", [](ReconstructionParams& p) { p.outline.min_region_area = 0; }},

@@ -110,10 +110,4 @@ std::vector<Point2> edges_off_the_rim(const Heightmap& heightmap, const std::vec
 std::vector<Polygon2> infer_outline(const Heightmap& heightmap, const std::vector<Point3>& local_points,
                                     double tolerance = 0.25, double min_area = 2.0, double gap_spacings = 1.5);
 
-/// Writes the heightmap (grey, as above) with `edges` (points in the heightmap's frame, e.g. from
-/// detect_edges()) painted red, as an RGB PNG, north up. Edges outside the raster are ignored.
-/// Throws IoError naming the file when it cannot be written.
-void write_edges_png(const Heightmap& heightmap, const std::vector<Point2>& edges,
-                     const std::string& path);
-
 }  // namespace city3d

@@ -89,8 +89,8 @@ struct RebuildParams {
   /// metres; 0: always the smaller planes' count.
   double min_level_area = 4.0;
   /// A group of left-out points is searched for planes through triples of its points only up to this
-  /// many points (the triples grow with the cube of the count; a larger group makes planes by region
-  /// growing).
+  /// many points (the triples grow with the cube of the count); a larger group is left to the region
+  /// growing of the rebuild's other variants and makes no left-out plane.
   std::size_t max_left_out_plane_points = 60;
   /// A left-out plane holds at least the group's points / left_out_plane_divisor (rounded up: half of
   /// them; the group is mostly that plane, or it is left to its level) and at least
@@ -163,8 +163,8 @@ struct ReconstructionParams {
   /// A LoD2 model that leaves more than this share of the building's points unexplained (farther
   /// than kUnexplainedDistance) is rebuilt with the variants of explain_more(): smaller roof planes,
   /// a wider inferred outline, roofs for the points left out, and selections without the face prior
-  /// and with half the complexity weight; a variant that leaves fewer points unexplained and fits all
-  /// points better is kept. 1 (or more): never rebuilt.
+  /// and with half the complexity weight; a variant is kept when it is more faithful both ways and fits
+  /// better both ways (see explain_more()). 1 (or more): never rebuilt.
   double retry_unexplained_share = 0.05;
   /// A LoD2 model with more than this much surface no point supports (m2 more than 1 m above the
   /// highest point within 1.5 m in plan, surface_support.hpp) is rebuilt with the same variants, the

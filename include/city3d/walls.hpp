@@ -25,7 +25,7 @@ struct VerticalPlane {
 
 /// Where the walls come from.
 enum class WallMode {
-  automatic,  ///< footprint when one is given; else detected when plentiful (see infer_walls); else inferred
+  automatic,  ///< footprint when one is given; else detected when plentiful (see infer_walls); else inferred. The pipeline passes footprint (a cloud's inferred outline as the footprint)
   footprint,  ///< outer walls = footprint edges, inner walls = inferred lines inside the footprint
   inferred,   ///< every wall from the regularised lines (footprint ignored)
   detected,   ///< every wall from the detected wall lines (footprint only used to tell outer from inner)
@@ -70,9 +70,10 @@ struct WallParams {
 /// footprint boundary (a line along the boundary duplicates a footprint wall).
 ///
 /// Without a footprint (mode inferred, or detected), the outline is not closed into a polygon: a line
-/// is an outer wall when, from most of three points along it (1/4, 1/2, 3/4), a perpendicular ray to
-/// one side crosses no other line (it faces the outside); the normal points to that side. Lines
-/// enclosed on both sides are inner walls. This suits the closed outlines the heightmap gives; a
+/// is an outer wall when, of the rays cast from three points along it (1/4, 1/2, 3/4) to one side, in a
+/// fan about the normal (ray_fan_step), at least min_escaping_rays cross no other line, and more than
+/// from its other side (it faces the outside); the normal points to that side. Lines enclosed on both
+/// sides are inner walls. This suits the closed outlines the heightmap gives; a
 /// concave hull would cut into courtyards.
 ///
 /// Throws ConfigError for invalid params or for mode footprint without a footprint, and

@@ -178,6 +178,7 @@ std::string parameters_text(const ReconstructionParams& p) {
   put("selection.use_face_prior", p.selection.use_face_prior);
   put("selection.use_single_layer", p.selection.use_single_layer);
   put("assemble.collinear_tolerance", p.assemble.collinear_tolerance);
+  put("assemble.planarity_tolerance", p.assemble.planarity_tolerance);
   put("assemble.merge_coplanar", p.assemble.merge_coplanar);
   put("lod1.roof_percentile", p.lod1.roof_percentile);
   put("lod1.min_height", p.lod1.min_height);

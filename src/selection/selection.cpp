@@ -18,14 +18,17 @@
 //                                                  coplanar partners (edges with y_e; see build_program)
 //              c_e >= x_i + x_j - 1                each sharp pair (i, j) of an edge with one face on or
 //                                                  two free faces (c_e >= x_j when x_i = 1)
-//              x_i + x_j <= 1                      each vertically overlapping pair (single layer)
+//              sum_{k in group} x_k = 1            each exactly_one group with free faces (single layer)
+//              x_i + x_j <= 1                      each vertically overlapping pair no group covers
 //
-// Single layer: the paper writes sum_{k in V(f_i)} x_k = 1. With partially overlapping candidate faces
-// (face A overlaps B and C, which do not overlap each other) the equality asks for exactly one of
-// {A, B} and exactly one of {A, C}, and chains of such sets easily become infeasible, and the equality
-// also forces a roof where no face should be selected. Coverage is already implied by
-// watertightness (a closed surface over the footprint has a roof everywhere), so only "never two
-// layers" is needed: the pairwise x_i + x_j <= 1.
+// Single layer: the paper writes sum_{k in V(f_i)} x_k = 1 for every face. With partially overlapping
+// candidate faces (face A overlaps B and C, which do not overlap each other) that equality asks for
+// exactly one of {A, B} and exactly one of {A, C}, and chains of such sets easily become infeasible, and
+// it also forces a roof where no face should be selected. So the equality is kept only for the groups
+// where it holds (problem.exactly_one: faces that each cover the whole group's area, which must be
+// roofed; tight for the LP relaxation), and every other overlap gets the pairwise x_i + x_j <= 1:
+// coverage is already implied by watertightness (a closed surface over the footprint has a roof
+// everywhere), so elsewhere only "never two layers" is needed.
 //
 // Exact reductions before solving (they never change the optimum):
 //  - face prior / forced_on fix faces to 1, forced_off to 0, and fixed values are substituted;
