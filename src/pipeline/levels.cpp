@@ -71,12 +71,13 @@ std::optional<ValidBlocks> validated(BuildingModel blocks, const ReconstructionP
 // The blocks of a level (LoD1.2: an infinite step) whose blocks of `parts` are no valid solid, with
 // no more than two walls over each other on a vertex's column: of the roof parts joined within
 // lod1.join_distance (a sliver between two parts, `joined`), else of `parts` themselves (joining can
-// fold a part that is itself a sliver); LoD1.3 then as one block, as LoD1.2 is; at last the LoD1
-// rung's block (the footprint, or a cloud's convex hull, extruded). `how` says which, when coarser
-// than asked.
+// fold a part that is itself a sliver); LoD1.3 then as one block, as LoD1.2 is; for a cloud, the
+// floor of its LoD2.2 model `lod22` (its inferred outline, valid as the model is) extruded as the
+// LoD1 rung's block is; at last the LoD1 rung's block (the footprint, or a cloud's convex hull,
+// extruded). `how` says which, when coarser than asked.
 std::optional<ValidBlocks> remade_blocks(const BuildingInput& input, const ReconstructionParams& params,
-                                         const Lod13Parts& parts, const Lod13Parts& joined, double step,
-                                         std::string& how) {
+                                         const BuildingModel& lod22, const Lod13Parts& parts,
+                                         const Lod13Parts& joined, double step, std::string& how) {
   for (const Lod13Parts* roof : {&joined, &parts})
     if (auto b = validated(make_lod13_blocks(*roof, input.ground_z, step, params.lod1.roof_percentile,
                                              params.lod1.min_height, true),
@@ -88,6 +89,29 @@ std::optional<ValidBlocks> remade_blocks(const BuildingInput& input, const Recon
                            params)) {
       how = " as one block, as LoD1.2";
       return b;
+    }
+  }
+  if (!input.footprint_given) {
+    // The convex hull would add ground the building does not stand on (an L-shaped house's corner).
+    std::vector<Polygon2> floor;
+    const std::vector<SurfaceType> types = surface_types(lod22);
+    for (std::size_t f = 0; f < lod22.mesh.faces.size(); ++f) {
+      if (types[f] != SurfaceType::ground) continue;
+      Polygon2& face = floor.emplace_back();
+      for (std::uint32_t v : lod22.mesh.faces[f]) face.outer.push_back({lod22.mesh.vertices[v].x, lod22.mesh.vertices[v].y});
+    }
+    try {
+      const Lod1Heights heights = lod1_heights(input, params.lod1);
+      BuildingModel block;
+      block.id = input.id;
+      block.origin = input.origin;
+      block.mesh = extrude_polygons(floor, heights.floor_z, heights.roof_z, input.id);
+      if (auto b = validated(std::move(block), params)) {
+        how = " as the block of the LoD2.2 model's floor";
+        return b;
+      }
+    } catch (const ReconstructionError&) {
+      // A floor ring extrude_polygons cannot take: the convex hull's block below.
     }
   }
   if (auto b = validated(make_lod1_block(input, params.lod1), params)) {
@@ -157,7 +181,7 @@ void add_levels_of_detail(const BuildingInput& input, const ReconstructionParams
         if (!joined_parts) joined_parts = lod13_parts(primary, input.points, params.lod1.join_distance);
         std::string how;
         std::optional<ValidBlocks> remade =
-            remade_blocks(input, params, *roof_parts, *joined_parts, step, how);
+            remade_blocks(input, params, primary, *roof_parts, *joined_parts, step, how);
         const std::string why = v.remaining.front().text();
         if (!remade) {
           add_note(r, std::string("LoD") + lod + " not made: not valid as written: " + why);
