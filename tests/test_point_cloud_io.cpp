@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <initializer_list>
 #include <iterator>
@@ -736,6 +737,23 @@ TEST(PlyReader, reads_type_aliases_and_scalar_field_names) {
   EXPECT_EQ(c.points[1].z, -3e-3);
   EXPECT_EQ(c.classification, (std::vector<std::uint8_t>{9, 1}));
   EXPECT_EQ(c.intensity, (std::vector<std::uint16_t>{17, 65535}));
+}
+
+// CloudCompare writes its scalar fields capitalised (scalar_Classification, scalar_Intensity), some
+// writers X, Y, Z: the classes were ignored, and every point in a footprint taken for a building point.
+TEST(PlyReader, reads_property_names_in_any_case) {
+  const std::filesystem::path file = std::filesystem::temp_directory_path() / "city3d_ply_capitalised.ply";
+  std::ofstream(file)
+      << "ply\nformat ascii 1.0\nelement vertex 2\nproperty double X\nproperty double Y\n"
+         "property double Z\nproperty float scalar_Classification\nproperty float scalar_Intensity\n"
+         "end_header\n1 2 3 6 40\n4 5 6 2 50\n";
+  const PointCloud c = read_point_cloud(file.string());
+  std::filesystem::remove(file);
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c.points[1].x, 4.0);
+  EXPECT_EQ(c.points[1].z, 6.0);
+  EXPECT_EQ(c.classification, (std::vector<std::uint8_t>{6, 2}));
+  EXPECT_EQ(c.intensity, (std::vector<std::uint16_t>{40, 50}));
 }
 
 TEST(PlyReader, streams_one_vertex_at_a_time) {

@@ -110,7 +110,10 @@ struct VertexRoles {
   static VertexRoles of(const PlyElement& vertex) {
     VertexRoles r;
     for (std::size_t i = 0; i < vertex.properties.size(); ++i) {
-      const std::string& n = vertex.properties[i].name;
+      // Names in any case: CloudCompare writes scalar_Classification and scalar_Intensity.
+      std::string n = vertex.properties[i].name;
+      std::transform(n.begin(), n.end(), n.begin(),
+                     [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
       const int k = static_cast<int>(i);
       if (n == "x") r.x = k;
       else if (n == "y") r.y = k;
