@@ -813,8 +813,8 @@ TEST(ReportRows, the_overview_record_read_from_a_json_row_has_every_output_attri
   r.coverage = 0.875, r.point_coverage = 0.625, r.building_coverage = 0.75;
   r.points = 650, r.planes = 3, r.faces = 21;
   const city3d::Attributes written = city3d::detail::output_attributes(r, {}, false);
-  const city3d::OverviewRecord read = city3d::overview_record(city3d::detail::report_json_row(r), "", {}, 0.001,
-                                                              {0, 0, 0}, 0, false);
+  const city3d::OverviewRecord read =
+      city3d::overview_record(city3d::detail::report_json_row(r), "", {}, 0.001, {0, 0, 0}, 0, false);
   const city3d::Attributes back = city3d::detail::output_attributes(read.report, {}, false);
   ASSERT_EQ(back.size(), written.size());
   for (std::size_t k = 0; k < written.size(); ++k) {

@@ -593,8 +593,11 @@ TEST(Smoke, blocks_that_cannot_be_valid_fall_to_the_block_of_the_lod22_floor_and
     ASSERT_TRUE(r.model.has_value()) << c.id;
     EXPECT_EQ(r.report.lods, "1.2,1.3,2.2") << c.id << ": " << r.report.note;
     for (const std::string note :
-         {std::string("LoD1.2 as the block of the LoD2.2 model's floor: its blocks are not valid as written: ") + c.code,
-          std::string("LoD1.3 as the block of the LoD2.2 model's floor: at 3 m its blocks are not valid as written: ") +
+         {std::string(
+              "LoD1.2 as the block of the LoD2.2 model's floor: its blocks are not valid as written: ") +
+              c.code,
+          std::string("LoD1.3 as the block of the LoD2.2 model's floor: at 3 m its blocks are not valid as "
+                      "written: ") +
               c.code})
       EXPECT_NE(r.report.note.find(note), std::string::npos) << c.id << ": " << r.report.note;
     ASSERT_EQ(r.lods.size(), 3u) << c.id;

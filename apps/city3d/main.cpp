@@ -107,9 +107,11 @@ int finish(const city3d::RunOptions& options, const city3d::BatchSummary& s, con
     if (s.resumed > 0)
       resumed = " (" + std::to_string(s.resumed) + " of them taken from the journal of an earlier run into " +
                 options.batch.output_dir + "; --no-resume recomputes them)";
-    std::fprintf(stderr, "city3d: %s%zu building%s: %zu ok, %zu fallback, %zu skipped, %zu failed, %zu partial in %.1f s%s; report %s\n",
-                 what.c_str(), s.buildings, s.buildings == 1 ? "" : "s", s.ok, s.fallback, s.skipped, s.failed, s.partial, s.seconds, resumed.c_str(),
-                 s.report_path.c_str());
+    std::fprintf(stderr,
+                 "city3d: %s%zu building%s: %zu ok, %zu fallback, %zu skipped, %zu failed, %zu partial in "
+                 "%.1f s%s; report %s\n",
+                 what.c_str(), s.buildings, s.buildings == 1 ? "" : "s", s.ok, s.fallback, s.skipped,
+                 s.failed, s.partial, s.seconds, resumed.c_str(), s.report_path.c_str());
     if (!s.advice.empty()) std::fprintf(stderr, "city3d: %s\n", s.advice.c_str());
     if (s.nothing_built())
       std::fprintf(stderr, "city3d: no building was reconstructed (each one's reason is in %s)\n", s.report_path.c_str());

@@ -23,9 +23,10 @@ struct VerticalPlane {
   enum class Source { footprint, inferred, detected } source = Source::inferred;
 };
 
-/// Where the walls come from.
+/// Where the walls come from. The pipeline passes footprint for automatic, with a cloud's inferred
+/// outline as the footprint.
 enum class WallMode {
-  automatic,  ///< footprint when one is given; else detected when plentiful (see infer_walls); else inferred. The pipeline passes footprint (a cloud's inferred outline as the footprint)
+  automatic,  ///< footprint when one is given; else detected when plentiful (see infer_walls); else inferred
   footprint,  ///< outer walls = footprint edges, inner walls = inferred lines inside the footprint
   inferred,   ///< every wall from the regularised lines (footprint ignored)
   detected,   ///< every wall from the detected wall lines (footprint only used to tell outer from inner)

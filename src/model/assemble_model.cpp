@@ -1,8 +1,6 @@
 // Model assembly: selected candidate faces -> welded, oriented, merged and validated polygon mesh.
 // Topology is by vertex identity throughout; coordinates are used only for orientation (volume),
 // turning angles when a merged boundary touches itself, and the collinearity test.
-#include "city3d/model.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -16,6 +14,7 @@
 
 #include "city3d/error.hpp"
 #include "city3d/mesh_check.hpp"
+#include "city3d/model.hpp"
 #include "core/mesh_faces.hpp"
 #include "core/vec.hpp"
 

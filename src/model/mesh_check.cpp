@@ -102,8 +102,7 @@ MeshCheck check_mesh(const PolygonMesh& mesh) {
       ++check.edge_count;
       if (here + opposite > 2 || here > 1 || opposite > 1) ++check.non_manifold_edges;
     }
-    for (std::size_t k = i + 1; k < j; ++k)
-      shells.join(directed[k].second, directed[i].second);
+    for (std::size_t k = i + 1; k < j; ++k) shells.join(directed[k].second, directed[i].second);
     if (opposite > 0) {
       auto it = std::lower_bound(directed.begin(), directed.end(), std::make_pair(key(b, a), std::size_t{0}));
       shells.join(it->second, directed[i].second);

@@ -98,7 +98,8 @@ std::optional<ValidBlocks> remade_blocks(const BuildingInput& input, const Recon
     for (std::size_t f = 0; f < lod22.mesh.faces.size(); ++f) {
       if (types[f] != SurfaceType::ground) continue;
       Polygon2& face = floor.emplace_back();
-      for (std::uint32_t v : lod22.mesh.faces[f]) face.outer.push_back({lod22.mesh.vertices[v].x, lod22.mesh.vertices[v].y});
+      for (std::uint32_t v : lod22.mesh.faces[f])
+        face.outer.push_back({lod22.mesh.vertices[v].x, lod22.mesh.vertices[v].y});
     }
     try {
       const Lod1Heights heights = lod1_heights(input, params.lod1);
