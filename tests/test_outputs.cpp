@@ -825,6 +825,39 @@ TEST(ReportRows, the_overview_record_read_from_a_json_row_has_every_output_attri
     EXPECT_FALSE(std::holds_alternative<std::monostate>(value)) << name;
 }
 
+// A footprint field whose name the GeoPackage's buildings layer has already, in any case (id, STATUS, a
+// footprint_status of its own), made the GeoPackage fail after the whole run: it is renamed, the same in
+// every output, and nothing is lost.
+TEST(OutputsNames, footprint_fields_named_as_city3ds_own_in_any_case_are_renamed_and_kept) {
+  if (!have("ogrinfo") || !have("ogr2ogr")) GTEST_SKIP() << "ogrinfo / ogr2ogr (gdal-bin) not installed";
+  const fs::path dir = fs::temp_directory_path() / ("city3d_names_test_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string d = CITY3D_SAMPLE_DATA;
+  const fs::path footprints = dir / "names.gpkg";
+  const Result conv =
+      run_shell("ogr2ogr " + footprints.string() + " " + d + "/delft_sample_footprints.gpkg -nln fp " +
+                "-sql \"SELECT gml_id, gml_id AS id, bgt_status AS STATUS, 'own' AS footprint_status, " +
+                "GEOMETRY FROM buildingpart\"");
+  ASSERT_EQ(conv.exit_code, 0) << conv.output;
+  const Result run = run_shell(
+      std::string(CITY3D_EXE) + " reconstruct " + d + "/delft_sample_1.las " + d + "/delft_sample_2.las -f " +
+      footprints.string() + " --id-field gml_id --gpkg --no-html --no-progress -o " + (dir / "out").string());
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const Result fields =
+      run_shell("ogrinfo -ro -so " + (dir / "out" / "buildings.gpkg").string() + " buildings");
+  for (const char* field : {"id: String", "footprint_id: String", "footprint_STATUS_2: String",
+                            "footprint_status: String", "status: String"})
+    EXPECT_NE(fields.output.find(field), std::string::npos) << field << "\n" << fields.output;
+  const json city = read_json(dir / "out" / "buildings.city.json");
+  const json& attributes = city["CityObjects"][building_ids(city).front()]["attributes"];
+  EXPECT_EQ(attributes["footprint_status"], "own");
+  EXPECT_TRUE(attributes.contains("footprint_STATUS_2")) << attributes.dump();
+  EXPECT_EQ(attributes["footprint_id"], building_ids(city).front());
+  EXPECT_EQ(attributes["status"], "ok");
+  fs::remove_all(dir);
+}
+
 namespace {
 
 // The records of a run held in memory.

@@ -4,12 +4,13 @@
 // they come, one building a line.
 #include "reports/report.hpp"
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <nlohmann/json.hpp>
+#include <set>
 
 #include "files/atomic_file.hpp"
 
@@ -246,10 +247,26 @@ Attributes building_attributes(const BuildingReport& r, bool timings) {
 
 Attributes output_attributes(const BuildingReport& r, const Attributes& footprint, bool timings) {
   Attributes own = building_attributes(r, timings);
+  // Names compare as GeoPackage (SQLite) columns do, whatever their case. Besides city3d's own names,
+  // the GeoPackage's id, fid and geom columns are taken.
+  const auto lower = [](std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return s;
+  };
+  std::set<std::string> reserved = {"id", "fid", "geom"};
+  for (const auto& o : own) reserved.insert(lower(o.first));
+  std::set<std::string> taken = reserved;
+  for (const auto& f : footprint) taken.insert(lower(f.first));
   Attributes a;
   for (const auto& [name, value] : footprint) {
-    const bool taken = std::any_of(own.begin(), own.end(), [&](const auto& o) { return o.first == name; });
-    a.emplace_back(taken ? "footprint_" + name : name, value);
+    std::string out = name;
+    if (reserved.count(lower(name))) {
+      out = "footprint_" + name;
+      for (int k = 2; taken.count(lower(out)); ++k) out = "footprint_" + name + "_" + std::to_string(k);
+      taken.insert(lower(out));
+    }
+    a.emplace_back(out, value);
   }
   a.insert(a.end(), own.begin(), own.end());
   return a;

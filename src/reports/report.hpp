@@ -41,8 +41,9 @@ class ReportWriter {
 /// and unknown values are null. "seconds" only with `timings` (it differs from run to run).
 Attributes building_attributes(const BuildingReport& report, bool timings);
 
-/// The footprint's attributes (names and types as in the source; a name city3d uses itself gets the
-/// prefix "footprint_"), then building_attributes().
+/// The footprint's attributes (names and types as in the source; a name city3d uses itself, or the
+/// GeoPackage's id, fid or geom, in any case, gets the prefix "footprint_", and a number after it where
+/// the footprint has that name too), then building_attributes().
 Attributes output_attributes(const BuildingReport& report, const Attributes& footprint, bool timings);
 
 }  // namespace city3d::detail
