@@ -847,6 +847,19 @@ TEST_F(Mistakes, point_clouds_in_a_subfolder_of_a_folder_given_are_named_as_not_
           kSampleFootprints + " --lod 1.2 --no-progress -o " + (dir_ / "all").string());
   EXPECT_FALSE(contains(all.output, "not read")) << "given too: " << all.output;
   EXPECT_EQ(report(dir_ / "all").at("summary").at("partial"), 0) << "both tiles read";
+  // An output folder of city3d's inside the tiles' folder holds PLY models, not points: it is not named,
+  // or a user would be told to read the models as tiles.
+  const Result inside =
+      run("reconstruct " + (dir_ / "tiles").string() + " " + (dir_ / "tiles" / "more").string() +
+          kSampleFootprints + " --lod 1.2 --format ply --merged --no-progress -o " +
+          (dir_ / "tiles" / "out").string());
+  ASSERT_EQ(inside.exit_code, 0) << inside.output;
+  ASSERT_TRUE(fs::exists(dir_ / "tiles" / "out" / "models.ply"));
+  const Result again =
+      run("reconstruct " + (dir_ / "tiles").string() + " " + (dir_ / "tiles" / "more").string() +
+          kSampleFootprints + " --lod 1.2 --format ply --merged --no-progress -o " +
+          (dir_ / "tiles" / "out").string());
+  EXPECT_FALSE(contains(again.output, "not read")) << again.output;
 }
 
 TEST_F(Mistakes, a_header_whose_bounds_leave_out_points_is_named_and_coverage_is_measured_from_the_points) {

@@ -72,9 +72,15 @@ std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
     if (fs::is_directory(in, ec)) {
       const std::vector<std::string> found = point_cloud_files_in(in);
       if (found.empty()) throw IoError("input: folder " + in + " holds no .las, .laz or .ply file");
-      std::vector<std::string> below;  // subfolders with point clouds of their own: not read
+      // Subfolders with point clouds of their own: not read. A city3d output folder (its PLY models
+      // are meshes, not points) is not named.
+      std::vector<std::string> below;
+      const auto city3d_output = [&ec](const fs::path& dir) {
+        return fs::exists(dir / "run.json", ec) || fs::exists(dir / "resume.journal", ec);
+      };
       for (const auto& entry : fs::directory_iterator(in, ec))
-        if (entry.is_directory(ec) && !point_cloud_files_in(entry.path().string()).empty() &&
+        if (entry.is_directory(ec) && !city3d_output(entry.path()) &&
+            !point_cloud_files_in(entry.path().string()).empty() &&
             std::none_of(inputs.begin(), inputs.end(),
                          [&](const std::string& given) { return fs::equivalent(given, entry.path(), ec); }))
           below.push_back(entry.path().filename().string());
