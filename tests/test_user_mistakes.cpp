@@ -1331,3 +1331,38 @@ TEST_F(Mistakes, a_bbox_that_leaves_no_reprojected_footprint_says_which_crs_it_w
       r.output, "(in EPSG:28992, the point clouds' CRS: the footprints are reprojected from EPSG:32631)"))
       << r.output;
 }
+
+// A layer with two geometry columns (a CSV with an envelope beside each footprint): the first was read
+// in silence, and the buildings got their envelopes. The run says which column it reads.
+TEST_F(Mistakes, a_layer_of_two_geometry_columns_is_named_with_the_one_read) {
+  city3d::FootprintReadOptions read;
+  read.id_field = "gml_id";
+  const city3d::FootprintSet sample =
+      city3d::read_footprints(kSample + "/delft_sample_footprints.gpkg", read);
+  {
+    std::ofstream csv(dir_ / "two.csv");
+    csv.precision(12);
+    csv << "gml_id,_WKTenv,_WKTfp\n";
+    for (const city3d::Footprint& f : sample.footprints) {
+      const auto& ring = f.polygons.at(0).outer;
+      city3d::Box2 box;
+      for (const city3d::Point2& p : ring) box.add(p);
+      csv << f.id << ",\"POLYGON((" << box.min.x - 3 << " " << box.min.y - 3 << ", " << box.max.x + 3 << " "
+          << box.min.y - 3 << ", " << box.max.x + 3 << " " << box.max.y + 3 << ", " << box.min.x - 3 << " "
+          << box.max.y + 3 << ", " << box.min.x - 3 << " " << box.min.y - 3 << "))\",\"POLYGON((";
+      for (std::size_t i = 0; i <= ring.size(); ++i)
+        csv << (i ? ", " : "") << ring[i % ring.size()].x << " " << ring[i % ring.size()].y;
+      csv << "))\"\n";
+    }
+  }
+  const Result r = run("reconstruct " + kSampleTiles + " -f " + (dir_ / "two.csv").string() +
+                       " --id-field gml_id --lod 1.2 --no-progress -o " + (dir_ / "out").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(
+      r.output, "has 2 geometry columns (geom__WKTenv, geom__WKTfp): the first, geom__WKTenv, is read"))
+      << r.output;
+  // One geometry column: no such warning.
+  const Result one = run("reconstruct " + kSampleTiles + kSampleFootprints + " --lod 1.2 --no-progress -o " +
+                         (dir_ / "one").string());
+  EXPECT_FALSE(contains(one.output, "geometry columns")) << one.output;
+}

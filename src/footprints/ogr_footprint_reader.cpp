@@ -472,6 +472,16 @@ FootprintSet read_ogr_footprints(const std::string& path, const FootprintReadOpt
   OGRLayer& layer = select_layer(*dataset, path, options.layer);
   const std::string where = path + " layer '" + layer.GetName() + "'";
 
+  if (const OGRFeatureDefn* columns = layer.GetLayerDefn(); columns->GetGeomFieldCount() > 1) {
+    // A CSV with two WKT columns, a table with an envelope beside the footprint: say which is read.
+    std::string names;
+    for (int i = 0; i < columns->GetGeomFieldCount(); ++i)
+      names += std::string(i ? ", " : "") + columns->GetGeomFieldDefn(i)->GetNameRef();
+    warn(kModule + where + " has " + std::to_string(columns->GetGeomFieldCount()) + " geometry columns (" +
+         names + "): the first, " + columns->GetGeomFieldDefn(0)->GetNameRef() +
+         ", is read as the footprints (make a layer of the one meant, e.g. ogr2ogr -select)");
+  }
+
   FootprintSet set;
   set.path = path;
   set.driver = dataset->GetDriver() != nullptr ? dataset->GetDriver()->GetDescription() : "";
