@@ -1366,3 +1366,19 @@ TEST_F(Mistakes, a_layer_of_two_geometry_columns_is_named_with_the_one_read) {
                          (dir_ / "one").string());
   EXPECT_FALSE(contains(one.output, "geometry columns")) << one.output;
 }
+
+// Data in a CRS of feet (EPSG:2263, US survey feet) was taken for metres in silence: every threshold of
+// the method off by 3.28, areas and volumes in square and cubic feet. The run says so.
+TEST_F(Mistakes, a_crs_not_in_metres_is_named_with_its_unit) {
+  const Result made = run_shell("ogr2ogr -a_srs EPSG:2263 " + (dir_ / "feet.gpkg").string() + " " + kSample +
+                                "/delft_sample_footprints.gpkg");
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  const Result r = run("reconstruct " + kSampleTiles + " -f " + (dir_ / "feet.gpkg").string() +
+                       " --id-field gml_id --lod 1.2 --no-progress -o " + (dir_ / "out").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "has its coordinates in US survey foot, 0.3048006")) << r.output;
+  // The sample's own CRS is in metres: no such warning.
+  const Result metres = run("reconstruct " + kSampleTiles + kSampleFootprints +
+                            " --lod 1.2 --no-progress -o " + (dir_ / "metres").string());
+  EXPECT_FALSE(contains(metres.output, "has its coordinates in")) << metres.output;
+}

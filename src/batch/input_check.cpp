@@ -14,6 +14,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <iomanip>
 #include <sstream>
 #include <utility>
 
@@ -218,6 +219,11 @@ CrsFacts crs_facts(const std::string& text) {
   }
   OGRSpatialReference plan(srs);
   if (plan.IsCompound()) plan.StripVertical();
+  if (plan.IsProjected()) {
+    const char* unit = nullptr;
+    facts.unit_metres = plan.GetLinearUnits(&unit);
+    facts.unit = unit ? unit : "";
+  }
   facts.horizontal = code_of(plan);
   if (facts.horizontal.empty()) {
     OGRSpatialReference matched(plan);
@@ -287,6 +293,15 @@ RunCrs resolve_run_crs(const std::string& given, const std::string& points_crs, 
   }
   const RunCrs run = {facts.name.empty() ? stated : facts.name,
                       from_flag ? "--crs" : from_points ? "point clouds" : "footprints"};
+  if (std::fabs(facts.unit_metres - 1.0) > 1e-9) {
+    std::ostringstream unit;
+    unit << facts.unit << ", " << std::setprecision(10) << facts.unit_metres << " m";
+    log_warning(
+        "crs: " + described(facts) + " has its coordinates in " + unit.str() +
+        ": every length city3d takes or gives (its parameters, the heights, areas and volumes of the "
+        "report) is read in that unit as if it were the metre; reproject the points and footprints to a "
+        "CRS in metres");
+  }
   if (from_flag || from_points)
     log_info("crs: " + described(facts) + (from_flag ? ", from --crs" : ", as the point clouds record it") +
              (facts.vertical ? "" : "; its heights have no stated vertical datum (" + how_to_state(facts) + ")"));

@@ -50,6 +50,10 @@ struct CrsFacts {
   std::string horizontal;  ///< the horizontal part: "EPSG:28992", or WKT
   bool vertical = false;   ///< it states the heights' vertical datum (a compound CRS)
   bool geographic = false; ///< its horizontal part is in degrees
+  /// Metres per unit of its (projected) plan coordinates, and the unit's name: 0.3048006 "US survey
+  /// foot" for EPSG:2263; 1 "metre" for most.
+  double unit_metres = 1.0;
+  std::string unit;
 };
 
 /// The facts of a CRS given as "EPSG:n", "EPSG:h+v", WKT or PROJ text. Throws ConfigError naming
