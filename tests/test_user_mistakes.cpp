@@ -1382,3 +1382,37 @@ TEST_F(Mistakes, a_crs_not_in_metres_is_named_with_its_unit) {
                             " --lod 1.2 --no-progress -o " + (dir_ / "metres").string());
   EXPECT_FALSE(contains(metres.output, "has its coordinates in")) << metres.output;
 }
+
+// A Shapefile's .dbf changed alone (a ground field edited in place) left the .shp's size and time as they
+// were, and a rerun took every building from the journal of the earlier values. The .dbf, .shx, .prj and
+// .cpg are stamped too.
+TEST_F(Mistakes, a_shapefile_whose_dbf_alone_changed_is_not_resumed) {
+  const Result made =
+      run_shell("ogr2ogr " + (dir_ / "fp.shp").string() + " " + kSample +
+                "/delft_sample_footprints.gpkg -sql \"SELECT *, 0.5 AS gz FROM buildingpart\"");
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  const std::string command = "reconstruct " + kSampleTiles + " -f " + (dir_ / "fp.shp").string() +
+                              " --id-field gml_id --ground-field gz --lod 1.2 --no-progress -o " +
+                              (dir_ / "out").string();
+  ASSERT_EQ(run(command).exit_code, 0);
+  const auto before = rows_by_id(dir_ / "out");
+  // The ground values edited in the .dbf's own bytes (as a tool that writes the .dbf alone does).
+  std::string dbf;
+  {
+    std::ifstream in(dir_ / "fp.dbf", std::ios::binary);
+    dbf.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  std::size_t edited = 0;
+  for (std::size_t at = dbf.find("0.5"); at != std::string::npos; at = dbf.find("0.5", at + 3), ++edited)
+    dbf[at] = '3';
+  ASSERT_GT(edited, 0u);
+  std::ofstream(dir_ / "fp.dbf", std::ios::binary) << dbf;
+  const Result again = run(command);
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_FALSE(contains(again.output, "taken from the journal")) << again.output;
+  std::size_t changed = 0;
+  for (const auto& [id, row] : rows_by_id(dir_ / "out"))
+    changed +=
+        row.at("ground_z") != before.at(id).at("ground_z") || row.at("note") != before.at(id).at("note");
+  EXPECT_GT(changed, 0u) << "the grounds of 3.5 m were not read";
+}

@@ -4,6 +4,7 @@
 #include "batch/journal.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -287,7 +288,21 @@ std::string batch_fingerprint(const BatchOptions& o, const std::vector<std::stri
   std::ostringstream s;
   s << CITY3D_VERSION << " journal " << kJournalVersion << '\n';
   for (const std::string& f : files) s << file_stamp(f) << '\n';
-  if (!o.footprints.empty()) s << file_stamp(o.footprints) << '\n';
+  if (!o.footprints.empty()) {
+    s << file_stamp(o.footprints) << '\n';
+    // A Shapefile's attributes, index, CRS and encoding are files of their own beside the .shp: a
+    // changed ground field in the .dbf alone is another run too.
+    const fs::path shp(o.footprints);
+    std::string ext = shp.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (ext == ".shp")
+      for (const char* side : {".dbf", ".DBF", ".shx", ".SHX", ".prj", ".PRJ", ".cpg", ".CPG"}) {
+        std::error_code ec;
+        const fs::path f = fs::path(shp).replace_extension(side);
+        if (fs::exists(f, ec)) s << file_stamp(f.string()) << '\n';
+      }
+  }
   s << o.footprint.layer << '|' << o.footprint.id_field << '|' << o.footprint.attribute_filter << '|'
     << o.footprint.repair << '|' << o.footprint.ground_field << '|';
   if (o.footprint.bbox)
