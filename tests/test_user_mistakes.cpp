@@ -1416,3 +1416,34 @@ TEST_F(Mistakes, a_shapefile_whose_dbf_alone_changed_is_not_resumed) {
         row.at("ground_z") != before.at(id).at("ground_z") || row.at("note") != before.at(id).at("note");
   EXPECT_GT(changed, 0u) << "the grounds of 3.5 m were not read";
 }
+
+// A ground field of another datum, or a relative level (BGT's rel_hoogte, 0 for every footprint), over
+// heights some metres from it: the floors stood metres in the air or under the terrain, and nothing said
+// so. A value taken more than 2 m from the ground measured around the footprint is noted.
+TEST_F(Mistakes, a_ground_field_far_from_the_ground_measured_is_noted) {
+  for (const char* value : {"3.0", "0.5"}) {
+    const fs::path fp = dir_ / (std::string("gz") + value + ".gpkg");
+    const Result made =
+        run_shell("ogr2ogr " + fp.string() + " " + kSample +
+                  "/delft_sample_footprints.gpkg -sql \"SELECT *, " + value + " AS gz FROM buildingpart\"");
+    ASSERT_EQ(made.exit_code, 0) << made.output;
+    const fs::path out = dir_ / (std::string("out") + value);
+    const Result r = run("reconstruct " + kSampleTiles + " -f " + fp.string() +
+                         " --id-field gml_id --ground-field gz --lod 1.2 --no-progress -o " + out.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    std::size_t taken = 0, noted = 0;
+    for (const auto& [id, row] : rows_by_id(out)) {
+      if (row.at("ground_method") != "footprint attribute") continue;
+      ++taken;
+      noted += contains(row.at("note").get<std::string>(), "m above the ground measured around it");
+    }
+    EXPECT_GT(taken, 5u) << value;
+    if (std::string(value) == "3.0") {
+      EXPECT_EQ(noted, taken) << r.output;
+      EXPECT_TRUE(contains(r.output, "lie far from the ground measured around them")) << r.output;
+    } else {
+      EXPECT_EQ(noted, 0u);
+      EXPECT_FALSE(contains(r.output, "lie far from the ground")) << r.output;
+    }
+  }
+}

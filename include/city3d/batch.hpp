@@ -51,6 +51,10 @@ struct BatchOptions {
   /// code): the measured ground stays, and the note says so. A value above half of the building's
   /// points is never taken.
   double ground_field_max_below = 10.0;
+  /// A --ground-field value taken that lies more than this many metres above or below the ground
+  /// measured around the footprint gets a note saying by how much (a field of another datum, or a
+  /// relative level: the floor then stands in the air or under the terrain).
+  double ground_field_note_distance = 2.0;
 
   std::string output_dir = "city3d_out";
   MeshFormat format = MeshFormat::obj;

@@ -741,7 +741,8 @@ BatchSummary run_batch_in_folder(const BatchOptions& options) {
     // Keep only the group's own inputs (the first indices.size()).
     std::vector<BuildingInput> inputs = cropper.finish();
     inputs.resize(indices.size());
-    detail::take_ground_fields(inputs, options.footprint.ground_field, options.ground_field_max_below);
+    detail::take_ground_fields(inputs, options.footprint.ground_field, options.ground_field_max_below,
+                               options.ground_field_note_distance);
     // The tiles' extents, for the coverage each worker measures before it reconstructs.
     std::vector<Box2> extents;
     std::vector<double> spacings;

@@ -487,9 +487,10 @@ CloudPoints read_building_cloud(const std::string& path, double max_extent) {
   return out;
 }
 
-void take_ground_fields(std::vector<BuildingInput>& inputs, const std::string& field, double max_below) {
-  std::size_t ignored = 0;
-  std::string first_ignored;
+void take_ground_fields(std::vector<BuildingInput>& inputs, const std::string& field, double max_below,
+                        double note_distance) {
+  std::size_t ignored = 0, far_taken = 0;
+  std::string first_ignored, first_far;
   for (BuildingInput& in : inputs) {
     if (!in.footprint.ground_z) continue;
     const double field_z = *in.footprint.ground_z - in.origin.z;
@@ -513,10 +514,23 @@ void take_ground_fields(std::vector<BuildingInput>& inputs, const std::string& f
       if (ignored++ == 0) first_ignored = in.id + ": " + note.str();
       continue;
     }
+    if (in.ground_measured && std::fabs(field_z - in.ground_z) > note_distance) {
+      std::ostringstream note;
+      note << std::fixed << std::setprecision(2) << "ground field '" << field << "' ("
+           << *in.footprint.ground_z << ") taken, " << std::fabs(field_z - in.ground_z) << " m "
+           << (field_z > in.ground_z ? "above" : "below") << " the ground measured around it ("
+           << in.ground_z + in.origin.z << ", " << in.ground_method << ")";
+      in.footprint.note += (in.footprint.note.empty() ? "" : "; ") + note.str();
+      if (far_taken++ == 0) first_far = in.id + ": " + note.str();
+    }
     in.ground_z = field_z;
     in.ground_method = "footprint attribute";
     in.ground_measured = true;
   }
+  if (far_taken > 0)
+    log_warning("input: " + std::to_string(far_taken) + " of " + std::to_string(inputs.size()) +
+                " footprints' ground heights lie far from the ground measured around them (" + first_far +
+                (far_taken > 1 ? "; the others' notes say the same" : "") + ")");
   if (ignored > 0)
     log_warning("input: " + std::to_string(ignored) + " of " + std::to_string(inputs.size()) +
                 " footprints' ground heights not used (" + first_ignored +

@@ -111,7 +111,9 @@ void warn_of_uncounted_records(const std::vector<PointCloudInfo>& infos);
 /// --ground-field `field`), unless that stands above half of the building's points, or more than
 /// `max_below` metres below the ground measured from the points around it (another field than a
 /// height, or heights in another datum): then the ground measured from the points stays, a note says
-/// why, and one warning counts them.
-void take_ground_fields(std::vector<BuildingInput>& inputs, const std::string& field, double max_below);
+/// why, and one warning counts them. A value taken more than `note_distance` metres above or below the
+/// ground measured around the footprint gets a note saying by how much, and one warning counts those.
+void take_ground_fields(std::vector<BuildingInput>& inputs, const std::string& field, double max_below,
+                        double note_distance);
 
 }  // namespace city3d::detail
