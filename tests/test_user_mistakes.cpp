@@ -1447,3 +1447,49 @@ TEST_F(Mistakes, a_ground_field_far_from_the_ground_measured_is_noted) {
     }
   }
 }
+
+// Coordinates recorded more coarsely than a roof can be read from were taken as they were: a LAS scale of
+// 1 (whole metres: RMSE 0.20 -> 0.51 m on the sample), a PLY of 32-bit floats at UTM coordinates (steps of
+// 0.5 m at 5.8e6). A single-building cloud's note says so, and a tile gets a warning.
+TEST_F(Mistakes, coordinates_recorded_in_coarse_steps_are_named) {
+  const city3d::PointCloud smoke =
+      city3d::read_point_cloud(kShared + "/city3d_smoke/AHN3/00295.ply", city3d::kFieldXyz);
+  std::vector<city3d::test::LasPoint> points;
+  for (const city3d::Point3& p : smoke.points) points.push_back({p.x, p.y, p.z, 6});
+  city3d::test::LasWriteOptions metres;
+  metres.scale = 1.0;
+  city3d::test::write_las((dir_ / "metres.las").string(), points, metres);
+  {
+    std::ofstream ply(dir_ / "utm_float.ply");
+    ply.precision(12);
+    ply << "ply\nformat ascii 1.0\nelement vertex " << smoke.points.size()
+        << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+    for (const city3d::Point3& p : smoke.points)
+      ply << p.x + 500000 << " " << p.y + 5800000 << " " << p.z << "\n";
+  }
+  const Result r =
+      run("reconstruct " + (dir_ / "metres.las").string() + " " + (dir_ / "utm_float.ply").string() + " " +
+          kShared + "/city3d_smoke/AHN3/00295.ply --no-progress -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto rows = rows_by_id(dir_ / "out");
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_TRUE(
+      contains(rows.at("metres").at("note").get<std::string>(), "recorded in steps of 1 m (the LAS scale)"))
+      << rows.at("metres").at("note");
+  EXPECT_TRUE(
+      contains(rows.at("utm_float").at("note").get<std::string>(), "in steps of 0.5 m (32-bit floats"))
+      << rows.at("utm_float").at("note");
+  EXPECT_FALSE(contains(rows.at("00295").at("note").get<std::string>(), "steps of"))
+      << rows.at("00295").at("note");
+  // A tile of whole metres.
+  const city3d::PointCloud tile = city3d::read_point_cloud(kSample + "/delft_sample_1.las",
+                                                           city3d::kFieldXyz | city3d::kFieldClassification);
+  std::vector<city3d::test::LasPoint> tile_points;
+  for (std::size_t i = 0; i < tile.points.size(); ++i)
+    tile_points.push_back({tile.points[i].x, tile.points[i].y, tile.points[i].z, tile.classification[i]});
+  city3d::test::write_las((dir_ / "tile.las").string(), tile_points, metres);
+  const Result t = run("reconstruct " + (dir_ / "tile.las").string() + kSampleFootprints +
+                       " --lod 1.2 --no-progress -o " + (dir_ / "tile").string());
+  EXPECT_TRUE(contains(t.output, "tile.las: its x and y are recorded in steps of 1.000000 m (the LAS scale)"))
+      << t.output;
+}

@@ -32,6 +32,8 @@ struct PointCloudInfo {
   PointFields fields = kFieldXyz;  ///< attributes the file can provide
   std::vector<std::string> vlrs;   ///< "user_id/record_id (n bytes)" of each VLR and EVLR, for `info`
   std::uint64_t mesh_faces = 0;  ///< PLY: items of its 'face' element (a mesh, such as a model, not a cloud)
+  /// PLY: x or y a 32-bit float, whose steps grow with the coordinates (0.5 m at 5.8e6: UTM northings).
+  bool single_precision_xy = false;
   /// LAS: whole point records' worth of bytes after the counted points that neither waveform packets
   /// nor EVLRs claim (a header whose count was not rewritten when points were added); not read.
   std::uint64_t uncounted_records = 0;

@@ -27,6 +27,9 @@ namespace city3d::detail {
 namespace {
 
 constexpr std::size_t kCompareBytes = 64 * 1024;
+// Metres: plan coordinates recorded in coarser steps are named (a LAS scale of 1, 32-bit floats of UTM
+// coordinates). A quarter of the plane distance the method reads roofs with (0.2 m).
+constexpr double kCoarsestCoordinateStep = 0.05;
 
 /// The first and last kCompareBytes of a file (all of it when smaller).
 std::string ends_of(const std::string& path, std::uint64_t size) {
@@ -400,6 +403,11 @@ void warn_of_meshes(const std::vector<PointCloudInfo>& infos) {
 
 void warn_of_uncounted_records(const std::vector<PointCloudInfo>& infos) {
   for (const PointCloudInfo& info : infos)
+    if (info.format != "PLY" && std::max(info.scale[0], info.scale[1]) > kCoarsestCoordinateStep)
+      log_warning("input: " + info.path + ": its x and y are recorded in steps of " +
+                  fixed(std::max(info.scale[0], info.scale[1])) +
+                  " m (the LAS scale): the models can be no finer (a scale written wrong?)");
+  for (const PointCloudInfo& info : infos)
     if (info.uncounted_records > 0)
       log_warning("input: " + info.path + ": its header counts " + std::to_string(info.point_count) +
                   " points, but " + std::to_string(info.uncounted_records) +
@@ -409,7 +417,8 @@ void warn_of_uncounted_records(const std::vector<PointCloudInfo>& infos) {
 
 CloudPoints read_building_cloud(const std::string& path, double max_extent) {
   // LAS classes only: a PLY's class or label property follows a scheme of its own (DALES: 2 is vegetation).
-  const bool las = read_point_cloud_info(path).format != "PLY";
+  const PointCloudInfo info = read_point_cloud_info(path);
+  const bool las = info.format != "PLY";
   PointCloud cloud = read_point_cloud(path, las ? kFieldXyz | kFieldClassification : kFieldXyz);
   // LAS noise (7, low point; 18, high noise) is no part of the building: a noise point metres below the
   // rest was its floor.
@@ -473,6 +482,24 @@ CloudPoints read_building_cloud(const std::string& path, double max_extent) {
           "it spans %.0f m in plan, more than any building (--max-footprint-size %.0f m): coordinates in "
           "millimetres or centimetres? city3d needs metres",
           width, max_extent);
+      out.note += std::string(out.note.empty() ? "" : "; ") + text;
+    }
+  }
+  // Coordinates recorded more coarsely than the method reads a roof (its plane distance is 0.2 m): a
+  // LAS scale of 1 (metres), or 32-bit floats of large coordinates (UTM northings step by 0.5 m).
+  {
+    double step = las ? std::max(info.scale[0], info.scale[1]) : 0.0;
+    if (!las && info.single_precision_xy) {
+      double reach = 0.0;
+      for (const Point3& p : out.points) reach = std::max({reach, std::fabs(p.x), std::fabs(p.y)});
+      if (reach > 0) step = std::ldexp(1.0, std::ilogb(reach) - 23);  // a float's step at that magnitude
+    }
+    if (step > kCoarsestCoordinateStep) {
+      char text[200];
+      std::snprintf(text, sizeof text,
+                    "its x and y are recorded in steps of %g m (%s): the model can be no finer", step,
+                    las ? "the LAS scale"
+                        : "32-bit floats at these coordinates; doubles, or a cloud near 0, keep them");
       out.note += std::string(out.note.empty() ? "" : "; ") + text;
     }
   }

@@ -104,7 +104,8 @@ struct CloudPoints {
 CloudPoints read_building_cloud(const std::string& path, double max_extent);
 
 /// One warning per LAS file with whole records after its counted points that nothing else in the file
-/// claims (PointCloudInfo::uncounted_records): they are not read.
+/// claims (PointCloudInfo::uncounted_records): they are not read. One per LAS file whose x or y scale
+/// is coarser than 5 cm (a scale of 1: a roof cannot be read from whole metres).
 void warn_of_uncounted_records(const std::vector<PointCloudInfo>& infos);
 
 /// Each input's ground from its footprint's ground field (Footprint::ground_z, read with

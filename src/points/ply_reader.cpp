@@ -326,7 +326,12 @@ class PlyReader final : public PointCloudReader {
     info.format = "PLY";
     info.version = h.format_name;
     info.point_count = h.elements[h.vertex_element].count;
-    info.fields = VertexRoles::of(h.elements[h.vertex_element]).fields();
+    const VertexRoles roles = VertexRoles::of(h.elements[h.vertex_element]);
+    info.fields = roles.fields();
+    const auto& properties = h.elements[h.vertex_element].properties;
+    for (int axis : {roles.x, roles.y})
+      if (axis >= 0 && properties[static_cast<std::size_t>(axis)].type == PlyType::float32)
+        info.single_precision_xy = true;
     for (const PlyElement& e : h.elements)
       if (e.name == "face") info.mesh_faces += e.count;
     return info;
