@@ -11,10 +11,10 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <iomanip>
 #include <map>
 #include <memory>
 #include <optional>
-#include <iomanip>
 #include <sstream>
 #include <utility>
 
