@@ -557,6 +557,13 @@ TEST_F(Mistakes, a_shard_that_builds_nothing_succeeds_and_its_merge_says_so) {
 namespace {
 const std::string kSampleTiles = kSample + "/delft_sample_1.las " + kSample + "/delft_sample_2.las";
 const std::string kSampleFootprints = " -f " + kSample + "/delft_sample_footprints.gpkg --id-field gml_id";
+
+// The sample's footprints as read, to write variants of them.
+city3d::FootprintSet sample_footprints() {
+  city3d::FootprintReadOptions read;
+  read.id_field = "gml_id";
+  return city3d::read_footprints(kSample + "/delft_sample_footprints.gpkg", read);
+}
 }  // namespace
 
 TEST_F(Mistakes, a_jobs_count_beyond_the_threads_to_be_had_runs_on_as_many_as_there_is_work_for) {
@@ -1278,10 +1285,7 @@ TEST_F(Mistakes, records_beyond_a_las_headers_count_are_named_not_dropped_in_sil
 TEST_F(Mistakes, footprints_that_declare_degrees_but_hold_metres_are_not_taken_for_degrees) {
   // The sample's footprints as a GeoJSON file without a "crs" member (as many tools write RFC 7946
   // GeoJSON): WGS 84 by the standard, RD New metres in fact.
-  city3d::FootprintReadOptions read;
-  read.id_field = "gml_id";
-  const city3d::FootprintSet sample =
-      city3d::read_footprints(kSample + "/delft_sample_footprints.gpkg", read);
+  const city3d::FootprintSet sample = sample_footprints();
   {
     std::ofstream g(dir_ / "rfc7946.geojson");
     g.precision(12);
@@ -1335,10 +1339,7 @@ TEST_F(Mistakes, a_bbox_that_leaves_no_reprojected_footprint_says_which_crs_it_w
 // A layer with two geometry columns (a CSV with an envelope beside each footprint): the first was read
 // in silence, and the buildings got their envelopes. The run says which column it reads.
 TEST_F(Mistakes, a_layer_of_two_geometry_columns_is_named_with_the_one_read) {
-  city3d::FootprintReadOptions read;
-  read.id_field = "gml_id";
-  const city3d::FootprintSet sample =
-      city3d::read_footprints(kSample + "/delft_sample_footprints.gpkg", read);
+  const city3d::FootprintSet sample = sample_footprints();
   {
     std::ofstream csv(dir_ / "two.csv");
     csv.precision(12);
